@@ -1,0 +1,390 @@
+//! Figures mirroring the paper's Figures 4-10, as PNG and SVG.
+//!
+//! Figures 4-9: for one parameter (x, y, z, α, β, γ), (a) the six UAVs' values over time and
+//! (b) the followers' errors relative to the navigator with the allowable band. Figure 10:
+//! (a) the 3-D tracks, (b) the attitude overview. The PNG text uses DejaVu Sans, embedded in
+//! the binary so no system font library is needed.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use anyhow::{anyhow, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+use proxform_sim::{Scenario, Trajectory};
+
+const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+const SIZE: (u32, u32) = (1000, 760);
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(0, 0, 0),
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+];
+
+/// One of the six error axes: its state column, label, unit and scale to report units.
+struct Axis {
+    figure: &'static str,
+    state: usize,
+    error: usize,
+    name: &'static str,
+    unit: &'static str,
+    degrees: bool,
+}
+
+const AXES: [Axis; 6] = [
+    Axis {
+        figure: "fig4_x",
+        state: 0,
+        error: 0,
+        name: "x",
+        unit: "m",
+        degrees: false,
+    },
+    Axis {
+        figure: "fig5_y",
+        state: 1,
+        error: 1,
+        name: "y",
+        unit: "m",
+        degrees: false,
+    },
+    Axis {
+        figure: "fig6_z",
+        state: 2,
+        error: 2,
+        name: "z",
+        unit: "m",
+        degrees: false,
+    },
+    Axis {
+        figure: "fig7_alpha",
+        state: 6,
+        error: 3,
+        name: "α (pitch)",
+        unit: "deg",
+        degrees: true,
+    },
+    Axis {
+        figure: "fig8_beta",
+        state: 7,
+        error: 4,
+        name: "β (yaw)",
+        unit: "deg",
+        degrees: true,
+    },
+    Axis {
+        figure: "fig9_gamma",
+        state: 8,
+        error: 5,
+        name: "γ (roll)",
+        unit: "deg",
+        degrees: true,
+    },
+];
+
+fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("cannot draw figure: {e:?}")
+}
+
+/// Per-UAV time series extracted from a trajectory.
+struct Series {
+    n: usize,
+    /// `t[k]`.
+    t: Vec<f64>,
+    /// `rows[uav][k]` = (state, error).
+    rows: Vec<Vec<([f64; 9], [f64; 6])>>,
+}
+
+impl Series {
+    fn new(traj: &Trajectory, n: usize) -> Self {
+        let mut rows = vec![Vec::new(); n];
+        let mut t = Vec::new();
+        for r in &traj.rows {
+            let u = r.uav as usize;
+            if u == 0 {
+                t.push(r.t);
+            }
+            if u < n {
+                let mut s = [0.0; 9];
+                s.copy_from_slice(r.state.as_slice());
+                rows[u].push((s, r.error));
+            }
+        }
+        Self { n, t, rows }
+    }
+
+    fn value(&self, uav: usize, k: usize, axis: &Axis) -> f64 {
+        let v = self.rows[uav][k].0[axis.state];
+        if axis.degrees {
+            v.to_degrees()
+        } else {
+            v
+        }
+    }
+
+    fn error(&self, uav: usize, k: usize, axis: &Axis) -> f64 {
+        let v = self.rows[uav][k].1[axis.error];
+        if axis.degrees {
+            v.to_degrees()
+        } else {
+            v
+        }
+    }
+}
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(1e-6);
+    (lo - pad, hi + pad)
+}
+
+fn axis_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    s: &Series,
+    axis: &Axis,
+    allowable: f64,
+    nav: usize,
+) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    let (top, bottom) = root.split_vertically(SIZE.1 / 2);
+    let tmax = s.t.last().copied().unwrap_or(1.0);
+    let n = s.t.len();
+    // (a) values
+    let (lo, hi) = range(
+        (0..s.n)
+            .flat_map(|u| (0..n).map(move |k| (u, k)))
+            .map(|(u, k)| s.value(u, k, axis)),
+    );
+    let mut chart = ChartBuilder::on(&top)
+        .caption(
+            format!("(a) {} of the six UAVs", axis.name),
+            ("sans-serif", 22),
+        )
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..tmax, lo..hi)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc("t (s)")
+        .y_desc(format!("{} ({})", axis.name, axis.unit))
+        .draw()
+        .map_err(plot_err)?;
+    for u in 0..s.n {
+        let color = PALETTE[u % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(
+                (0..n).map(|k| (s.t[k], s.value(u, k, axis))),
+                color.stroke_width(2),
+            ))
+            .map_err(plot_err)?
+            .label(format!("UAV{}", u + 1))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(plot_err)?;
+    // (b) errors with the allowable band
+    let followers: Vec<usize> = (0..s.n).filter(|&u| u != nav).collect();
+    let (elo, ehi) = range(
+        followers
+            .iter()
+            .flat_map(|&u| (0..n).map(move |k| (u, k)))
+            .map(|(u, k)| s.error(u, k, axis)),
+    );
+    let bound = allowable * 1.15;
+    let mut chart = ChartBuilder::on(&bottom)
+        .caption(
+            format!(
+                "(b) {} error relative to UAV1, allowable ±{allowable}",
+                axis.name
+            ),
+            ("sans-serif", 22),
+        )
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..tmax, elo.min(-bound)..ehi.max(bound))
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc("t (s)")
+        .y_desc(format!("error ({})", axis.unit))
+        .draw()
+        .map_err(plot_err)?;
+    for sign in [-1.0, 1.0] {
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(0.0, sign * allowable), (tmax, sign * allowable)],
+                8,
+                5,
+                RED.stroke_width(2),
+            ))
+            .map_err(plot_err)?;
+    }
+    for &u in &followers {
+        let color = PALETTE[u % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(
+                (0..n).map(|k| (s.t[k], s.error(u, k, axis))),
+                color.stroke_width(1),
+            ))
+            .map_err(plot_err)?
+            .label(format!("UAV{}", u + 1))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerLeft)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)
+}
+
+fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    let n = s.t.len();
+    let coord = |i: usize| range((0..s.n).flat_map(|u| s.rows[u].iter().map(move |r| r.0[i])));
+    let (x, y, z) = (coord(0), coord(1), coord(2));
+    let mut chart = ChartBuilder::on(root)
+        .caption("Formation tracks (x, y, z in m)", ("sans-serif", 24))
+        .margin(20)
+        .build_cartesian_3d(x.0..x.1, z.0..z.1, y.0..y.1)
+        .map_err(plot_err)?;
+    chart.with_projection(|mut p| {
+        p.pitch = 0.35;
+        p.yaw = 0.7;
+        p.scale = 0.85;
+        p.into_matrix()
+    });
+    chart.configure_axes().draw().map_err(plot_err)?;
+    for u in 0..s.n {
+        let color = PALETTE[u % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(
+                (0..n).map(|k| (s.rows[u][k].0[0], s.rows[u][k].0[2], s.rows[u][k].0[1])),
+                color.stroke_width(2),
+            ))
+            .map_err(plot_err)?
+            .label(format!("UAV{}", u + 1))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)
+}
+
+fn attitude_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    let panels = root.split_evenly((3, 1));
+    let n = s.t.len();
+    let tmax = s.t.last().copied().unwrap_or(1.0);
+    for (panel, axis) in panels.iter().zip(&AXES[3..]) {
+        let (lo, hi) = range(
+            (0..s.n)
+                .flat_map(|u| (0..n).map(move |k| (u, k)))
+                .map(|(u, k)| s.value(u, k, axis)),
+        );
+        let mut chart = ChartBuilder::on(panel)
+            .caption(format!("{} of the six UAVs", axis.name), ("sans-serif", 18))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..tmax, lo..hi)
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .x_desc("t (s)")
+            .y_desc("deg")
+            .draw()
+            .map_err(plot_err)?;
+        for u in 0..s.n {
+            let color = PALETTE[u % PALETTE.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    (0..n).map(|k| (s.t[k], s.value(u, k, axis))),
+                    color.stroke_width(1),
+                ))
+                .map_err(plot_err)?;
+        }
+    }
+    root.present().map_err(plot_err)
+}
+
+/// Draws every figure of a run into `dir` and returns the files written.
+pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<Vec<PathBuf>> {
+    static FONT_ONCE: Once = Once::new();
+    let mut font_ok = true;
+    FONT_ONCE.call_once(|| font_ok = register_font("sans-serif", FontStyle::Normal, FONT).is_ok());
+    if !font_ok {
+        return Err(anyhow!("the embedded font could not be loaded"));
+    }
+    let s = Series::new(traj, scenario.len());
+    let nav = scenario.navigator.index();
+    let allow = scenario.allowable.as_array();
+    let mut written = Vec::new();
+    for axis in &AXES {
+        let a = if axis.degrees {
+            allow[axis.error].to_degrees()
+        } else {
+            allow[axis.error]
+        };
+        let a = (a * 1e6).round() / 1e6;
+        let png = dir.join(format!("{}.png", axis.figure));
+        let svg = dir.join(format!("{}.svg", axis.figure));
+        axis_figure(
+            &BitMapBackend::new(&png, SIZE).into_drawing_area(),
+            &s,
+            axis,
+            a,
+            nav,
+        )?;
+        axis_figure(
+            &SVGBackend::new(&svg, SIZE).into_drawing_area(),
+            &s,
+            axis,
+            a,
+            nav,
+        )?;
+        written.extend([png, svg]);
+    }
+    let png = dir.join("fig10a_tracks.png");
+    let svg = dir.join("fig10a_tracks.svg");
+    tracks_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
+    tracks_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
+    written.extend([png, svg]);
+    let png = dir.join("fig10b_attitude.png");
+    let svg = dir.join("fig10b_attitude.svg");
+    attitude_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
+    attitude_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
+    written.extend([png, svg]);
+    Ok(written)
+}

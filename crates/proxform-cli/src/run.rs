@@ -1,0 +1,102 @@
+//! `proxform run`: a batch of seeded runs, the printed table and the output files.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use proxform_sim::{run_batch, Scenario};
+
+use crate::{figures, output, report};
+
+/// Arguments of `proxform run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Built-in scenario to run.
+    #[arg(long, default_value = "paper", value_parser = ["paper"])]
+    scenario: String,
+    /// Base seed; run r of a batch uses streams keyed by (seed, r).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Number of seeded runs, aggregated into one summary.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    runs: u64,
+    /// Output directory [default: out/<scenario>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (0 = all cores). Results do not depend on it.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Skip the figures (PNG and SVG).
+    #[arg(long)]
+    no_figures: bool,
+    /// Skip trajectories.csv.
+    #[arg(long)]
+    no_trajectories: bool,
+    /// Switch the controller's adjustment off (every input discarded): shows the check fail.
+    #[arg(long)]
+    no_adjust: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// Runs the command; the exit code is 0 when every run passed, 1 otherwise.
+pub fn run(args: &RunArgs) -> Result<ExitCode> {
+    let mut scenario = match args.scenario.as_str() {
+        "paper" => Scenario::paper(),
+        other => bail!("unknown scenario '{other}'"),
+    };
+    scenario.adjustment_enabled = !args.no_adjust;
+    scenario.validate().context("invalid scenario")?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&scenario.name));
+    std::fs::create_dir_all(&out)
+        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads)
+        .build()
+        .context("cannot start worker threads")?;
+    let bar = if args.quiet || args.runs < 2 {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(args.runs)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs ({per_sec}, eta {eta})",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let record = !(args.no_figures && args.no_trajectories);
+    let started = Instant::now();
+    let result =
+        pool.install(|| run_batch(&scenario, args.seed, args.runs, record, &|| bar.inc(1)))?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+
+    report::print(&scenario, &result, elapsed, pool.current_num_threads());
+    output::write_summary(&out.join("summary.json"), &result.summary)?;
+    let mut written = vec![out.join("summary.json")];
+    if let Some(traj) = &result.first_trajectory {
+        if !args.no_trajectories {
+            let p = out.join("trajectories.csv");
+            output::write_trajectories(&p, traj)?;
+            written.push(p);
+        }
+        if !args.no_figures {
+            written.extend(figures::write_all(&out, &scenario, traj)?);
+        }
+    }
+    println!("\nwrote {} files to {}", written.len(), out.display());
+    Ok(if result.summary.pass_fraction >= 1.0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}

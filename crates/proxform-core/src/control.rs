@@ -1,0 +1,146 @@
+//! The one-step predictive control of METHOD §6 step 7 (the paper's eq. 12, H = 1).
+//!
+//! With the prediction `X(t+1) = X_hold + B·u`, the input minimises
+//! `Σ_k q_k (r_k + (B·u)_k)² + Σ_j w_j u_j²` subject to `lo ≤ u ≤ hi`, where `r = X_hold − O`
+//! is the deviation of the course-keeping state from the envelope centre, `q_k = 1/Δ_k²` and
+//! `w` the input penalty. This is a box-constrained least-squares problem; it is solved in
+//! closed form per coordinate and by exact coordinate descent when inputs are coupled (the
+//! iteration is exact in one sweep when B's columns are orthogonal under Q, as for the
+//! kinematic model).
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::state::{Input, State9, MAX_INPUTS, P};
+
+/// Control matrix B (9 × `MAX_INPUTS`); only the first `n` columns are used.
+pub type ControlMatrix = SMatrix<f64, P, MAX_INPUTS>;
+
+/// Most coordinate-descent sweeps for coupled inputs.
+const MAX_SWEEPS: usize = 64;
+
+/// Solves the saturated least-squares step. `q` are the state weights, `w` the input weights,
+/// `n` the number of inputs in use. Inputs whose column and weight are both zero stay at zero.
+#[allow(clippy::too_many_arguments)]
+pub fn saturated_least_squares(
+    b: &ControlMatrix,
+    n: usize,
+    r: &State9,
+    q: &State9,
+    w: &Input,
+    lo: &Input,
+    hi: &Input,
+) -> Input {
+    // Hessian H = BᵀQB + diag(w) and gradient g = BᵀQr (n ≤ MAX_INPUTS).
+    let mut h = SMatrix::<f64, MAX_INPUTS, MAX_INPUTS>::zeros();
+    let mut g = SVector::<f64, MAX_INPUTS>::zeros();
+    let qr = r.component_mul(q);
+    for a in 0..n {
+        let ca = b.column(a);
+        g[a] = ca.dot(&qr);
+        for c in a..n {
+            let v = ca.component_mul(q).dot(&b.column(c));
+            h[(a, c)] = v;
+            h[(c, a)] = v;
+        }
+        h[(a, a)] += w[a];
+    }
+    let mut u = Input::zeros();
+    let coupled = (0..n).any(|a| (0..n).any(|c| a != c && h[(a, c)] != 0.0));
+    let sweeps = if coupled { MAX_SWEEPS } else { 1 };
+    for _ in 0..sweeps {
+        let mut change: f64 = 0.0;
+        for a in 0..n {
+            if h[(a, a)] <= 0.0 {
+                continue;
+            }
+            let mut s = g[a];
+            for c in 0..n {
+                if c != a {
+                    s += h[(a, c)] * u[c];
+                }
+            }
+            let new = (-s / h[(a, a)]).clamp(lo[a], hi[a]);
+            change = change.max((new - u[a]).abs());
+            u[a] = new;
+        }
+        if change <= 1e-12 {
+            break;
+        }
+    }
+    u
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn identity_b() -> ControlMatrix {
+        let mut b = ControlMatrix::zeros();
+        for j in 0..MAX_INPUTS {
+            b[(j + 3, j)] = 1.0;
+        }
+        b
+    }
+
+    #[test]
+    fn unconstrained_solution_cancels_the_deviation() {
+        let b = identity_b();
+        let mut r = State9::zeros();
+        r[4] = 0.3;
+        let u = saturated_least_squares(
+            &b,
+            6,
+            &r,
+            &State9::from_element(1.0),
+            &Input::zeros(),
+            &Input::from_element(-1.0),
+            &Input::from_element(1.0),
+        );
+        assert_relative_eq!(u[1], -0.3);
+        assert_relative_eq!(u[0], 0.0);
+    }
+
+    #[test]
+    fn saturates_at_the_bounds() {
+        let b = identity_b();
+        let mut r = State9::zeros();
+        r[4] = 5.0;
+        r[6] = -5.0;
+        let u = saturated_least_squares(
+            &b,
+            6,
+            &r,
+            &State9::from_element(1.0),
+            &Input::zeros(),
+            &Input::from_element(-0.5),
+            &Input::from_element(0.25),
+        );
+        assert_relative_eq!(u[1], -0.5);
+        assert_relative_eq!(u[3], 0.25);
+    }
+
+    #[test]
+    fn coupled_inputs_reach_the_constrained_optimum() {
+        // One state driven by two inputs: minimise (1 + u0 + u1)² + 0.1(u0² + u1²), u0 ≤ 0.
+        let mut b = ControlMatrix::zeros();
+        b[(0, 0)] = 1.0;
+        b[(0, 1)] = 1.0;
+        let mut r = State9::zeros();
+        r[0] = 1.0;
+        let mut q = State9::zeros();
+        q[0] = 1.0;
+        let w = Input::from_element(0.1);
+        let lo = Input::from_element(-10.0);
+        let mut hi = Input::from_element(10.0);
+        let u = saturated_least_squares(&b, 2, &r, &q, &w, &lo, &hi);
+        // Symmetric optimum: u0 = u1 = −1/2.1.
+        assert_relative_eq!(u[0], -1.0 / 2.1, epsilon = 1e-9);
+        assert_relative_eq!(u[1], -1.0 / 2.1, epsilon = 1e-9);
+        hi[0] = -0.9;
+        let u = saturated_least_squares(&b, 2, &r, &q, &w, &lo, &hi);
+        // u0 pinned at its bound; u1 optimal given it: (1 − 0.9 + u1) + 0.1 u1 = 0.
+        assert_relative_eq!(u[0], -0.9, epsilon = 1e-9);
+        assert_relative_eq!(u[1], -0.1 / 1.1, epsilon = 1e-9);
+    }
+}

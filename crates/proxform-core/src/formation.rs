@@ -1,0 +1,165 @@
+//! Formation parameters (METHOD §4, the paper's eq. 5-7).
+//!
+//! A formation is a slot per UAV: a position offset `d_i` in the formation frame (forward,
+//! left, up; m) and an attitude offset `a_i` (rad, normally zero). The formation control
+//! parameter vector of i with respect to j is `W_ij = [R_f(d_i − d_j); 0; a_i − a_j]`.
+
+use nalgebra::{Rotation3, Vector3};
+
+use crate::error::ConfigError;
+use crate::observation::UavId;
+use crate::state::{self, State9};
+
+/// One UAV's place in the formation.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FormationSlot {
+    /// Offset d_i in the formation frame: forward, left, up (m).
+    pub offset_m: Vector3<f64>,
+    /// Attitude offset a_i: pitch, yaw, roll (rad). Default zero: one common attitude.
+    pub attitude_offset_rad: Vector3<f64>,
+}
+
+impl FormationSlot {
+    /// A slot at `offset_m` with no attitude offset.
+    pub fn at(forward: f64, left: f64, up: f64) -> Self {
+        Self {
+            offset_m: Vector3::new(forward, left, up),
+            attitude_offset_rad: Vector3::zeros(),
+        }
+    }
+}
+
+/// How the formation frame is oriented in the world (METHOD §4 Choice).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FormationFrame {
+    /// `R_f = I`: the formation frame is the world frame (the paper's straight flight).
+    #[default]
+    World,
+    /// `R_f` is the yaw rotation by the formation's course, taken as the horizontal direction
+    /// of travel of the reference UAV, so the formation turns with its course.
+    Course,
+}
+
+impl FormationFrame {
+    /// Formation-to-world rotation given the reference UAV's state.
+    #[inline]
+    pub fn rotation(self, reference: &State9) -> Rotation3<f64> {
+        match self {
+            FormationFrame::World => Rotation3::identity(),
+            FormationFrame::Course => {
+                let course = reference[state::VY].atan2(reference[state::VX]);
+                Rotation3::from_axis_angle(&Vector3::z_axis(), course)
+            }
+        }
+    }
+}
+
+/// The whole formation: one slot per UAV, indexed by [`UavId`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Formation {
+    /// Slots, `slots[id]`.
+    pub slots: Vec<FormationSlot>,
+    /// Orientation of the formation frame.
+    pub frame: FormationFrame,
+}
+
+impl Formation {
+    /// Builds a formation after checking every offset is finite.
+    pub fn new(slots: Vec<FormationSlot>, frame: FormationFrame) -> Result<Self, ConfigError> {
+        for s in &slots {
+            for v in s.offset_m.iter().chain(s.attitude_offset_rad.iter()) {
+                if !v.is_finite() {
+                    return Err(ConfigError::OutOfRange {
+                        field: "formation offset",
+                        value: *v,
+                        expected: "finite offsets",
+                    });
+                }
+            }
+        }
+        Ok(Self { slots, frame })
+    }
+
+    /// Number of slots.
+    pub fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// True when there are no slots.
+    pub fn is_empty(&self) -> bool {
+        self.slots.is_empty()
+    }
+
+    /// The slot of `id`, if it is in the formation.
+    pub fn slot(&self, id: UavId) -> Option<&FormationSlot> {
+        self.slots.get(id.index())
+    }
+
+    /// `W_ij` (eq. 7) for slots i and j, with `R_f` from the reference state `reference`
+    /// (the observed j for [`FormationFrame::Course`]).
+    #[inline]
+    pub fn w(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9) -> State9 {
+        let dp = self.frame.rotation(reference) * (i.offset_m - j.offset_m);
+        let da = i.attitude_offset_rad - j.attitude_offset_rad;
+        State9::from_column_slice(&[dp.x, dp.y, dp.z, 0.0, 0.0, 0.0, da.x, da.y, da.z])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::angle::deg;
+    use approx::assert_relative_eq;
+
+    fn two() -> (FormationSlot, FormationSlot) {
+        (
+            FormationSlot::at(0.0, 0.0, 0.0),
+            FormationSlot::at(-86.6, 50.0, -10.0),
+        )
+    }
+
+    #[test]
+    fn w_is_the_offset_difference_in_the_world_frame() {
+        let (a, b) = two();
+        let f = Formation::new(vec![a, b], FormationFrame::World).expect("finite");
+        let w = f.w(&b, &a, &State9::zeros());
+        assert_relative_eq!(
+            w,
+            State9::from_column_slice(&[-86.6, 50.0, -10.0, 0., 0., 0., 0., 0., 0.])
+        );
+        // W_ji = −W_ij.
+        assert_relative_eq!(f.w(&a, &b, &State9::zeros()), -w);
+    }
+
+    #[test]
+    fn course_frame_rotates_offsets_with_the_course() {
+        let (a, b) = two();
+        let f = Formation::new(vec![a, b], FormationFrame::Course).expect("finite");
+        let mut reference = State9::zeros();
+        reference[state::VY] = 10.0; // flying along +y: course 90°
+        let w = f.w(&b, &a, &reference);
+        // forward −86.6 now points along −y, left 50 along −x.
+        assert_relative_eq!(w[0], -50.0, epsilon = 1e-9);
+        assert_relative_eq!(w[1], -86.6, epsilon = 1e-9);
+        assert_relative_eq!(w[2], -10.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn attitude_offsets_enter_w() {
+        let a = FormationSlot::at(0.0, 0.0, 0.0);
+        let mut b = FormationSlot::at(0.0, 10.0, 0.0);
+        b.attitude_offset_rad.y = deg(2.0);
+        let f = Formation::new(vec![a, b], FormationFrame::World).expect("finite");
+        assert_relative_eq!(f.w(&b, &a, &State9::zeros())[state::BETA], deg(2.0));
+    }
+
+    #[test]
+    fn rejects_non_finite_offsets() {
+        let err = Formation::new(
+            vec![FormationSlot::at(f64::NAN, 0.0, 0.0)],
+            FormationFrame::World,
+        );
+        assert!(err.is_err());
+    }
+}

@@ -1,0 +1,30 @@
+//! proxform-core: the per-UAV side of proximity formation maintenance.
+//!
+//! This crate owns the 9-parameter behaviour state, the vehicle models, azimuth-area sensing
+//! and the proximity formation controller of METHOD.md §2-§7. It does no I/O, reads no clock,
+//! starts no threads and owns no random number generator: everything it needs arrives as
+//! arguments, so the same controller runs in the simulator or behind a network transport.
+
+pub mod angle;
+pub mod azimuth;
+pub mod control;
+pub mod controller;
+pub mod dependency;
+pub mod envelope;
+pub mod error;
+pub mod formation;
+pub mod observation;
+pub mod predictor;
+pub mod state;
+pub mod vehicle;
+
+pub use azimuth::AzimuthAreas;
+pub use controller::{ControllerParams, Decision, Outcome, ProximityController};
+pub use dependency::DependencySet;
+pub use envelope::Envelope;
+pub use error::ConfigError;
+pub use formation::{Formation, FormationFrame, FormationSlot};
+pub use observation::{Observation, ObservationSource, UavId};
+pub use predictor::PredictorKind;
+pub use state::{Input, State9};
+pub use vehicle::{KinematicLimits, KinematicModel, VehicleModel};

@@ -1,0 +1,79 @@
+//! Vehicle models (METHOD §5): how a UAV's state responds to its inputs.
+//!
+//! Every model gives the controller the same three things: the course-keeping prediction
+//! `F·X`, the control matrix B at the current state, and the per-step input bounds that keep
+//! the vehicle inside its limits. The simulator uses [`VehicleModel::propagate`] as the plant.
+
+mod kinematic;
+
+pub use kinematic::{KinematicLimits, KinematicModel};
+
+use crate::control::ControlMatrix;
+use crate::error::ConfigError;
+use crate::state::{Input, State9};
+
+/// The vehicle models proxform knows. An enum rather than a trait object: the controller's
+/// inner loop stays monomorphic and the models stay plain data.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "model", rename_all = "snake_case")]
+pub enum VehicleModel {
+    /// The paper's §4 simulation model (METHOD §5, model 1).
+    Kinematic(KinematicModel),
+}
+
+impl VehicleModel {
+    /// Checks the model's parameters.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        match self {
+            VehicleModel::Kinematic(m) => m.limits.validate(),
+        }
+    }
+
+    /// Number of inputs n_u.
+    #[inline]
+    pub fn n_inputs(&self) -> usize {
+        match self {
+            VehicleModel::Kinematic(_) => KinematicModel::N_INPUTS,
+        }
+    }
+
+    /// `F·X`: the state after `dt` when no new input is given.
+    #[inline]
+    pub fn hold(&self, x: &State9, dt: f64) -> State9 {
+        match self {
+            VehicleModel::Kinematic(_) => KinematicModel::hold(x, dt),
+        }
+    }
+
+    /// Control matrix B at state `x`.
+    #[inline]
+    pub fn control_matrix(&self, x: &State9, dt: f64) -> ControlMatrix {
+        match self {
+            VehicleModel::Kinematic(_) => KinematicModel::control_matrix(x, dt),
+        }
+    }
+
+    /// Per-step input bounds `(lo, hi)` at state `x`.
+    #[inline]
+    pub fn input_bounds(&self, x: &State9, dt: f64) -> (Input, Input) {
+        match self {
+            VehicleModel::Kinematic(m) => m.input_bounds(x, dt),
+        }
+    }
+
+    /// The plant: the true state after `dt` under the (already perturbed) input `u`.
+    #[inline]
+    pub fn propagate(&self, x: &State9, u: &Input, dt: f64) -> State9 {
+        match self {
+            VehicleModel::Kinematic(_) => KinematicModel::propagate(x, u, dt),
+        }
+    }
+
+    /// Largest magnitude of each input in one step, used to normalise the input penalty.
+    #[inline]
+    pub fn input_scale(&self, dt: f64) -> Input {
+        match self {
+            VehicleModel::Kinematic(m) => m.input_scale(dt),
+        }
+    }
+}

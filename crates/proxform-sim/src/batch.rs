@@ -1,0 +1,247 @@
+//! Batches of seeded runs, in parallel, aggregated into one summary.
+//!
+//! Run r of seed S draws from streams keyed by (S, r), so each run's result is fixed by the
+//! seed and its index whatever thread runs it; results are collected in run order and
+//! aggregated sequentially, so the summary is bit-identical for any thread count.
+
+use rayon::prelude::*;
+
+use crate::engine::Simulation;
+use crate::metrics::{RunMetrics, RunSummary};
+use crate::scenario::{Scenario, ScenarioError};
+use crate::trajectory::Trajectory;
+
+/// Per-axis errors: x, y, z (m) and α, β, γ (deg).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct AxisErrors {
+    /// x (m).
+    pub x_m: f64,
+    /// y (m).
+    pub y_m: f64,
+    /// z (m).
+    pub z_m: f64,
+    /// α (deg).
+    pub alpha_deg: f64,
+    /// β (deg).
+    pub beta_deg: f64,
+    /// γ (deg).
+    pub gamma_deg: f64,
+}
+
+impl AxisErrors {
+    /// From SI values (m, rad).
+    pub fn from_si(v: [f64; 6]) -> Self {
+        Self {
+            x_m: v[0],
+            y_m: v[1],
+            z_m: v[2],
+            alpha_deg: v[3].to_degrees(),
+            beta_deg: v[4].to_degrees(),
+            gamma_deg: v[5].to_degrees(),
+        }
+    }
+
+    /// As an array in report units.
+    pub fn as_array(&self) -> [f64; 6] {
+        [
+            self.x_m,
+            self.y_m,
+            self.z_m,
+            self.alpha_deg,
+            self.beta_deg,
+            self.gamma_deg,
+        ]
+    }
+}
+
+/// Aggregate of a batch.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Number of runs.
+    pub runs: u64,
+    /// Base seed.
+    pub seed: u64,
+    /// Fraction of runs in which every follower stayed within every allowable error.
+    pub pass_fraction: f64,
+    /// Largest |error| over all runs and followers.
+    pub worst_abs_error: AxisErrors,
+    /// 99th percentile (nearest rank) over runs of each run's largest |error|.
+    pub p99_abs_error: AxisErrors,
+    /// Median over runs of each run's largest |error|.
+    pub median_abs_error: AxisErrors,
+    /// RMS error over all runs, followers and steps.
+    pub rms_error: AxisErrors,
+    /// The allowable errors.
+    pub allowable_error: AxisErrors,
+    /// Predicted error band of eq. 17, σ = sqrt(σm² + σn²), per axis.
+    pub predicted_sigma: AxisErrors,
+    /// Smallest separation between two UAVs over all runs (m).
+    pub min_separation_m: f64,
+    /// Adjustments per follower per minute of flight, mean over runs.
+    pub adjustments_per_uav_minute: f64,
+    /// Per follower (UAV 2…): largest |error| over all runs.
+    pub per_uav_worst: Vec<AxisErrors>,
+    /// Per follower: mean adjustments per run.
+    pub per_uav_adjustments: Vec<f64>,
+}
+
+/// A batch's results.
+#[derive(Debug, Clone)]
+pub struct BatchResult {
+    /// Every run's summary, in run order.
+    pub runs: Vec<RunSummary>,
+    /// The aggregate.
+    pub summary: Summary,
+    /// The first run's trajectories, when asked for.
+    pub first_trajectory: Option<Trajectory>,
+}
+
+/// Runs one flight and returns its summary (and its trajectory when `record`).
+pub fn run_one(
+    scenario: &Scenario,
+    seed: u64,
+    run: u64,
+    record: bool,
+) -> Result<(RunSummary, Option<Trajectory>), ScenarioError> {
+    let sim = Simulation::new(scenario, seed, run)?;
+    let metrics = RunMetrics::new(scenario);
+    if record {
+        let mut obs = (metrics, Trajectory::default());
+        sim.run(&mut obs);
+        Ok((obs.0.finish(run, scenario.duration_s), Some(obs.1)))
+    } else {
+        let mut m = metrics;
+        sim.run(&mut m);
+        Ok((m.finish(run, scenario.duration_s), None))
+    }
+}
+
+/// Runs `runs` flights of `scenario` with seed `seed` on the current rayon pool, calling
+/// `progress` after each finished run. The first run's trajectory is kept when `record_first`.
+pub fn run_batch(
+    scenario: &Scenario,
+    seed: u64,
+    runs: u64,
+    record_first: bool,
+    progress: &(dyn Fn() + Sync),
+) -> Result<BatchResult, ScenarioError> {
+    scenario.validate()?;
+    let results: Vec<(RunSummary, Option<Trajectory>)> = (0..runs)
+        .into_par_iter()
+        .map(|r| {
+            let out = run_one(scenario, seed, r, record_first && r == 0);
+            progress();
+            out
+        })
+        .collect::<Result<_, _>>()?;
+    let mut first_trajectory = None;
+    let mut summaries = Vec::with_capacity(results.len());
+    for (s, t) in results {
+        if t.is_some() {
+            first_trajectory = t;
+        }
+        summaries.push(s);
+    }
+    let summary = aggregate(scenario, seed, &summaries);
+    Ok(BatchResult {
+        runs: summaries,
+        summary,
+        first_trajectory,
+    })
+}
+
+/// Nearest-rank percentile of `values` (sorted in place), `q` in (0, 1].
+fn percentile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_by(f64::total_cmp);
+    let rank = (q * values.len() as f64).ceil() as usize;
+    values[rank.clamp(1, values.len()) - 1]
+}
+
+/// Aggregates run summaries (in run order) into a [`Summary`].
+pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary {
+    let n = runs.len().max(1) as f64;
+    let worst_per_run: Vec<[f64; 6]> = runs.iter().map(RunSummary::worst).collect();
+    let mut worst = [0.0f64; 6];
+    let mut p99 = [0.0f64; 6];
+    let mut median = [0.0f64; 6];
+    let mut rms = [0.0f64; 6];
+    for k in 0..6 {
+        let mut col: Vec<f64> = worst_per_run.iter().map(|w| w[k]).collect();
+        worst[k] = col.iter().copied().fold(0.0, f64::max);
+        p99[k] = percentile(&mut col, 0.99);
+        median[k] = percentile(&mut col, 0.5);
+        let ms: f64 = runs
+            .iter()
+            .map(|r| {
+                r.rms_error.iter().map(|e| e[k] * e[k]).sum::<f64>()
+                    / r.rms_error.len().max(1) as f64
+            })
+            .sum();
+        rms[k] = (ms / n).sqrt();
+    }
+    let followers = runs.first().map_or(0, |r| r.max_abs_error.len());
+    let mut per_uav_worst = vec![[0.0f64; 6]; followers];
+    let mut per_uav_adj = vec![0.0f64; followers];
+    for r in runs {
+        for f in 0..followers {
+            for k in 0..6 {
+                per_uav_worst[f][k] = per_uav_worst[f][k].max(r.max_abs_error[f][k]);
+            }
+            per_uav_adj[f] += r.adjustments[f] as f64 / n;
+        }
+    }
+    let minutes = scenario.duration_s / 60.0;
+    let adj_rate = runs
+        .iter()
+        .map(|r| r.adjustments.iter().sum::<u64>() as f64 / (followers.max(1) as f64 * minutes))
+        .sum::<f64>()
+        / n;
+    // eq. 17: σ = sqrt(σm² + σn²), σm measured as the RMS actuation-error effect per step.
+    let sigma_n = scenario.noise.sigma();
+    let mut model = [0.0f64; 9];
+    for r in runs {
+        for k in 0..9 {
+            model[k] += r.model_error_rms[k].powi(2) / n;
+        }
+    }
+    let idx = [0, 1, 2, 6, 7, 8];
+    let predicted = idx.map(|k| (model[k] + sigma_n[k].powi(2)).sqrt());
+    Summary {
+        scenario: scenario.name.clone(),
+        runs: runs.len() as u64,
+        seed,
+        pass_fraction: runs.iter().filter(|r| r.pass).count() as f64 / n,
+        worst_abs_error: AxisErrors::from_si(worst),
+        p99_abs_error: AxisErrors::from_si(p99),
+        median_abs_error: AxisErrors::from_si(median),
+        rms_error: AxisErrors::from_si(rms),
+        allowable_error: AxisErrors::from_si(scenario.allowable.as_array()),
+        predicted_sigma: AxisErrors::from_si(predicted),
+        min_separation_m: runs
+            .iter()
+            .map(|r| r.min_separation_m)
+            .fold(f64::INFINITY, f64::min),
+        adjustments_per_uav_minute: adj_rate,
+        per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
+        per_uav_adjustments: per_uav_adj,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_rank_percentile() {
+        let mut v: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(percentile(&mut v, 0.99), 99.0);
+        assert_eq!(percentile(&mut v, 0.5), 50.0);
+        let mut one = vec![3.0];
+        assert_eq!(percentile(&mut one, 0.99), 3.0);
+    }
+}

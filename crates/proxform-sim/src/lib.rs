@@ -1,0 +1,23 @@
+//! proxform-sim: the deterministic stepping engine around the per-UAV controllers.
+//!
+//! It owns the scenario (who flies where, with which controller, vehicle, noise and path),
+//! the engine that steps every UAV from a shared snapshot, the seeded random streams, the
+//! observers that measure a run, and batches of seeded runs in parallel. It writes no files:
+//! output belongs to the caller.
+
+pub mod batch;
+pub mod engine;
+pub mod metrics;
+pub mod observer;
+pub mod path;
+pub mod rng;
+pub mod scenario;
+pub mod trajectory;
+
+pub use batch::{run_batch, AxisErrors, BatchResult, Summary};
+pub use engine::Simulation;
+pub use metrics::{RunMetrics, RunSummary};
+pub use observer::{Observer, StepFrame};
+pub use path::{NavigatorPath, PaperPath};
+pub use scenario::{AllowableErrors, MeasurementNoise, Scenario, ScenarioError};
+pub use trajectory::{Trajectory, TrajectoryRow};

@@ -1,0 +1,323 @@
+//! A checked scenario: everything one simulated flight needs, in SI units.
+//!
+//! [`Scenario::paper`] is the paper's six-UAV experiment as METHOD §9 fixes it. A scenario is
+//! built once, checked by [`Scenario::validate`], and then shared read-only by every run.
+
+use std::sync::Arc;
+
+use proxform_core::angle::deg;
+use proxform_core::state::{self, State9};
+use proxform_core::{
+    ConfigError, ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot,
+    KinematicModel, UavId, VehicleModel,
+};
+
+use crate::path::{NavigatorPath, PaperPath};
+
+/// Why a scenario is invalid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ScenarioError {
+    /// A parameter outside its domain.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// Per-UAV lists of different lengths, or too few UAVs.
+    #[error("{what}: expected {expected}, found {found}")]
+    Shape {
+        /// Which list.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Found length.
+        found: usize,
+    },
+    /// A non-finite or out-of-range scenario value.
+    #[error("{field} = {value} is invalid: expected {expected}")]
+    Value {
+        /// The field.
+        field: &'static str,
+        /// The value.
+        value: f64,
+        /// What was expected.
+        expected: &'static str,
+    },
+}
+
+/// White measurement noise, 1σ per axis, on every observation and on each UAV's own estimate.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MeasurementNoise {
+    /// Position (m). Paper scenario: 0.02 m.
+    pub position_m: f64,
+    /// Velocity (m/s). Paper scenario: 0.05 m/s.
+    pub velocity_mps: f64,
+    /// Attitude (rad). Paper scenario: 0.01°.
+    pub attitude_rad: f64,
+}
+
+impl MeasurementNoise {
+    /// σn per state parameter.
+    pub fn sigma(&self) -> State9 {
+        let (p, v, a) = (self.position_m, self.velocity_mps, self.attitude_rad);
+        State9::from_column_slice(&[p, p, p, v, v, v, a, a, a])
+    }
+}
+
+/// Allowable formation errors, the pass criterion (METHOD §7, §9).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct AllowableErrors {
+    /// x, y, z (m).
+    pub position_m: [f64; 3],
+    /// α, β, γ (rad).
+    pub attitude_rad: [f64; 3],
+}
+
+impl AllowableErrors {
+    /// As a 6-vector: x, y, z (m), α, β, γ (rad).
+    pub fn as_array(&self) -> [f64; 6] {
+        let (p, a) = (self.position_m, self.attitude_rad);
+        [p[0], p[1], p[2], a[0], a[1], a[2]]
+    }
+}
+
+/// A checked scenario.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    /// Short name used in reports.
+    pub name: String,
+    /// Update period Δt (s).
+    pub dt_s: f64,
+    /// Flight duration (s).
+    pub duration_s: f64,
+    /// The formation (one slot per UAV).
+    pub formation: Arc<Formation>,
+    /// The navigator, which flies `path` and runs no controller.
+    pub navigator: UavId,
+    /// The navigator's path.
+    pub path: NavigatorPath,
+    /// Initial state of every UAV.
+    pub initial: Vec<State9>,
+    /// Dependency table of every UAV (the navigator's is unused).
+    pub dependencies: Vec<DependencySet>,
+    /// Controller parameters shared by every follower.
+    pub controller: ControllerParams,
+    /// Vehicle model shared by every UAV.
+    pub vehicle: VehicleModel,
+    /// Measurement noise σn.
+    pub noise: MeasurementNoise,
+    /// Actuation error: each applied input component is scaled by `1 + ε`, ε uniform in
+    /// `[−e, e]` (dimensionless). Paper scenario: 0.1.
+    pub actuation_error: f64,
+    /// Pass criterion.
+    pub allowable: AllowableErrors,
+    /// When false the followers' inputs are discarded: the method switched off, to show
+    /// that the pass criterion can fail.
+    pub adjustment_enabled: bool,
+}
+
+impl Scenario {
+    /// Number of UAVs.
+    pub fn len(&self) -> usize {
+        self.initial.len()
+    }
+
+    /// True when the scenario has no UAVs.
+    pub fn is_empty(&self) -> bool {
+        self.initial.is_empty()
+    }
+
+    /// Number of update periods in the flight.
+    pub fn steps(&self) -> u64 {
+        (self.duration_s / self.dt_s).round() as u64
+    }
+
+    /// Checks the scenario's consistency.
+    pub fn validate(&self) -> Result<(), ScenarioError> {
+        let n = self.initial.len();
+        if n < 2 {
+            return Err(ScenarioError::Shape {
+                what: "number of UAVs",
+                expected: 2,
+                found: n,
+            });
+        }
+        if self.formation.len() != n {
+            return Err(ScenarioError::Shape {
+                what: "formation slots",
+                expected: n,
+                found: self.formation.len(),
+            });
+        }
+        if self.dependencies.len() != n {
+            return Err(ScenarioError::Shape {
+                what: "dependency tables",
+                expected: n,
+                found: self.dependencies.len(),
+            });
+        }
+        if self.navigator.index() >= n {
+            return Err(ConfigError::UnknownUav {
+                id: self.navigator,
+                size: n,
+            }
+            .into());
+        }
+        positive("dt_s", self.dt_s)?;
+        positive("duration_s", self.duration_s)?;
+        if (self.controller.dt_s - self.dt_s).abs() > 1e-12 {
+            return Err(ScenarioError::Value {
+                field: "controller.dt_s",
+                value: self.controller.dt_s,
+                expected: "the scenario's dt_s",
+            });
+        }
+        for s in &self.initial {
+            if !state::is_finite(s) {
+                return Err(ScenarioError::Value {
+                    field: "initial state",
+                    value: f64::NAN,
+                    expected: "finite values",
+                });
+            }
+        }
+        let noise = self.noise;
+        for (field, v) in [
+            ("noise.position_m", noise.position_m),
+            ("noise.velocity_mps", noise.velocity_mps),
+            ("noise.attitude_rad", noise.attitude_rad),
+            ("actuation_error", self.actuation_error),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ScenarioError::Value {
+                    field,
+                    value: v,
+                    expected: "a finite value ≥ 0",
+                });
+            }
+        }
+        for v in self.allowable.as_array() {
+            positive("allowable error", v)?;
+        }
+        self.controller.validate()?;
+        self.vehicle.validate()?;
+        Ok(())
+    }
+
+    /// The paper's six-UAV experiment (METHOD §9).
+    pub fn paper() -> Self {
+        let layout = [
+            (0.0, 0.0, 0.0),
+            (-86.6, 50.0, -10.0),
+            (-86.6, -50.0, -10.0),
+            (-173.2, 100.0, -20.0),
+            (-173.2, 0.0, -20.0),
+            (-173.2, -100.0, -20.0),
+        ];
+        let n = layout.len();
+        let slots: Vec<FormationSlot> = layout
+            .iter()
+            .map(|&(f, l, u)| FormationSlot::at(f, l, u))
+            .collect();
+        let path = PaperPath::default();
+        // Every UAV starts in its slot on the navigator's initial state: [250 km/h, 0, vz, 5°, 3°, 0°]
+        // with vz the path's initial climb rate (see README, Choices).
+        let nav0 = path.state_at(0.0, [0.0; 3]);
+        let initial = slots
+            .iter()
+            .map(|s| {
+                let mut x = nav0;
+                x[state::X] = s.offset_m.x;
+                x[state::Y] = s.offset_m.y;
+                x[state::Z] = s.offset_m.z;
+                x
+            })
+            .collect();
+        let table: [&[(u32, f64)]; 6] = [
+            &[],
+            &[(0, 0.7), (2, 0.3)],
+            &[(0, 0.7), (1, 0.3)],
+            &[(1, 0.5), (4, 0.5)],
+            &[(1, 0.35), (2, 0.35), (0, 0.3)],
+            &[(2, 0.5), (4, 0.5)],
+        ];
+        let dependencies = table
+            .iter()
+            .enumerate()
+            .map(|(i, refs)| {
+                DependencySet::new(
+                    UavId(i as u32),
+                    n,
+                    refs.iter().map(|&(j, c)| (UavId(j), c)).collect(),
+                )
+                .expect("the paper's Table 1 is a valid dependency table")
+            })
+            .collect();
+        Self {
+            name: "paper".into(),
+            dt_s: 0.1,
+            duration_s: 100.0,
+            formation: Arc::new(Formation {
+                slots,
+                frame: FormationFrame::World,
+            }),
+            navigator: UavId(0),
+            path: NavigatorPath::Paper(path),
+            initial,
+            dependencies,
+            controller: ControllerParams::default(),
+            vehicle: VehicleModel::Kinematic(KinematicModel::default()),
+            noise: MeasurementNoise {
+                position_m: 0.02,
+                velocity_mps: 0.05,
+                attitude_rad: deg(0.01),
+            },
+            actuation_error: 0.1,
+            allowable: AllowableErrors {
+                position_m: [0.5, 0.6, 0.2],
+                attitude_rad: [deg(0.4), deg(0.3), deg(1.0)],
+            },
+            adjustment_enabled: true,
+        }
+    }
+}
+
+fn positive(field: &'static str, v: f64) -> Result<(), ScenarioError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(ScenarioError::Value {
+            field,
+            value: v,
+            expected: "a finite value > 0",
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_scenario_is_valid_and_matches_method() {
+        let s = Scenario::paper();
+        s.validate().expect("valid");
+        assert_eq!(s.len(), 6);
+        assert_eq!(s.steps(), 1000);
+        assert_eq!(s.dependencies[4].degree(UavId(0)), Some(0.3));
+        assert_eq!(s.dependencies[3].refs().len(), 2);
+    }
+
+    #[test]
+    fn rejects_inconsistent_scenarios() {
+        let mut s = Scenario::paper();
+        s.dt_s = 0.0;
+        assert!(s.validate().is_err());
+        let mut s = Scenario::paper();
+        s.initial.truncate(1);
+        assert!(s.validate().is_err());
+        let mut s = Scenario::paper();
+        s.actuation_error = f64::NAN;
+        assert!(s.validate().is_err());
+        let mut s = Scenario::paper();
+        s.controller.lambda = 1.5;
+        assert!(matches!(s.validate(), Err(ScenarioError::Config(_))));
+    }
+}

@@ -1,0 +1,62 @@
+//! Recording a run's trajectories in memory, one row per UAV per step.
+
+use proxform_core::state::State9;
+
+use crate::observer::{formation_error, Observer, StepFrame};
+use crate::scenario::Scenario;
+
+/// One UAV at one step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrajectoryRow {
+    /// Time (s).
+    pub t: f64,
+    /// UAV index.
+    pub uav: u32,
+    /// True state (SI, rad).
+    pub state: State9,
+    /// Formation error x, y, z (m), α, β, γ (rad); zero for the navigator.
+    pub error: [f64; 6],
+    /// The decision's outcome at the previous update: "held", "adjusted", "alone", or
+    /// "navigator"/"initial".
+    pub outcome: &'static str,
+    /// True when the UAV's course was inside its envelope (it held).
+    pub in_envelope: bool,
+    /// True when every formation error is within the allowable error.
+    pub within_allowable: bool,
+}
+
+/// Observer collecting every row of a run.
+#[derive(Debug, Clone, Default)]
+pub struct Trajectory {
+    /// Rows in time order, then UAV order.
+    pub rows: Vec<TrajectoryRow>,
+}
+
+impl Observer for Trajectory {
+    fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        let nav = scenario.navigator.index();
+        let allowable = scenario.allowable.as_array();
+        for (i, s) in frame.states.iter().enumerate() {
+            let error = if i == nav {
+                [0.0; 6]
+            } else {
+                formation_error(scenario, frame.states, i)
+            };
+            let (outcome, in_envelope) = match frame.decisions[i] {
+                Some(d) => (d.outcome.label(), d.outcome == proxform_core::Outcome::Held),
+                None if i == nav => ("navigator", false),
+                None => ("initial", false),
+            };
+            let within_allowable = error.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a);
+            self.rows.push(TrajectoryRow {
+                t: frame.t,
+                uav: i as u32,
+                state: *s,
+                error,
+                outcome,
+                in_envelope,
+                within_allowable,
+            });
+        }
+    }
+}
