@@ -36,54 +36,12 @@ struct Axis {
 }
 
 const AXES: [Axis; 6] = [
-    Axis {
-        figure: "fig4_x",
-        state: 0,
-        error: 0,
-        name: "x",
-        unit: "m",
-        degrees: false,
-    },
-    Axis {
-        figure: "fig5_y",
-        state: 1,
-        error: 1,
-        name: "y",
-        unit: "m",
-        degrees: false,
-    },
-    Axis {
-        figure: "fig6_z",
-        state: 2,
-        error: 2,
-        name: "z",
-        unit: "m",
-        degrees: false,
-    },
-    Axis {
-        figure: "fig7_alpha",
-        state: 6,
-        error: 3,
-        name: "α (pitch)",
-        unit: "deg",
-        degrees: true,
-    },
-    Axis {
-        figure: "fig8_beta",
-        state: 7,
-        error: 4,
-        name: "β (yaw)",
-        unit: "deg",
-        degrees: true,
-    },
-    Axis {
-        figure: "fig9_gamma",
-        state: 8,
-        error: 5,
-        name: "γ (roll)",
-        unit: "deg",
-        degrees: true,
-    },
+    Axis { figure: "fig4_x", state: 0, error: 0, name: "x", unit: "m", degrees: false },
+    Axis { figure: "fig5_y", state: 1, error: 1, name: "y", unit: "m", degrees: false },
+    Axis { figure: "fig6_z", state: 2, error: 2, name: "z", unit: "m", degrees: false },
+    Axis { figure: "fig7_alpha", state: 6, error: 3, name: "α (pitch)", unit: "deg", degrees: true },
+    Axis { figure: "fig8_beta", state: 7, error: 4, name: "β (yaw)", unit: "deg", degrees: true },
+    Axis { figure: "fig9_gamma", state: 8, error: 5, name: "γ (roll)", unit: "deg", degrees: true },
 ];
 
 fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
@@ -161,39 +119,22 @@ fn axis_figure<DB: DrawingBackend>(
     let tmax = s.t.last().copied().unwrap_or(1.0);
     let n = s.t.len();
     // (a) values
-    let (lo, hi) = range(
-        (0..s.n)
-            .flat_map(|u| (0..n).map(move |k| (u, k)))
-            .map(|(u, k)| s.value(u, k, axis)),
-    );
+    let (lo, hi) = range((0..s.n).flat_map(|u| (0..n).map(move |k| (u, k))).map(|(u, k)| s.value(u, k, axis)));
     let mut chart = ChartBuilder::on(&top)
-        .caption(
-            format!("(a) {} of the six UAVs", axis.name),
-            ("sans-serif", 22),
-        )
+        .caption(format!("(a) {} of the six UAVs", axis.name), ("sans-serif", 22))
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(70)
         .build_cartesian_2d(0.0..tmax, lo..hi)
         .map_err(plot_err)?;
-    chart
-        .configure_mesh()
-        .x_desc("t (s)")
-        .y_desc(format!("{} ({})", axis.name, axis.unit))
-        .draw()
-        .map_err(plot_err)?;
+    chart.configure_mesh().x_desc("t (s)").y_desc(format!("{} ({})", axis.name, axis.unit)).draw().map_err(plot_err)?;
     for u in 0..s.n {
         let color = PALETTE[u % PALETTE.len()];
         chart
-            .draw_series(LineSeries::new(
-                (0..n).map(|k| (s.t[k], s.value(u, k, axis))),
-                color.stroke_width(2),
-            ))
+            .draw_series(LineSeries::new((0..n).map(|k| (s.t[k], s.value(u, k, axis))), color.stroke_width(2)))
             .map_err(plot_err)?
             .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
     }
     chart
         .configure_series_labels()
@@ -204,32 +145,17 @@ fn axis_figure<DB: DrawingBackend>(
         .map_err(plot_err)?;
     // (b) errors with the allowable band
     let followers: Vec<usize> = (0..s.n).filter(|&u| u != nav).collect();
-    let (elo, ehi) = range(
-        followers
-            .iter()
-            .flat_map(|&u| (0..n).map(move |k| (u, k)))
-            .map(|(u, k)| s.error(u, k, axis)),
-    );
+    let (elo, ehi) =
+        range(followers.iter().flat_map(|&u| (0..n).map(move |k| (u, k))).map(|(u, k)| s.error(u, k, axis)));
     let bound = allowable * 1.15;
     let mut chart = ChartBuilder::on(&bottom)
-        .caption(
-            format!(
-                "(b) {} error relative to UAV1, allowable ±{allowable}",
-                axis.name
-            ),
-            ("sans-serif", 22),
-        )
+        .caption(format!("(b) {} error relative to UAV1, allowable ±{allowable}", axis.name), ("sans-serif", 22))
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(70)
         .build_cartesian_2d(0.0..tmax, elo.min(-bound)..ehi.max(bound))
         .map_err(plot_err)?;
-    chart
-        .configure_mesh()
-        .x_desc("t (s)")
-        .y_desc(format!("error ({})", axis.unit))
-        .draw()
-        .map_err(plot_err)?;
+    chart.configure_mesh().x_desc("t (s)").y_desc(format!("error ({})", axis.unit)).draw().map_err(plot_err)?;
     for sign in [-1.0, 1.0] {
         chart
             .draw_series(DashedLineSeries::new(
@@ -243,15 +169,10 @@ fn axis_figure<DB: DrawingBackend>(
     for &u in &followers {
         let color = PALETTE[u % PALETTE.len()];
         chart
-            .draw_series(LineSeries::new(
-                (0..n).map(|k| (s.t[k], s.error(u, k, axis))),
-                color.stroke_width(1),
-            ))
+            .draw_series(LineSeries::new((0..n).map(|k| (s.t[k], s.error(u, k, axis))), color.stroke_width(1)))
             .map_err(plot_err)?
             .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
     }
     chart
         .configure_series_labels()
@@ -289,16 +210,9 @@ fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) 
             ))
             .map_err(plot_err)?
             .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(plot_err)?;
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(plot_err)?;
     root.present().map_err(plot_err)
 }
 
@@ -308,11 +222,7 @@ fn attitude_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series
     let n = s.t.len();
     let tmax = s.t.last().copied().unwrap_or(1.0);
     for (panel, axis) in panels.iter().zip(&AXES[3..]) {
-        let (lo, hi) = range(
-            (0..s.n)
-                .flat_map(|u| (0..n).map(move |k| (u, k)))
-                .map(|(u, k)| s.value(u, k, axis)),
-        );
+        let (lo, hi) = range((0..s.n).flat_map(|u| (0..n).map(move |k| (u, k))).map(|(u, k)| s.value(u, k, axis)));
         let mut chart = ChartBuilder::on(panel)
             .caption(format!("{} of the six UAVs", axis.name), ("sans-serif", 18))
             .margin(8)
@@ -320,19 +230,11 @@ fn attitude_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..tmax, lo..hi)
             .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("t (s)")
-            .y_desc("deg")
-            .draw()
-            .map_err(plot_err)?;
+        chart.configure_mesh().x_desc("t (s)").y_desc("deg").draw().map_err(plot_err)?;
         for u in 0..s.n {
             let color = PALETTE[u % PALETTE.len()];
             chart
-                .draw_series(LineSeries::new(
-                    (0..n).map(|k| (s.t[k], s.value(u, k, axis))),
-                    color.stroke_width(1),
-                ))
+                .draw_series(LineSeries::new((0..n).map(|k| (s.t[k], s.value(u, k, axis))), color.stroke_width(1)))
                 .map_err(plot_err)?;
         }
     }
@@ -352,28 +254,12 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
     let allow = scenario.allowable.as_array();
     let mut written = Vec::new();
     for axis in &AXES {
-        let a = if axis.degrees {
-            allow[axis.error].to_degrees()
-        } else {
-            allow[axis.error]
-        };
+        let a = if axis.degrees { allow[axis.error].to_degrees() } else { allow[axis.error] };
         let a = (a * 1e6).round() / 1e6;
         let png = dir.join(format!("{}.png", axis.figure));
         let svg = dir.join(format!("{}.svg", axis.figure));
-        axis_figure(
-            &BitMapBackend::new(&png, SIZE).into_drawing_area(),
-            &s,
-            axis,
-            a,
-            nav,
-        )?;
-        axis_figure(
-            &SVGBackend::new(&svg, SIZE).into_drawing_area(),
-            &s,
-            axis,
-            a,
-            nav,
-        )?;
+        axis_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s, axis, a, nav)?;
+        axis_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s, axis, a, nav)?;
         written.extend([png, svg]);
     }
     let png = dir.join("fig10a_tracks.png");

@@ -11,8 +11,7 @@ use proxform_sim::{Summary, Trajectory};
 /// Writes the batch summary as pretty JSON.
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
     let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    serde_json::to_writer_pretty(BufWriter::new(f), summary)
-        .with_context(|| format!("cannot write {}", path.display()))
+    serde_json::to_writer_pretty(BufWriter::new(f), summary).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes one row per UAV per step.
@@ -48,17 +47,12 @@ pub fn write_trajectories(path: &Path, traj: &Trajectory) -> Result<()> {
         rec.push((r.uav + 1).to_string());
         rec.extend(r.state.iter().map(|v| format!("{v:.6}")));
         rec.extend(r.error[..3].iter().map(|v| format!("{v:.6}")));
-        rec.extend(
-            r.error[3..]
-                .iter()
-                .map(|v| format!("{:.6}", v.to_degrees())),
-        );
+        rec.extend(r.error[3..].iter().map(|v| format!("{:.6}", v.to_degrees())));
         rec.push(u8::from(r.in_envelope).to_string());
         rec.push(u8::from(r.within_allowable).to_string());
         rec.push(r.outcome.to_string());
         w.write_record(&rec)?;
     }
-    w.flush()
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }

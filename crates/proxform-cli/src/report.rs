@@ -38,11 +38,7 @@ pub fn print(scenario: &Scenario, result: &BatchResult, elapsed: Duration, threa
         for e in w {
             print!("{e:>10.3}");
         }
-        println!(
-            "{:>14.1}{:>8}",
-            s.per_uav_adjustments[f],
-            if ok { "PASS" } else { "FAIL" }
-        );
+        println!("{:>14.1}{:>8}", s.per_uav_adjustments[f], if ok { "PASS" } else { "FAIL" });
     }
     println!();
     row("p99 over runs", &s.p99_abs_error.as_array());
@@ -57,10 +53,7 @@ pub fn print(scenario: &Scenario, result: &BatchResult, elapsed: Duration, threa
         s.runs
     );
     println!("min separation           {:.1} m", s.min_separation_m);
-    println!(
-        "adjustments per UAV-min  {:.1}",
-        s.adjustments_per_uav_minute
-    );
+    println!("adjustments per UAV-min  {:.1}", s.adjustments_per_uav_minute);
 }
 
 fn row(label: &str, v: &[f64; 6]) {

@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use proxform_core::PredictorKind;
 use proxform_sim::{run_batch, Scenario};
 
 use crate::{figures, output, report};
@@ -41,6 +42,27 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Override λ, the envelope centre's lean toward the main references, in [0, 1].
+    #[arg(long)]
+    lambda: Option<f64>,
+    /// Override ρ, the envelope radius in permissible-error units, in (0, 1].
+    #[arg(long)]
+    rho: Option<f64>,
+    /// Override τ, the position-closing time of the velocity reference (s); 0 switches it off.
+    #[arg(long)]
+    closing_time_s: Option<f64>,
+    /// Override the neighbour predictor.
+    #[arg(long, value_enum)]
+    predictor: Option<Predictor>,
+}
+
+/// Neighbour predictors selectable from the command line.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Predictor {
+    /// α-β tracking filter (the default).
+    AlphaBeta,
+    /// The plain transition F on the latest observation.
+    ConstantVelocity,
 }
 
 /// Runs the command; the exit code is 0 when every run passed, 1 otherwise.
@@ -50,33 +72,35 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         other => bail!("unknown scenario '{other}'"),
     };
     scenario.adjustment_enabled = !args.no_adjust;
+    let c = &mut scenario.controller;
+    if let Some(l) = args.lambda {
+        c.lambda = l;
+    }
+    if let Some(r) = args.rho {
+        c.envelope.rho = r;
+    }
+    if let Some(t) = args.closing_time_s {
+        c.closing_time_s = (t != 0.0).then_some(t);
+    }
+    match args.predictor {
+        Some(Predictor::ConstantVelocity) => c.predictor = PredictorKind::ConstantVelocity,
+        Some(Predictor::AlphaBeta) => c.predictor = PredictorKind::default(),
+        None => {}
+    }
     scenario.validate().context("invalid scenario")?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(&scenario.name));
-    std::fs::create_dir_all(&out)
-        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scenario.name));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
-        .build()
-        .context("cannot start worker threads")?;
-    let bar = if args.quiet || args.runs < 2 {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(args.runs)
-    };
+    let pool =
+        rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
+    let bar = if args.quiet || args.runs < 2 { ProgressBar::hidden() } else { ProgressBar::new(args.runs) };
     bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs ({per_sec}, eta {eta})",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs ({per_sec}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let record = !(args.no_figures && args.no_trajectories);
     let started = Instant::now();
-    let result =
-        pool.install(|| run_batch(&scenario, args.seed, args.runs, record, &|| bar.inc(1)))?;
+    let result = pool.install(|| run_batch(&scenario, args.seed, args.runs, record, &|| bar.inc(1)))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 
@@ -94,9 +118,5 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         }
     }
     println!("\nwrote {} files to {}", written.len(), out.display());
-    Ok(if result.summary.pass_fraction >= 1.0 {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(1)
-    })
+    Ok(if result.summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

@@ -1,1 +1,63 @@
-fn main() {}
+//! One controller step against the number of perceived neighbours.
+
+use std::sync::Arc;
+
+use proxform_core::angle::kmh;
+use proxform_core::state::State9;
+use proxform_core::{
+    ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, Observation,
+    ObservationSource, ProximityController, UavId, VehicleModel,
+};
+
+fn main() {
+    divan::main();
+}
+
+/// A UAV at the origin with `n` neighbours on a 100 m ring, one per azimuth area.
+fn setup(n: usize) -> (ProximityController, Vec<Observation>, State9) {
+    let mut slots = vec![FormationSlot::at(0.0, 0.0, 0.0)];
+    for k in 0..n {
+        let a = (k as f64 + 0.5) * std::f64::consts::TAU / 8.0;
+        slots.push(FormationSlot::at(100.0 * a.cos(), 100.0 * a.sin(), 0.0));
+    }
+    let formation = Arc::new(Formation { slots, frame: FormationFrame::World });
+    let deps = DependencySet::new(UavId(0), n + 1, vec![(UavId(1), 0.7)]).expect("valid");
+    let ctrl = ProximityController::new(
+        UavId(0),
+        ControllerParams::default(),
+        formation.clone(),
+        deps,
+        VehicleModel::Kinematic(KinematicModel::default()),
+    )
+    .expect("valid");
+    let state_of = |s: &FormationSlot| {
+        State9::from_column_slice(&[s.offset_m.x, s.offset_m.y, 0.0, kmh(250.0), 0.3, 0.0, 0.05, 0.02, 0.01])
+    };
+    let obs = formation.slots[1..]
+        .iter()
+        .enumerate()
+        .map(|(k, s)| Observation {
+            id: UavId(k as u32 + 1),
+            state: state_of(s),
+            age_s: 0.0,
+            source: ObservationSource::Onboard,
+        })
+        .collect();
+    let mut own = state_of(&formation.slots[0]);
+    own[1] += 0.7; // off its slot: the step adjusts
+    (ctrl, obs, own)
+}
+
+#[divan::bench(args = [1, 2, 4, 8])]
+fn controller_step(bencher: divan::Bencher, neighbours: usize) {
+    let (mut ctrl, obs, own) = setup(neighbours);
+    let mut t = 0.0;
+    // Sanity: every neighbour is perceived and the step adjusts.
+    let d = ctrl.step(t, &own, &obs);
+    assert_eq!(usize::from(d.occupied_areas), neighbours);
+    assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }));
+    bencher.bench_local(|| {
+        t += 0.1;
+        divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
+    });
+}

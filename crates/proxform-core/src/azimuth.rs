@@ -20,10 +20,7 @@ pub struct AzimuthAreas {
 
 impl Default for AzimuthAreas {
     fn default() -> Self {
-        Self {
-            areas: 8,
-            sensing_range_m: 250.0,
-        }
+        Self { areas: 8, sensing_range_m: 250.0 }
     }
 }
 
@@ -31,11 +28,7 @@ impl AzimuthAreas {
     /// Checks the parameters.
     pub fn validate(&self) -> Result<(), ConfigError> {
         if self.areas < 1 {
-            return Err(ConfigError::OutOfRange {
-                field: "areas",
-                value: self.areas as f64,
-                expected: "m ≥ 1",
-            });
+            return Err(ConfigError::OutOfRange { field: "areas", value: self.areas as f64, expected: "m ≥ 1" });
         }
         if !(self.sensing_range_m.is_finite() && self.sensing_range_m > 0.0) {
             return Err(ConfigError::OutOfRange {
@@ -75,31 +68,16 @@ mod tests {
     use crate::angle::deg;
     use approx::assert_relative_eq;
 
-    const AREAS: AzimuthAreas = AzimuthAreas {
-        areas: 8,
-        sensing_range_m: 250.0,
-    };
+    const AREAS: AzimuthAreas = AzimuthAreas { areas: 8, sensing_range_m: 250.0 };
 
     #[test]
     fn bearing_is_clockwise_from_the_nose() {
         // Nose along +x: a neighbour straight ahead is at 0, one on the right (−y) at 90°.
         assert_relative_eq!(bearing_cw_from_nose(0.0, 10.0, 0.0), 0.0);
-        assert_relative_eq!(
-            bearing_cw_from_nose(0.0, 0.0, -10.0),
-            deg(90.0),
-            epsilon = 1e-12
-        );
-        assert_relative_eq!(
-            bearing_cw_from_nose(0.0, -10.0, 0.0),
-            deg(180.0),
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(bearing_cw_from_nose(0.0, 0.0, -10.0), deg(90.0), epsilon = 1e-12);
+        assert_relative_eq!(bearing_cw_from_nose(0.0, -10.0, 0.0), deg(180.0), epsilon = 1e-12);
         // Left (+y) is 270° clockwise.
-        assert_relative_eq!(
-            bearing_cw_from_nose(0.0, 0.0, 10.0),
-            deg(270.0),
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(bearing_cw_from_nose(0.0, 0.0, 10.0), deg(270.0), epsilon = 1e-12);
     }
 
     #[test]
@@ -136,24 +114,9 @@ mod tests {
 
     #[test]
     fn rejects_bad_parameters() {
-        assert!(AzimuthAreas {
-            areas: 0,
-            sensing_range_m: 1.0
-        }
-        .validate()
-        .is_err());
-        assert!(AzimuthAreas {
-            areas: 8,
-            sensing_range_m: f64::NAN
-        }
-        .validate()
-        .is_err());
-        assert!(AzimuthAreas {
-            areas: 8,
-            sensing_range_m: -1.0
-        }
-        .validate()
-        .is_err());
+        assert!(AzimuthAreas { areas: 0, sensing_range_m: 1.0 }.validate().is_err());
+        assert!(AzimuthAreas { areas: 8, sensing_range_m: f64::NAN }.validate().is_err());
+        assert!(AzimuthAreas { areas: 8, sensing_range_m: -1.0 }.validate().is_err());
         assert!(AREAS.validate().is_ok());
     }
 }

@@ -20,7 +20,6 @@ const MAX_SWEEPS: usize = 64;
 
 /// Solves the saturated least-squares step. `q` are the state weights, `w` the input weights,
 /// `n` the number of inputs in use. Inputs whose column and weight are both zero stay at zero.
-#[allow(clippy::too_many_arguments)]
 pub fn saturated_least_squares(
     b: &ControlMatrix,
     n: usize,
@@ -67,7 +66,40 @@ pub fn saturated_least_squares(
             break;
         }
     }
+    if coupled {
+        polish(&h, &g, n, lo, hi, &mut u);
+    }
     u
+}
+
+/// Solves the free inputs exactly once coordinate descent has found the active bounds; keeps
+/// the descent's answer if the exact one would leave the box.
+fn polish(h: &SMatrix<f64, MAX_INPUTS, MAX_INPUTS>, g: &Input, n: usize, lo: &Input, hi: &Input, u: &mut Input) {
+    let mut a = SMatrix::<f64, MAX_INPUTS, MAX_INPUTS>::identity();
+    let mut rhs = *u;
+    for j in 0..n {
+        let at_bound = u[j] <= lo[j] || u[j] >= hi[j] || h[(j, j)] <= 0.0;
+        if at_bound {
+            continue;
+        }
+        rhs[j] = -g[j];
+        for c in 0..n {
+            let free_c = !(u[c] <= lo[c] || u[c] >= hi[c] || h[(c, c)] <= 0.0);
+            if free_c {
+                a[(j, c)] = h[(j, c)];
+            } else {
+                a[(j, c)] = 0.0;
+                rhs[j] -= h[(j, c)] * u[c];
+            }
+        }
+    }
+    if let Some(exact) = a.lu().solve(&rhs) {
+        if (0..n).all(|j| exact[j] >= lo[j] - 1e-12 && exact[j] <= hi[j] + 1e-12 && exact[j].is_finite()) {
+            for j in 0..n {
+                u[j] = exact[j].clamp(lo[j], hi[j]);
+            }
+        }
+    }
 }
 
 #[cfg(test)]

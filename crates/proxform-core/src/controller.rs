@@ -51,17 +51,7 @@ impl ControllerParams {
     /// The paper's permissible errors Δ (METHOD §9) in SI units.
     pub fn paper_thresholds() -> State9 {
         use crate::angle::{deg, kmh};
-        State9::from_column_slice(&[
-            0.5,
-            0.6,
-            0.2,
-            kmh(5.0),
-            kmh(2.0),
-            kmh(2.0),
-            deg(0.4),
-            deg(0.2),
-            deg(0.5),
-        ])
+        State9::from_column_slice(&[0.5, 0.6, 0.2, kmh(5.0), kmh(2.0), kmh(2.0), deg(0.4), deg(0.2), deg(0.5)])
     }
 
     /// Checks every parameter, naming the first one out of its domain.
@@ -91,10 +81,7 @@ impl Default for ControllerParams {
             dt_s: 0.1,
             areas: AzimuthAreas::default(),
             lambda: 0.8,
-            envelope: Envelope {
-                thresholds: Self::paper_thresholds(),
-                rho: 0.4,
-            },
+            envelope: Envelope { thresholds: Self::paper_thresholds(), rho: 0.4 },
             closing_time_s: Some(1.0),
             input_weight: 0.01,
             predictor: PredictorKind::default(),
@@ -174,36 +161,28 @@ impl ProximityController {
         params.validate()?;
         vehicle.validate()?;
         if formation.slot(id).is_none() {
-            return Err(ConfigError::UnknownUav {
-                id,
-                size: formation.len(),
-            });
+            return Err(ConfigError::UnknownUav { id, size: formation.len() });
         }
         for &(r, _) in dependency.refs() {
             if formation.slot(r).is_none() {
-                return Err(ConfigError::BadReference {
-                    owner: id,
-                    reference: r,
-                    reason: "not in the formation",
-                });
+                return Err(ConfigError::BadReference { owner: id, reference: r, reason: "not in the formation" });
             }
         }
         let m = params.areas.areas;
-        let tracks = NeighbourTracks::new(
-            params.predictor,
-            2 * (m + dependency.refs().len()),
-            params.track_timeout_s,
-        );
+        let tracks = NeighbourTracks::new(params.predictor, 2 * (m + dependency.refs().len()), params.track_timeout_s);
         let q = params.envelope.thresholds.map(|d| 1.0 / (d * d));
         let scale = vehicle.input_scale(params.dt_s);
         let n = vehicle.n_inputs();
-        let input_weights = Input::from_fn(|j, _| {
-            if j < n && scale[j] > 0.0 {
-                params.input_weight / (scale[j] * scale[j])
-            } else {
-                0.0
-            }
-        });
+        let input_weights =
+            Input::from_fn(
+                |j, _| {
+                    if j < n && scale[j] > 0.0 {
+                        params.input_weight / (scale[j] * scale[j])
+                    } else {
+                        0.0
+                    }
+                },
+            );
         Ok(Self {
             id,
             params,
@@ -213,9 +192,7 @@ impl ProximityController {
             tracks,
             q,
             input_weights,
-            scratch: Scratch {
-                nearest: vec![None; m],
-            },
+            scratch: Scratch { nearest: vec![None; m] },
         })
     }
 
@@ -253,11 +230,7 @@ impl ProximityController {
             if o.id == self.id {
                 continue;
             }
-            let (dx, dy, dz) = (
-                o.state[X] - own[X],
-                o.state[X + 1] - own[X + 1],
-                o.state[X + 2] - own[X + 2],
-            );
+            let (dx, dy, dz) = (o.state[X] - own[X], o.state[X + 1] - own[X + 1], o.state[X + 2] - own[X + 2]);
             let d2 = dx * dx + dy * dy + dz * dz;
             if o.source == ObservationSource::Onboard && d2 > r2 {
                 continue;
@@ -281,11 +254,7 @@ impl ProximityController {
             if o.id == self.id {
                 continue;
             }
-            let in_area = self
-                .scratch
-                .nearest
-                .iter()
-                .any(|a| matches!(a, Some((idx, _)) if *idx == k));
+            let in_area = self.scratch.nearest.iter().any(|a| matches!(a, Some((idx, _)) if *idx == k));
             let degree = self.dependency.degree(o.id);
             if !in_area && degree.is_none() {
                 continue;
@@ -318,16 +287,8 @@ impl ProximityController {
 
         // §6 step 4: O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i, as a deviation from the course.
         let lambda = self.params.lambda;
-        let x_bar = if n_bar > 0 {
-            sum_bar / f64::from(n_bar)
-        } else {
-            sum_dep / c_sum
-        };
-        let mut centre = if main_refs > 0 {
-            (1.0 - lambda) * x_bar + lambda * (sum_dep / c_sum)
-        } else {
-            x_bar
-        };
+        let x_bar = if n_bar > 0 { sum_bar / f64::from(n_bar) } else { sum_dep / c_sum };
+        let mut centre = if main_refs > 0 { (1.0 - lambda) * x_bar + lambda * (sum_dep / c_sum) } else { x_bar };
         // Velocity part of W (paper §2.3): close the remaining position gap over τ.
         if let Some(tau) = self.params.closing_time_s {
             for k in X..VX {
@@ -341,40 +302,17 @@ impl ProximityController {
         let normalised_sq = envelope.normalised_sq(&r);
         let occupied_areas = n_bar;
         if normalised_sq <= envelope.rho * envelope.rho {
-            return Decision {
-                outcome: Outcome::Held,
-                input: Input::zeros(),
-                occupied_areas,
-                main_refs,
-            };
+            return Decision { outcome: Outcome::Held, input: Input::zeros(), occupied_areas, main_refs };
         }
 
         // §6 step 7: one-step predictive control, saturated by the vehicle's limits.
         let b = self.vehicle.control_matrix(own, dt);
         let (lo, hi) = self.vehicle.input_bounds(own, dt);
-        let input = saturated_least_squares(
-            &b,
-            self.vehicle.n_inputs(),
-            &r,
-            &self.q,
-            &self.input_weights,
-            &lo,
-            &hi,
-        );
-        Decision {
-            outcome: Outcome::Adjusted { normalised_sq },
-            input,
-            occupied_areas,
-            main_refs,
-        }
+        let input = saturated_least_squares(&b, self.vehicle.n_inputs(), &r, &self.q, &self.input_weights, &lo, &hi);
+        Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
     }
 }
 
 fn alone() -> Decision {
-    Decision {
-        outcome: Outcome::Alone,
-        input: Input::zeros(),
-        occupied_areas: 0,
-        main_refs: 0,
-    }
+    Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 }
 }

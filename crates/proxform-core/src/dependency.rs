@@ -25,11 +25,7 @@ impl DependencySet {
                 });
             }
             if id.index() >= size {
-                return Err(ConfigError::BadReference {
-                    owner,
-                    reference: id,
-                    reason: "not in the formation",
-                });
+                return Err(ConfigError::BadReference { owner, reference: id, reason: "not in the formation" });
             }
             if !(degree.is_finite() && degree > 0.0) {
                 return Err(ConfigError::OutOfRange {
@@ -39,11 +35,7 @@ impl DependencySet {
                 });
             }
             if refs[..k].iter().any(|(other, _)| *other == id) {
-                return Err(ConfigError::BadReference {
-                    owner,
-                    reference: id,
-                    reason: "named twice",
-                });
+                return Err(ConfigError::BadReference { owner, reference: id, reason: "named twice" });
             }
         }
         Ok(Self { refs })

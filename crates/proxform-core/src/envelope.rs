@@ -23,11 +23,7 @@ impl Envelope {
             positive(threshold_name(k), *d)?;
         }
         if !(self.rho.is_finite() && self.rho > 0.0 && self.rho <= 1.0) {
-            return Err(ConfigError::OutOfRange {
-                field: "rho",
-                value: self.rho,
-                expected: "ρ in (0, 1]",
-            });
+            return Err(ConfigError::OutOfRange { field: "rho", value: self.rho, expected: "ρ in (0, 1]" });
         }
         Ok(())
     }
@@ -66,10 +62,7 @@ mod tests {
     use super::*;
 
     fn env() -> Envelope {
-        Envelope {
-            thresholds: State9::from_element(1.0).map(|_| 0.5),
-            rho: 1.0,
-        }
+        Envelope { thresholds: State9::from_element(1.0).map(|_| 0.5), rho: 1.0 }
     }
 
     #[test]

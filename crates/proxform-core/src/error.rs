@@ -38,11 +38,7 @@ pub fn positive(field: &'static str, value: f64) -> Result<(), ConfigError> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(ConfigError::OutOfRange {
-            field,
-            value,
-            expected: "a finite value > 0",
-        })
+        Err(ConfigError::OutOfRange { field, value, expected: "a finite value > 0" })
     }
 }
 
@@ -51,10 +47,6 @@ pub fn unit_interval(field: &'static str, value: f64) -> Result<(), ConfigError>
     if (0.0..=1.0).contains(&value) {
         Ok(())
     } else {
-        Err(ConfigError::OutOfRange {
-            field,
-            value,
-            expected: "a value in [0, 1]",
-        })
+        Err(ConfigError::OutOfRange { field, value, expected: "a value in [0, 1]" })
     }
 }

@@ -22,10 +22,7 @@ pub struct FormationSlot {
 impl FormationSlot {
     /// A slot at `offset_m` with no attitude offset.
     pub fn at(forward: f64, left: f64, up: f64) -> Self {
-        Self {
-            offset_m: Vector3::new(forward, left, up),
-            attitude_offset_rad: Vector3::zeros(),
-        }
+        Self { offset_m: Vector3::new(forward, left, up), attitude_offset_rad: Vector3::zeros() }
     }
 }
 
@@ -113,10 +110,7 @@ mod tests {
     use approx::assert_relative_eq;
 
     fn two() -> (FormationSlot, FormationSlot) {
-        (
-            FormationSlot::at(0.0, 0.0, 0.0),
-            FormationSlot::at(-86.6, 50.0, -10.0),
-        )
+        (FormationSlot::at(0.0, 0.0, 0.0), FormationSlot::at(-86.6, 50.0, -10.0))
     }
 
     #[test]
@@ -124,10 +118,7 @@ mod tests {
         let (a, b) = two();
         let f = Formation::new(vec![a, b], FormationFrame::World).expect("finite");
         let w = f.w(&b, &a, &State9::zeros());
-        assert_relative_eq!(
-            w,
-            State9::from_column_slice(&[-86.6, 50.0, -10.0, 0., 0., 0., 0., 0., 0.])
-        );
+        assert_relative_eq!(w, State9::from_column_slice(&[-86.6, 50.0, -10.0, 0., 0., 0., 0., 0., 0.]));
         // W_ji = −W_ij.
         assert_relative_eq!(f.w(&a, &b, &State9::zeros()), -w);
     }
@@ -156,10 +147,7 @@ mod tests {
 
     #[test]
     fn rejects_non_finite_offsets() {
-        let err = Formation::new(
-            vec![FormationSlot::at(f64::NAN, 0.0, 0.0)],
-            FormationFrame::World,
-        );
+        let err = Formation::new(vec![FormationSlot::at(f64::NAN, 0.0, 0.0)], FormationFrame::World);
         assert!(err.is_err());
     }
 }

@@ -6,9 +6,7 @@
 use crate::state::State9;
 
 /// Identifier of a UAV; also its index in the [`crate::Formation`].
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 pub struct UavId(pub u32);
 
 impl UavId {

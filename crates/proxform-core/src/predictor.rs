@@ -32,10 +32,7 @@ pub enum PredictorKind {
 
 impl Default for PredictorKind {
     fn default() -> Self {
-        PredictorKind::AlphaBeta {
-            alpha: 0.8,
-            beta: 0.8 * 0.8 / 1.2,
-        }
+        PredictorKind::AlphaBeta { alpha: 0.8, beta: 0.8 * 0.8 / 1.2 }
     }
 }
 
@@ -84,12 +81,7 @@ impl NeighbourTracks {
     /// Tracks for at most `capacity` neighbours; a track not updated for `timeout_s` restarts.
     pub fn new(kind: PredictorKind, capacity: usize, timeout_s: f64) -> Self {
         let capacity = capacity.max(1);
-        Self {
-            kind,
-            timeout_s,
-            tracks: Vec::with_capacity(capacity),
-            capacity,
-        }
+        Self { kind, timeout_s, tracks: Vec::with_capacity(capacity), capacity }
     }
 
     /// Feeds observation `obs` (taken at `now − obs.age_s`) and returns the neighbour's
@@ -97,25 +89,16 @@ impl NeighbourTracks {
     pub fn predict(&mut self, obs: &Observation, now: f64, horizon_s: f64) -> State9 {
         let t_obs = now - obs.age_s;
         let track = match self.kind {
-            PredictorKind::ConstantVelocity => Track {
-                id: obs.id,
-                t: t_obs,
-                est: obs.state,
-                rate: Rates::zeros(),
-                seen: 1,
-            },
+            PredictorKind::ConstantVelocity => {
+                Track { id: obs.id, t: t_obs, est: obs.state, rate: Rates::zeros(), seen: 1 }
+            }
             PredictorKind::AlphaBeta { alpha, beta } => {
                 let slot = self.slot_for(obs.id, t_obs);
                 let tr = &mut self.tracks[slot];
                 let dt = t_obs - tr.t;
-                if tr.id != obs.id || !(dt <= self.timeout_s) {
-                    *tr = Track {
-                        id: obs.id,
-                        t: t_obs,
-                        est: obs.state,
-                        rate: Rates::zeros(),
-                        seen: 1,
-                    };
+                let fresh = dt <= self.timeout_s; // false for NaN too
+                if tr.id != obs.id || !fresh {
+                    *tr = Track { id: obs.id, t: t_obs, est: obs.state, rate: Rates::zeros(), seen: 1 };
                 } else if dt > 0.0 && tr.seen < 2 {
                     two_point_start(tr, &obs.state, dt);
                 } else if dt > 0.0 {
@@ -133,13 +116,7 @@ impl NeighbourTracks {
             return k;
         }
         if self.tracks.len() < self.capacity {
-            self.tracks.push(Track {
-                id,
-                t: t_obs,
-                est: State9::zeros(),
-                rate: Rates::zeros(),
-                seen: 0,
-            });
+            self.tracks.push(Track { id, t: t_obs, est: State9::zeros(), rate: Rates::zeros(), seen: 0 });
             // Marked as foreign so the caller initialises it.
             let k = self.tracks.len() - 1;
             self.tracks[k].id = UavId(u32::MAX);
@@ -208,12 +185,7 @@ mod tests {
     use approx::assert_relative_eq;
 
     fn obs(id: u32, s: State9) -> Observation {
-        Observation {
-            id: UavId(id),
-            state: s,
-            age_s: 0.0,
-            source: ObservationSource::Onboard,
-        }
+        Observation { id: UavId(id), state: s, age_s: 0.0, source: ObservationSource::Onboard }
     }
 
     #[test]

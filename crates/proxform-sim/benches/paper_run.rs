@@ -1,1 +1,18 @@
-fn main() {}
+//! One whole run of the paper experiment (6 UAVs, 1000 steps), without recording.
+
+use proxform_sim::batch::run_one;
+use proxform_sim::Scenario;
+
+fn main() {
+    divan::main();
+}
+
+#[divan::bench(sample_count = 30)]
+fn paper_run(bencher: divan::Bencher) {
+    let scenario = Scenario::paper();
+    let mut run = 0;
+    bencher.bench_local(|| {
+        run += 1;
+        divan::black_box(run_one(&scenario, 1, run, false))
+    });
+}

@@ -43,14 +43,7 @@ impl AxisErrors {
 
     /// As an array in report units.
     pub fn as_array(&self) -> [f64; 6] {
-        [
-            self.x_m,
-            self.y_m,
-            self.z_m,
-            self.alpha_deg,
-            self.beta_deg,
-            self.gamma_deg,
-        ]
+        [self.x_m, self.y_m, self.z_m, self.alpha_deg, self.beta_deg, self.gamma_deg]
     }
 }
 
@@ -145,11 +138,7 @@ pub fn run_batch(
         summaries.push(s);
     }
     let summary = aggregate(scenario, seed, &summaries);
-    Ok(BatchResult {
-        runs: summaries,
-        summary,
-        first_trajectory,
-    })
+    Ok(BatchResult { runs: summaries, summary, first_trajectory })
 }
 
 /// Nearest-rank percentile of `values` (sorted in place), `q` in (0, 1].
@@ -177,10 +166,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         median[k] = percentile(&mut col, 0.5);
         let ms: f64 = runs
             .iter()
-            .map(|r| {
-                r.rms_error.iter().map(|e| e[k] * e[k]).sum::<f64>()
-                    / r.rms_error.len().max(1) as f64
-            })
+            .map(|r| r.rms_error.iter().map(|e| e[k] * e[k]).sum::<f64>() / r.rms_error.len().max(1) as f64)
             .sum();
         rms[k] = (ms / n).sqrt();
     }
@@ -222,10 +208,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         rms_error: AxisErrors::from_si(rms),
         allowable_error: AxisErrors::from_si(scenario.allowable.as_array()),
         predicted_sigma: AxisErrors::from_si(predicted),
-        min_separation_m: runs
-            .iter()
-            .map(|r| r.min_separation_m)
-            .fold(f64::INFINITY, f64::min),
+        min_separation_m: runs.iter().map(|r| r.min_separation_m).fold(f64::INFINITY, f64::min),
         adjustments_per_uav_minute: adj_rate,
         per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
         per_uav_adjustments: per_uav_adj,

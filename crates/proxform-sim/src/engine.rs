@@ -7,9 +7,7 @@
 //! by (seed, run, UAV, source) and the step number.
 
 use proxform_core::state::{self, Input, State9};
-use proxform_core::{
-    Decision, Observation, ObservationSource, Outcome, ProximityController, UavId,
-};
+use proxform_core::{Decision, Observation, ObservationSource, Outcome, ProximityController, UavId};
 use rand::RngExt;
 use rand_distr::StandardNormal;
 
@@ -134,9 +132,7 @@ impl<'s> Simulation<'s> {
                 if j == i {
                     continue;
                 }
-                let d2 = (other[0] - me[0]).powi(2)
-                    + (other[1] - me[1]).powi(2)
-                    + (other[2] - me[2]).powi(2);
+                let d2 = (other[0] - me[0]).powi(2) + (other[1] - me[1]).powi(2) + (other[2] - me[2]).powi(2);
                 if d2 > range2 {
                     continue;
                 }
@@ -148,14 +144,8 @@ impl<'s> Simulation<'s> {
                 });
             }
             let decision = ctrl.step(t, &own, &self.observations);
-            let commanded = if sc.adjustment_enabled {
-                decision.input
-            } else {
-                Input::zeros()
-            };
-            let applied = if matches!(decision.outcome, Outcome::Adjusted { .. })
-                && sc.actuation_error > 0.0
-            {
+            let commanded = if sc.adjustment_enabled { decision.input } else { Input::zeros() };
+            let applied = if matches!(decision.outcome, Outcome::Adjusted { .. }) && sc.actuation_error > 0.0 {
                 let mut rng = StepRng::new(keys.actuation, self.k);
                 commanded.map(|u| u * (1.0 + sc.actuation_error * rng.random_range(-1.0..=1.0)))
             } else {

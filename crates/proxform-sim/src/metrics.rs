@@ -60,9 +60,7 @@ pub struct RunMetrics {
 impl RunMetrics {
     /// Metrics for `scenario`.
     pub fn new(scenario: &Scenario) -> Self {
-        let followers: Vec<usize> = (0..scenario.len())
-            .filter(|&i| i != scenario.navigator.index())
-            .collect();
+        let followers: Vec<usize> = (0..scenario.len()).filter(|&i| i != scenario.navigator.index()).collect();
         let nf = followers.len();
         Self {
             followers,
@@ -81,15 +79,8 @@ impl RunMetrics {
     /// The summary of run `run` lasting `duration_s`.
     pub fn finish(self, run: u64, duration_s: f64) -> RunSummary {
         let n = self.samples.max(1) as f64;
-        let rms_error = self
-            .sum_sq
-            .iter()
-            .map(|s| s.map(|v| (v / n).sqrt()))
-            .collect();
-        let pass = self
-            .max_abs
-            .iter()
-            .all(|e| e.iter().zip(&self.allowable).all(|(v, a)| v <= a));
+        let rms_error = self.sum_sq.iter().map(|s| s.map(|v| (v / n).sqrt())).collect();
+        let pass = self.max_abs.iter().all(|e| e.iter().zip(&self.allowable).all(|(v, a)| v <= a));
         let mn = self.model_n.max(1) as f64;
         let mut model_error_rms = [0.0; P];
         for (k, v) in model_error_rms.iter_mut().enumerate() {
@@ -135,9 +126,7 @@ impl Observer for RunMetrics {
         let s = frame.states;
         for a in 0..s.len() {
             for b in a + 1..s.len() {
-                let d2 = (s[a][0] - s[b][0]).powi(2)
-                    + (s[a][1] - s[b][1]).powi(2)
-                    + (s[a][2] - s[b][2]).powi(2);
+                let d2 = (s[a][0] - s[b][0]).powi(2) + (s[a][1] - s[b][1]).powi(2) + (s[a][2] - s[b][2]).powi(2);
                 if d2 < self.min_sep2 {
                     self.min_sep2 = d2;
                 }

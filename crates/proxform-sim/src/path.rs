@@ -52,12 +52,7 @@ impl Ramp {
         let tt = self.t1 - self.t0;
         let tau = (t - self.t0).min(tt);
         let inside = 0.5 * self.delta * (tau - tt / PI * (PI * tau / tt).sin());
-        inside
-            + if t > self.t1 {
-                self.delta * (t - self.t1)
-            } else {
-                0.0
-            }
+        inside + if t > self.t1 { self.delta * (t - self.t1) } else { 0.0 }
     }
 }
 
@@ -93,33 +88,13 @@ impl Default for PaperPath {
         Self {
             vx0_mps: kmh(250.0),
             speed_ramps: vec![
-                Ramp {
-                    t0: 30.0,
-                    t1: 40.0,
-                    delta: kmh(38.0),
-                },
-                Ramp {
-                    t0: 70.0,
-                    t1: 80.0,
-                    delta: kmh(36.0),
-                },
+                Ramp { t0: 30.0, t1: 40.0, delta: kmh(38.0) },
+                Ramp { t0: 70.0, t1: 80.0, delta: kmh(36.0) },
             ],
             lateral_ramps: vec![
-                Ramp {
-                    t0: 10.0,
-                    t1: 30.0,
-                    delta: 200.0,
-                },
-                Ramp {
-                    t0: 40.0,
-                    t1: 75.0,
-                    delta: -400.0,
-                },
-                Ramp {
-                    t0: 80.0,
-                    t1: 100.0,
-                    delta: 200.0,
-                },
+                Ramp { t0: 10.0, t1: 30.0, delta: 200.0 },
+                Ramp { t0: 40.0, t1: 75.0, delta: -400.0 },
+                Ramp { t0: 80.0, t1: 100.0, delta: 200.0 },
             ],
             height_amplitude_m: 20.0,
             height_period_s: 50.0,
@@ -138,9 +113,7 @@ impl PaperPath {
     pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
         let mut s = State9::zeros();
         s[state::VX] = self.vx0_mps + self.speed_ramps.iter().map(|r| r.value(t)).sum::<f64>();
-        s[state::X] = start[0]
-            + self.vx0_mps * t
-            + self.speed_ramps.iter().map(|r| r.integral(t)).sum::<f64>();
+        s[state::X] = start[0] + self.vx0_mps * t + self.speed_ramps.iter().map(|r| r.integral(t)).sum::<f64>();
         s[state::Y] = start[1] + self.lateral_ramps.iter().map(|r| r.value(t)).sum::<f64>();
         s[state::VY] = self.lateral_ramps.iter().map(|r| r.rate(t)).sum();
         let wz = TAU / self.height_period_s;
@@ -192,11 +165,7 @@ mod tests {
         let s100 = p.state_at(100.0, [0.0; 3]);
         assert_relative_eq!(s100[state::Y], 0.0, epsilon = 1e-9);
         assert_relative_eq!(s100[state::VX], kmh(324.0), epsilon = 1e-9);
-        assert_relative_eq!(
-            p.state_at(50.0, [0.0; 3])[state::ALPHA],
-            deg(45.0),
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(p.state_at(50.0, [0.0; 3])[state::ALPHA], deg(45.0), epsilon = 1e-12);
     }
 
     #[test]

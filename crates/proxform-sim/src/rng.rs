@@ -50,9 +50,7 @@ impl StepRng {
     /// The generator of stream `key` at step `step`.
     #[inline]
     pub fn new(key: u64, step: u64) -> Self {
-        Self {
-            state: mix(key ^ mix(step.wrapping_add(GOLDEN))),
-        }
+        Self { state: mix(key ^ mix(step.wrapping_add(GOLDEN))) }
     }
 
     #[inline]

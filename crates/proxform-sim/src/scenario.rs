@@ -8,8 +8,8 @@ use std::sync::Arc;
 use proxform_core::angle::deg;
 use proxform_core::state::{self, State9};
 use proxform_core::{
-    ConfigError, ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot,
-    KinematicModel, UavId, VehicleModel,
+    ConfigError, ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, UavId,
+    VehicleModel,
 };
 
 use crate::path::{NavigatorPath, PaperPath};
@@ -133,18 +133,10 @@ impl Scenario {
     pub fn validate(&self) -> Result<(), ScenarioError> {
         let n = self.initial.len();
         if n < 2 {
-            return Err(ScenarioError::Shape {
-                what: "number of UAVs",
-                expected: 2,
-                found: n,
-            });
+            return Err(ScenarioError::Shape { what: "number of UAVs", expected: 2, found: n });
         }
         if self.formation.len() != n {
-            return Err(ScenarioError::Shape {
-                what: "formation slots",
-                expected: n,
-                found: self.formation.len(),
-            });
+            return Err(ScenarioError::Shape { what: "formation slots", expected: n, found: self.formation.len() });
         }
         if self.dependencies.len() != n {
             return Err(ScenarioError::Shape {
@@ -154,11 +146,7 @@ impl Scenario {
             });
         }
         if self.navigator.index() >= n {
-            return Err(ConfigError::UnknownUav {
-                id: self.navigator,
-                size: n,
-            }
-            .into());
+            return Err(ConfigError::UnknownUav { id: self.navigator, size: n }.into());
         }
         positive("dt_s", self.dt_s)?;
         positive("duration_s", self.duration_s)?;
@@ -186,11 +174,7 @@ impl Scenario {
             ("actuation_error", self.actuation_error),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(ScenarioError::Value {
-                    field,
-                    value: v,
-                    expected: "a finite value ≥ 0",
-                });
+                return Err(ScenarioError::Value { field, value: v, expected: "a finite value ≥ 0" });
             }
         }
         for v in self.allowable.as_array() {
@@ -212,10 +196,7 @@ impl Scenario {
             (-173.2, -100.0, -20.0),
         ];
         let n = layout.len();
-        let slots: Vec<FormationSlot> = layout
-            .iter()
-            .map(|&(f, l, u)| FormationSlot::at(f, l, u))
-            .collect();
+        let slots: Vec<FormationSlot> = layout.iter().map(|&(f, l, u)| FormationSlot::at(f, l, u)).collect();
         let path = PaperPath::default();
         // Every UAV starts in its slot on the navigator's initial state: [250 km/h, 0, vz, 5°, 3°, 0°]
         // with vz the path's initial climb rate (see README, Choices).
@@ -242,38 +223,24 @@ impl Scenario {
             .iter()
             .enumerate()
             .map(|(i, refs)| {
-                DependencySet::new(
-                    UavId(i as u32),
-                    n,
-                    refs.iter().map(|&(j, c)| (UavId(j), c)).collect(),
-                )
-                .expect("the paper's Table 1 is a valid dependency table")
+                DependencySet::new(UavId(i as u32), n, refs.iter().map(|&(j, c)| (UavId(j), c)).collect())
+                    .expect("the paper's Table 1 is a valid dependency table")
             })
             .collect();
         Self {
             name: "paper".into(),
             dt_s: 0.1,
             duration_s: 100.0,
-            formation: Arc::new(Formation {
-                slots,
-                frame: FormationFrame::World,
-            }),
+            formation: Arc::new(Formation { slots, frame: FormationFrame::World }),
             navigator: UavId(0),
             path: NavigatorPath::Paper(path),
             initial,
             dependencies,
             controller: ControllerParams::default(),
             vehicle: VehicleModel::Kinematic(KinematicModel::default()),
-            noise: MeasurementNoise {
-                position_m: 0.02,
-                velocity_mps: 0.05,
-                attitude_rad: deg(0.01),
-            },
+            noise: MeasurementNoise { position_m: 0.02, velocity_mps: 0.05, attitude_rad: deg(0.01) },
             actuation_error: 0.1,
-            allowable: AllowableErrors {
-                position_m: [0.5, 0.6, 0.2],
-                attitude_rad: [deg(0.4), deg(0.3), deg(1.0)],
-            },
+            allowable: AllowableErrors { position_m: [0.5, 0.6, 0.2], attitude_rad: [deg(0.4), deg(0.3), deg(1.0)] },
             adjustment_enabled: true,
         }
     }
@@ -283,11 +250,7 @@ fn positive(field: &'static str, v: f64) -> Result<(), ScenarioError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(ScenarioError::Value {
-            field,
-            value: v,
-            expected: "a finite value > 0",
-        })
+        Err(ScenarioError::Value { field, value: v, expected: "a finite value > 0" })
     }
 }
 

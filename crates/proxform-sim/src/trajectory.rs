@@ -37,11 +37,7 @@ impl Observer for Trajectory {
         let nav = scenario.navigator.index();
         let allowable = scenario.allowable.as_array();
         for (i, s) in frame.states.iter().enumerate() {
-            let error = if i == nav {
-                [0.0; 6]
-            } else {
-                formation_error(scenario, frame.states, i)
-            };
+            let error = if i == nav { [0.0; 6] } else { formation_error(scenario, frame.states, i) };
             let (outcome, in_envelope) = match frame.decisions[i] {
                 Some(d) => (d.outcome.label(), d.outcome == proxform_core::Outcome::Held),
                 None if i == nav => ("navigator", false),

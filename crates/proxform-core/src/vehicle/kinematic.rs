@@ -74,22 +74,8 @@ impl KinematicLimits {
     fn state_box(&self) -> ([f64; 6], [f64; 6]) {
         let a = self.attitude_max_rad;
         (
-            [
-                self.vx_min_mps,
-                -self.vy_max_mps,
-                -self.vz_max_mps,
-                -a.x,
-                -a.y,
-                -a.z,
-            ],
-            [
-                self.vx_max_mps,
-                self.vy_max_mps,
-                self.vz_max_mps,
-                a.x,
-                a.y,
-                a.z,
-            ],
+            [self.vx_min_mps, -self.vy_max_mps, -self.vz_max_mps, -a.x, -a.y, -a.z],
+            [self.vx_max_mps, self.vy_max_mps, self.vz_max_mps, a.x, a.y, a.z],
         )
     }
 }

@@ -1,0 +1,91 @@
+//! The `proxform` binary as a user runs it.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn proxform() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_proxform"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn run_writes_the_table_the_summary_and_the_figures() {
+    let out = scratch("cli-run");
+    let o = proxform().args(["run", "--runs", "4", "--seed", "3", "-q", "--out"]).arg(&out).output().expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    for uav in ["UAV2", "UAV3", "UAV4", "UAV5", "UAV6"] {
+        assert!(stdout.contains(uav), "{stdout}");
+    }
+    assert!(stdout.contains("PASS") && stdout.contains("eq.17"), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary.json")).expect("JSON");
+    assert_eq!(summary["runs"], 4);
+    assert_eq!(summary["seed"], 3);
+    for key in ["pass_fraction", "min_separation_m", "adjustments_per_uav_minute"] {
+        assert!(summary[key].is_number(), "{key} missing");
+    }
+    for key in ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"] {
+        assert!(summary["worst_abs_error"][key].is_number(), "worst {key}");
+        assert!(summary["p99_abs_error"][key].is_number(), "p99 {key}");
+    }
+    for fig in
+        ["fig4_x", "fig5_y", "fig6_z", "fig7_alpha", "fig8_beta", "fig9_gamma", "fig10a_tracks", "fig10b_attitude"]
+    {
+        for ext in ["png", "svg"] {
+            let p = out.join(format!("{fig}.{ext}"));
+            assert!(std::fs::metadata(&p).map(|m| m.len() > 1000).unwrap_or(false), "{}", p.display());
+        }
+    }
+    let csv = std::fs::read_to_string(out.join("trajectories.csv")).expect("trajectories.csv");
+    let mut lines = csv.lines();
+    assert!(lines.next().is_some_and(|h| h.starts_with("t_s,uav,x_m")));
+    assert_eq!(lines.count(), 6 * 1001);
+}
+
+#[test]
+fn a_fixed_seed_gives_byte_identical_trajectories() {
+    let a = scratch("cli-seed-a");
+    let b = scratch("cli-seed-b");
+    for dir in [&a, &b] {
+        let o =
+            proxform().args(["run", "--seed", "11", "--no-figures", "-q", "--out"]).arg(dir).output().expect("runs");
+        assert!(o.status.success());
+    }
+    let ta = std::fs::read(a.join("trajectories.csv")).expect("a");
+    let tb = std::fs::read(b.join("trajectories.csv")).expect("b");
+    assert!(ta == tb, "trajectories differ");
+}
+
+#[test]
+fn switching_adjustment_off_fails_with_exit_code_1() {
+    let out = scratch("cli-noadjust");
+    let o = proxform()
+        .args(["run", "--no-adjust", "--no-figures", "--no-trajectories", "-q", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("FAIL"));
+}
+
+#[test]
+fn invalid_arguments_are_refused_with_a_message() {
+    for args in [
+        vec!["run", "--runs", "0"],
+        vec!["run", "--seed", "-4"],
+        vec!["run", "--scenario", "nope"],
+        vec!["run", "--threads", "many"],
+        vec!["fly"],
+    ] {
+        let o = proxform().args(&args).output().expect("runs");
+        assert!(!o.status.success(), "{args:?} accepted");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("error"), "{args:?}: {err}");
+    }
+}

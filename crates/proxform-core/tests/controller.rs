@@ -1,0 +1,184 @@
+//! Behaviour of one proximity controller on hand-made observations.
+
+use std::sync::Arc;
+
+use proxform_core::angle::{deg, kmh};
+use proxform_core::state::{self, State9};
+use proxform_core::{
+    ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, Observation,
+    ObservationSource, Outcome, PredictorKind, ProximityController, UavId, VehicleModel,
+};
+
+fn formation() -> Arc<Formation> {
+    Arc::new(Formation {
+        slots: vec![
+            FormationSlot::at(0.0, 0.0, 0.0),
+            FormationSlot::at(-86.6, 50.0, -10.0),
+            FormationSlot::at(-86.6, -50.0, -10.0),
+            FormationSlot::at(-173.2, 0.0, -20.0),
+        ],
+        frame: FormationFrame::World,
+    })
+}
+
+fn cruise_at(slot: &FormationSlot) -> State9 {
+    State9::from_column_slice(&[
+        slot.offset_m.x,
+        slot.offset_m.y,
+        slot.offset_m.z,
+        kmh(250.0),
+        0.0,
+        0.0,
+        deg(5.0),
+        deg(3.0),
+        0.0,
+    ])
+}
+
+fn controller(params: ControllerParams) -> ProximityController {
+    let f = formation();
+    let deps = DependencySet::new(UavId(1), 4, vec![(UavId(0), 0.7), (UavId(2), 0.3)]).expect("valid table");
+    ProximityController::new(UavId(1), params, f, deps, VehicleModel::Kinematic(KinematicModel::default()))
+        .expect("valid controller")
+}
+
+fn params() -> ControllerParams {
+    ControllerParams { predictor: PredictorKind::ConstantVelocity, ..ControllerParams::default() }
+}
+
+fn observe(id: u32, s: State9) -> Observation {
+    Observation { id: UavId(id), state: s, age_s: 0.0, source: ObservationSource::Onboard }
+}
+
+fn everyone_in_slot() -> Vec<State9> {
+    formation().slots.iter().map(cruise_at).collect()
+}
+
+#[test]
+fn holds_when_in_its_slot() {
+    let mut c = controller(params());
+    let s = everyone_in_slot();
+    let obs: Vec<_> = [0, 2, 3].iter().map(|&j| observe(j, s[j as usize])).collect();
+    let d = c.step(0.0, &s[1], &obs);
+    assert_eq!(d.outcome, Outcome::Held);
+    assert_eq!(d.input, proxform_core::Input::zeros());
+    assert_eq!(d.main_refs, 2);
+}
+
+#[test]
+fn adjusts_toward_the_centre_when_displaced() {
+    let mut c = controller(params());
+    let s = everyone_in_slot();
+    let obs: Vec<_> = [0, 2, 3].iter().map(|&j| observe(j, s[j as usize])).collect();
+    let mut me = s[1];
+    me[state::Y] += 1.0; // 1 m too far left
+    me[state::BETA] += deg(0.15); // and yawed
+    let d = c.step(0.0, &me, &obs);
+    assert!(matches!(d.outcome, Outcome::Adjusted { .. }), "{:?}", d.outcome);
+    // Moves right (−y) and yaws back, within the per-step limits.
+    assert!(d.input[1] < 0.0 && d.input[1] >= -0.5 - 1e-12, "Δvy = {}", d.input[1]);
+    assert!(d.input[4] < 0.0 && d.input[4] >= -deg(0.2) - 1e-12, "Δβ = {}", d.input[4]);
+    // The yaw error is within one step's reach, so it is cancelled.
+    assert!((d.input[4] + deg(0.15)).abs() < deg(0.01));
+}
+
+#[test]
+fn saturates_large_corrections_at_the_vehicle_limits() {
+    let mut c = controller(params());
+    let s = everyone_in_slot();
+    let obs: Vec<_> = [0, 2, 3].iter().map(|&j| observe(j, s[j as usize])).collect();
+    let mut me = s[1];
+    me[state::Y] -= 30.0;
+    me[state::GAMMA] = deg(-10.0);
+    let d = c.step(0.0, &me, &obs);
+    assert!((d.input[1] - 0.5).abs() < 1e-12, "Δvy saturates at 5 m/s² · 0.1 s: {}", d.input[1]);
+    assert!((d.input[5] - deg(0.2)).abs() < 1e-12, "Δγ saturates at 2 °/s · 0.1 s: {}", d.input[5]);
+}
+
+#[test]
+fn flies_alone_when_nothing_is_perceived() {
+    let mut c = controller(params());
+    let s = everyone_in_slot();
+    let d = c.step(0.0, &s[1], &[]);
+    assert_eq!(d.outcome, Outcome::Alone);
+    // Onboard observations beyond the sensing range do not count either.
+    let mut far = s[0];
+    far[state::X] += 1000.0;
+    let d = c.step(0.1, &s[1], &[observe(0, far)]);
+    assert_eq!(d.outcome, Outcome::Alone);
+    // The same state heard over the radio does.
+    let radio = Observation { source: ObservationSource::Radio, ..observe(0, far) };
+    let d = c.step(0.2, &s[1], &[radio]);
+    assert!(matches!(d.outcome, Outcome::Adjusted { .. }));
+}
+
+#[test]
+fn keeps_only_the_nearest_uav_of_an_area() {
+    // Only λ = 0 (the area mean) decides here. UAV1 is ahead-right of UAV2, in area 0; a
+    // far-away copy of UAV1's slot occupant placed in the same area must be ignored in favour
+    // of the nearer one.
+    let mut p = params();
+    p.lambda = 0.0;
+    let f = formation();
+    let deps = DependencySet::new(UavId(1), 4, vec![]).expect("empty table");
+    let mut c = ProximityController::new(UavId(1), p, f, deps, VehicleModel::Kinematic(KinematicModel::default()))
+        .expect("valid");
+    let s = everyone_in_slot();
+    // UAV3 (id 2) displaced by 5 m in z but placed in area 0 behind UAV1 (id 0): further away.
+    let mut decoy = s[0];
+    decoy[state::X] += 100.0;
+    decoy[state::Y] -= 30.0;
+    decoy[state::Z] += 5.0;
+    let d = c.step(0.0, &s[1], &[observe(0, s[0]), observe(2, decoy)]);
+    assert_eq!(d.outcome, Outcome::Held, "the decoy should have been dropped: {:?}", d);
+    assert_eq!(d.occupied_areas, 1);
+}
+
+#[test]
+fn main_references_count_even_when_not_nearest_in_their_area() {
+    // λ = 1: the centre is the dependency mean only. UAV1 (id 0, degree 0.7) is in area 0;
+    // a nearer non-reference UAV (id 3) is placed in the same area.
+    let mut p = params();
+    p.lambda = 1.0;
+    let mut c = controller(p);
+    let s = everyone_in_slot();
+    let mut nearer = s[1];
+    nearer[state::X] += 40.0;
+    nearer[state::Y] -= 10.0;
+    let mut lead = s[0];
+    lead[state::Z] += 2.0; // the navigator climbed 2 m: UAV2 must follow
+    let d = c.step(0.0, &s[1], &[observe(0, lead), observe(2, s[2]), observe(3, nearer)]);
+    assert!(matches!(d.outcome, Outcome::Adjusted { .. }));
+    assert!(d.input[2] > 0.0, "climbs after its main reference: {:?}", d.input);
+}
+
+#[test]
+fn rejects_invalid_parameters_by_name() {
+    let mut p = params();
+    p.lambda = 1.2;
+    let f = formation();
+    let deps = DependencySet::default();
+    let err = ProximityController::new(
+        UavId(1),
+        p,
+        f.clone(),
+        deps.clone(),
+        VehicleModel::Kinematic(KinematicModel::default()),
+    )
+    .expect_err("λ > 1");
+    assert!(err.to_string().contains("lambda"), "{err}");
+    let mut p = params();
+    p.areas.areas = 0;
+    let err = ProximityController::new(
+        UavId(1),
+        p,
+        f.clone(),
+        deps.clone(),
+        VehicleModel::Kinematic(KinematicModel::default()),
+    )
+    .expect_err("m = 0");
+    assert!(err.to_string().contains("areas"), "{err}");
+    let err = ProximityController::new(UavId(9), params(), f, deps, VehicleModel::Kinematic(KinematicModel::default()))
+        .expect_err("not in formation");
+    assert!(err.to_string().contains("UAV10"), "{err}");
+}
