@@ -6,7 +6,7 @@
 //! the binary so no system font library is needed.
 
 use std::path::{Path, PathBuf};
-use std::sync::Once;
+use std::sync::OnceLock;
 
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
@@ -46,6 +46,16 @@ const AXES: [Axis; 6] = [
 
 fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("cannot draw figure: {e:?}")
+}
+
+/// Makes the embedded font the "sans-serif" of the PNG backend (once per process).
+fn register_embedded_font() -> Result<()> {
+    static FONT_OK: OnceLock<bool> = OnceLock::new();
+    if *FONT_OK.get_or_init(|| register_font("sans-serif", FontStyle::Normal, FONT).is_ok()) {
+        Ok(())
+    } else {
+        Err(anyhow!("the embedded font could not be loaded"))
+    }
 }
 
 /// Per-UAV time series extracted from a trajectory.
@@ -243,12 +253,7 @@ fn attitude_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series
 
 /// Draws every figure of a run into `dir` and returns the files written.
 pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<Vec<PathBuf>> {
-    static FONT_ONCE: Once = Once::new();
-    let mut font_ok = true;
-    FONT_ONCE.call_once(|| font_ok = register_font("sans-serif", FontStyle::Normal, FONT).is_ok());
-    if !font_ok {
-        return Err(anyhow!("the embedded font could not be loaded"));
-    }
+    register_embedded_font()?;
     let s = Series::new(traj, scenario.len());
     let nav = scenario.navigator.index();
     let allow = scenario.allowable.as_array();
@@ -273,4 +278,58 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
     attitude_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
     written.extend([png, svg]);
     Ok(written)
+}
+
+/// Cost per agent-update against swarm size, one curve per (search, threads) configuration.
+pub fn bench_plot(dir: &Path, rows: &[(u64, String, usize, f64)]) -> Result<Vec<PathBuf>> {
+    register_embedded_font()?;
+    let png = dir.join("cost_per_update.png");
+    let svg = dir.join("cost_per_update.svg");
+    bench_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), rows)?;
+    bench_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), rows)?;
+    Ok(vec![png, svg])
+}
+
+fn bench_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[(u64, String, usize, f64)]) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    let nmax = rows.iter().map(|r| r.0).max().unwrap_or(100) as f64;
+    let ymax = rows.iter().map(|r| r.3).fold(1.0, f64::max);
+    let ymin = rows.iter().map(|r| r.3).fold(f64::INFINITY, f64::min).min(ymax);
+    let mut chart = ChartBuilder::on(root)
+        .caption("Cost per agent-update (swarm scenario)", ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d((50.0..nmax * 2.0).log_scale(), (ymin * 0.5..ymax * 2.0).log_scale())
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc("UAVs")
+        .y_desc("ns per agent-update")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.0}"))
+        .draw()
+        .map_err(plot_err)?;
+    let mut configs: Vec<(String, usize)> = rows.iter().map(|r| (r.1.clone(), r.2)).collect();
+    configs.sort();
+    configs.dedup();
+    for (k, (search, threads)) in configs.iter().enumerate() {
+        let color = PALETTE[(k + 1) % PALETTE.len()];
+        let pts: Vec<(f64, f64)> =
+            rows.iter().filter(|r| &r.1 == search && r.2 == *threads).map(|r| (r.0 as f64, r.3)).collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+            .map_err(plot_err)?
+            .label(format!("{search}, {threads} thread(s)"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(plot_err)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)
 }

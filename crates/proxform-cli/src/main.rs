@@ -1,6 +1,8 @@
 //! The `proxform` command-line tool.
 
+mod bench;
 mod figures;
+mod memory;
 mod output;
 mod report;
 mod run;
@@ -19,15 +21,22 @@ struct Cli {
 enum Command {
     /// Run a scenario (by default the paper's six-UAV experiment) over one or more seeds.
     Run(run::RunArgs),
+    /// Measure agent-updates per second and peak memory of the swarm scenario, 10^2 … 10^6 UAVs.
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(code) => code,
+        // A closed pipe (`proxform run | head`) ends the output, not the program with an error.
+        Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) => {
+            std::process::ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             std::process::ExitCode::from(2)

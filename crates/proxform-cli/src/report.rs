@@ -1,5 +1,6 @@
 //! The printed report: per-follower errors against the allowable ones, and the batch summary.
 
+use std::io::{self, Write};
 use std::time::Duration;
 
 use proxform_sim::{BatchResult, Scenario};
@@ -7,63 +8,97 @@ use proxform_sim::{BatchResult, Scenario};
 const AXES: [&str; 6] = ["x m", "y m", "z m", "α °", "β °", "γ °"];
 
 /// Prints the table of one batch.
-pub fn print(scenario: &Scenario, result: &BatchResult, elapsed: Duration, threads: usize) {
+pub fn print(
+    out: &mut impl Write,
+    scenario: &Scenario,
+    result: &BatchResult,
+    elapsed: Duration,
+    threads: usize,
+) -> io::Result<()> {
     let s = &result.summary;
     let allow = s.allowable_error.as_array();
-    println!(
-        "proxform run: scenario '{}', {} run(s) from seed {}, {:.2} s on {} thread(s)\n",
+    writeln!(
+        out,
+        "proxform run: scenario '{}' ({} UAVs), {} run(s) from seed {}, {:.2} s on {} thread(s)\n",
         s.scenario,
+        s.uavs,
         s.runs,
         s.seed,
         elapsed.as_secs_f64(),
         threads
-    );
-    println!("Largest |error| relative to the navigator (METHOD §7), over all runs:");
-    print!("{:<8}", "UAV");
+    )?;
+    writeln!(out, "Largest |error| relative to the navigator (METHOD §7), over all runs:")?;
+    write!(out, "{:<8}", "UAV")?;
     for a in AXES {
-        print!("{a:>10}");
+        write!(out, "{a:>10}")?;
     }
-    println!("{:>14}{:>8}", "adjust/run", "result");
-    print!("{:<8}", "allowed");
+    writeln!(out, "{:>14}{:>8}", "adjust/run", "result")?;
+    write!(out, "{:<8}", "allowed")?;
     for a in allow {
-        print!("{a:>10.3}");
+        write!(out, "{a:>10.3}")?;
     }
-    println!();
-    let nav = scenario.navigator.index();
-    let followers = (0..scenario.len()).filter(|&i| i != nav);
-    for (f, i) in followers.enumerate() {
-        let w = s.per_uav_worst[f].as_array();
-        let ok = w.iter().zip(&allow).all(|(e, a)| e <= a);
-        print!("{:<8}", format!("UAV{}", i + 1));
-        for e in w {
-            print!("{e:>10.3}");
-        }
-        println!("{:>14.1}{:>8}", s.per_uav_adjustments[f], if ok { "PASS" } else { "FAIL" });
+    writeln!(out)?;
+    let shown = s.per_uav.len().min(MAX_ROWS);
+    for f in 0..shown {
+        uav_row(
+            out,
+            &format!("UAV{}", s.per_uav[f]),
+            &s.per_uav_worst[f].as_array(),
+            s.per_uav_adjustments[f],
+            &allow,
+        )?;
     }
-    println!();
-    row("p99 over runs", &s.p99_abs_error.as_array());
-    row("median", &s.median_abs_error.as_array());
-    row("RMS measured", &s.rms_error.as_array());
-    row("eq.17 σ", &s.predicted_sigma.as_array());
-    println!();
-    println!(
+    if s.uavs as usize - 1 > shown {
+        writeln!(out, "… {} more followers", s.uavs as usize - 1 - shown)?;
+        let per_run = s.adjustments_per_uav_minute * scenario.duration_s / 60.0;
+        uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, &allow)?;
+    }
+    writeln!(out)?;
+    row(out, "p99 over runs", &s.p99_abs_error.as_array())?;
+    row(out, "median", &s.median_abs_error.as_array())?;
+    row(out, "RMS measured", &s.rms_error.as_array())?;
+    row(out, "eq.17 σ", &s.predicted_sigma.as_array())?;
+    writeln!(out)?;
+    writeln!(
+        out,
         "pass fraction            {:.4} ({} of {} runs)",
         s.pass_fraction,
         result.runs.iter().filter(|r| r.pass).count(),
         s.runs
-    );
-    println!("min separation           {:.1} m", s.min_separation_m);
-    println!("adjustments per UAV-min  {:.1}", s.adjustments_per_uav_minute);
+    )?;
+    writeln!(
+        out,
+        "min separation           {:.1} m (safety distance {:.1} m, {} run(s) closer)",
+        s.min_separation_m, s.safety_distance_m, s.unsafe_runs
+    )?;
+    writeln!(out, "adjustments per UAV-min  {:.1}", s.adjustments_per_uav_minute)?;
+    let updates = (s.uavs.saturating_sub(1) * s.runs) as f64 * scenario.steps() as f64;
+    writeln!(out, "agent-updates per second {:.3e}", updates / elapsed.as_secs_f64().max(1e-9))?;
+    Ok(())
 }
 
-fn row(label: &str, v: &[f64; 6]) {
-    print!("{label:<8}");
+/// Most follower rows printed; larger swarms get a summary row.
+const MAX_ROWS: usize = 10;
+
+fn uav_row(out: &mut impl Write, label: &str, worst: &[f64; 6], adjustments: f64, allow: &[f64; 6]) -> io::Result<()> {
+    let ok = worst.iter().zip(allow).all(|(e, a)| e <= a);
+    write!(out, "{label:<8}")?;
+    for e in worst {
+        write!(out, "{e:>10.3}")?;
+    }
+    writeln!(out, "{:>14.1}{:>8}", adjustments, if ok { "PASS" } else { "FAIL" })?;
+    Ok(())
+}
+
+fn row(out: &mut impl Write, label: &str, v: &[f64; 6]) -> io::Result<()> {
+    write!(out, "{label:<8}")?;
     if label.len() > 8 {
-        println!();
-        print!("{:<8}", "");
+        writeln!(out)?;
+        write!(out, "{:<8}", "")?;
     }
     for e in v {
-        print!("{e:>10.3}");
+        write!(out, "{e:>10.3}")?;
     }
-    println!();
+    writeln!(out)?;
+    Ok(())
 }

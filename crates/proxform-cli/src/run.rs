@@ -1,5 +1,6 @@
 //! `proxform run`: a batch of seeded runs, the printed table and the output files.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -15,9 +16,15 @@ use crate::{figures, output, report};
 /// Arguments of `proxform run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Built-in scenario to run.
-    #[arg(long, default_value = "paper", value_parser = ["paper"])]
+    /// Built-in scenario to run: the paper's experiment, or a large lattice swarm.
+    #[arg(long, default_value = "paper", value_parser = ["paper", "swarm"])]
     scenario: String,
+    /// Number of UAVs of the swarm scenario (2 to 10^7).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(2..=10_000_000))]
+    uavs: Option<u64>,
+    /// Flight duration override (s).
+    #[arg(long)]
+    duration_s: Option<f64>,
     /// Base seed; run r of a batch uses streams keyed by (seed, r).
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -67,10 +74,15 @@ enum Predictor {
 
 /// Runs the command; the exit code is 0 when every run passed, 1 otherwise.
 pub fn run(args: &RunArgs) -> Result<ExitCode> {
-    let mut scenario = match args.scenario.as_str() {
-        "paper" => Scenario::paper(),
-        other => bail!("unknown scenario '{other}'"),
+    let mut scenario = match (args.scenario.as_str(), args.uavs) {
+        ("paper", None) => Scenario::paper(),
+        ("paper", Some(_)) => bail!("--uavs applies to --scenario swarm only; the paper experiment has 6 UAVs"),
+        ("swarm", n) => proxform_sim::swarm::scenario(n.unwrap_or(1000) as usize).context("invalid swarm")?,
+        (other, _) => bail!("unknown scenario '{other}'"),
     };
+    if let Some(d) = args.duration_s {
+        scenario.duration_s = d;
+    }
     scenario.adjustment_enabled = !args.no_adjust;
     let c = &mut scenario.controller;
     if let Some(l) = args.lambda {
@@ -104,7 +116,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 
-    report::print(&scenario, &result, elapsed, pool.current_num_threads());
+    // Files first: a reader that closes the report early still gets them.
     output::write_summary(&out.join("summary.json"), &result.summary)?;
     let mut written = vec![out.join("summary.json")];
     if let Some(traj) = &result.first_trajectory {
@@ -117,6 +129,9 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
             written.extend(figures::write_all(&out, &scenario, traj)?);
         }
     }
-    println!("\nwrote {} files to {}", written.len(), out.display());
+    let mut stdout = std::io::stdout().lock();
+    report::print(&mut stdout, &scenario, &result, elapsed, pool.current_num_threads())?;
+    writeln!(stdout, "peak memory              {}", crate::memory::mib(crate::memory::peak_rss_bytes()))?;
+    writeln!(stdout, "\nwrote {} files to {}", written.len(), out.display())?;
     Ok(if result.summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

@@ -89,3 +89,38 @@ fn invalid_arguments_are_refused_with_a_message() {
         assert!(err.contains("error"), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn swarm_runs_at_any_size_and_keeps_files_small() {
+    let out = scratch("cli-swarm");
+    let o = proxform()
+        .args(["run", "--scenario", "swarm", "--uavs", "3000", "--duration-s", "2", "--no-figures", "-q", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("3000 UAVs") && stdout.contains("more followers") && stdout.contains("agent-updates"));
+    // Trajectories are kept for a sample of UAVs only.
+    let csv = std::fs::read_to_string(out.join("trajectories.csv")).expect("csv");
+    assert_eq!(csv.lines().count() - 1, 64 * 21);
+    let o = proxform().args(["run", "--uavs", "10"]).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--uavs applies to --scenario swarm"));
+}
+
+#[test]
+fn bench_measures_in_child_processes() {
+    let out = scratch("cli-bench");
+    let o = proxform()
+        .args(["bench", "--max-uavs", "100", "--naive-max-uavs", "100", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("all-pairs") && stdout.contains("MiB"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
+    assert!(csv.lines().count() >= 3, "{csv}");
+    assert!(out.join("cost_per_update.png").exists());
+}

@@ -22,7 +22,7 @@ fn setup(n: usize) -> (ProximityController, Vec<Observation>, State9) {
     }
     let formation = Arc::new(Formation { slots, frame: FormationFrame::World });
     let deps = DependencySet::new(UavId(0), n + 1, vec![(UavId(1), 0.7)]).expect("valid");
-    let ctrl = ProximityController::new(
+    let ctrl = ProximityController::standalone(
         UavId(0),
         ControllerParams::default(),
         formation.clone(),

@@ -19,6 +19,9 @@ pub fn wrap_2pi(a: f64) -> f64 {
 /// Wraps an angle to `(-π, π]`.
 #[inline]
 pub fn wrap_pi(a: f64) -> f64 {
+    if a > -PI && a <= PI {
+        return a;
+    }
     let w = wrap_2pi(a);
     if w > PI {
         w - TAU

@@ -18,6 +18,33 @@ pub type ControlMatrix = SMatrix<f64, P, MAX_INPUTS>;
 /// Most coordinate-descent sweeps for coupled inputs.
 const MAX_SWEEPS: usize = 64;
 
+/// Hessian `H = BᵀQB + diag(w)` of the step's cost, and whether inputs are coupled (H not
+/// diagonal). For a vehicle whose B does not depend on the state it is computed once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hessian {
+    h: SMatrix<f64, MAX_INPUTS, MAX_INPUTS>,
+    n: usize,
+    coupled: bool,
+}
+
+impl Hessian {
+    /// `BᵀQB + diag(w)` over the first `n` inputs.
+    pub fn new(b: &ControlMatrix, n: usize, q: &State9, w: &Input) -> Self {
+        let mut h = SMatrix::<f64, MAX_INPUTS, MAX_INPUTS>::zeros();
+        for a in 0..n {
+            let qa = b.column(a).component_mul(q);
+            for c in a..n {
+                let v = qa.dot(&b.column(c));
+                h[(a, c)] = v;
+                h[(c, a)] = v;
+            }
+            h[(a, a)] += w[a];
+        }
+        let coupled = (0..n).any(|a| (0..n).any(|c| a != c && h[(a, c)] != 0.0));
+        Self { h, n, coupled }
+    }
+}
+
 /// Solves the saturated least-squares step. `q` are the state weights, `w` the input weights,
 /// `n` the number of inputs in use. Inputs whose column and weight are both zero stay at zero.
 pub fn saturated_least_squares(
@@ -29,23 +56,20 @@ pub fn saturated_least_squares(
     lo: &Input,
     hi: &Input,
 ) -> Input {
-    // Hessian H = BᵀQB + diag(w) and gradient g = BᵀQr (n ≤ MAX_INPUTS).
-    let mut h = SMatrix::<f64, MAX_INPUTS, MAX_INPUTS>::zeros();
-    let mut g = SVector::<f64, MAX_INPUTS>::zeros();
+    solve(&Hessian::new(b, n, q, w), b, r, q, lo, hi)
+}
+
+/// The same step with a precomputed Hessian.
+pub fn solve(hess: &Hessian, b: &ControlMatrix, r: &State9, q: &State9, lo: &Input, hi: &Input) -> Input {
+    let (h, n) = (&hess.h, hess.n);
+    // Gradient g = BᵀQr.
     let qr = r.component_mul(q);
+    let mut g = SVector::<f64, MAX_INPUTS>::zeros();
     for a in 0..n {
-        let ca = b.column(a);
-        g[a] = ca.dot(&qr);
-        for c in a..n {
-            let v = ca.component_mul(q).dot(&b.column(c));
-            h[(a, c)] = v;
-            h[(c, a)] = v;
-        }
-        h[(a, a)] += w[a];
+        g[a] = b.column(a).dot(&qr);
     }
     let mut u = Input::zeros();
-    let coupled = (0..n).any(|a| (0..n).any(|c| a != c && h[(a, c)] != 0.0));
-    let sweeps = if coupled { MAX_SWEEPS } else { 1 };
+    let sweeps = if hess.coupled { MAX_SWEEPS } else { 1 };
     for _ in 0..sweeps {
         let mut change: f64 = 0.0;
         for a in 0..n {
@@ -53,9 +77,11 @@ pub fn saturated_least_squares(
                 continue;
             }
             let mut s = g[a];
-            for c in 0..n {
-                if c != a {
-                    s += h[(a, c)] * u[c];
+            if hess.coupled {
+                for c in 0..n {
+                    if c != a {
+                        s += h[(a, c)] * u[c];
+                    }
                 }
             }
             let new = (-s / h[(a, a)]).clamp(lo[a], hi[a]);
@@ -66,8 +92,8 @@ pub fn saturated_least_squares(
             break;
         }
     }
-    if coupled {
-        polish(&h, &g, n, lo, hi, &mut u);
+    if hess.coupled {
+        polish(h, &g, n, lo, hi, &mut u);
     }
     u
 }

@@ -11,12 +11,12 @@
 
 use std::sync::Arc;
 
-use crate::azimuth::AzimuthAreas;
-use crate::control::saturated_least_squares;
+use crate::azimuth::{AreaClassifier, AzimuthAreas};
+use crate::control::{solve, Hessian};
 use crate::dependency::DependencySet;
 use crate::envelope::Envelope;
 use crate::error::{positive, unit_interval, ConfigError};
-use crate::formation::Formation;
+use crate::formation::{Formation, FormationSlot};
 use crate::observation::{Observation, ObservationSource, UavId};
 use crate::predictor::{NeighbourTracks, PredictorKind};
 use crate::state::{self, Input, State9, VX, X};
@@ -128,38 +128,72 @@ pub struct Decision {
     pub main_refs: u16,
 }
 
-/// Per-step working memory, allocated once.
+/// What every controller of a swarm shares: the parameters, the vehicle model, and what is
+/// derived from them once (weights, area boundaries, the cost Hessian when B is constant).
 #[derive(Debug, Clone)]
-struct Scratch {
-    /// For each area: index into the observation slice and squared horizontal distance.
-    nearest: Vec<Option<(usize, f64)>>,
+pub struct ControllerSetup {
+    params: ControllerParams,
+    vehicle: VehicleModel,
+    q: State9,
+    input_weights: Input,
+    classifier: AreaClassifier,
+    hessian: Option<Hessian>,
 }
+
+impl ControllerSetup {
+    /// Checks `params` and `vehicle` and derives the shared quantities.
+    pub fn new(params: ControllerParams, vehicle: VehicleModel) -> Result<Arc<Self>, ConfigError> {
+        params.validate()?;
+        vehicle.validate()?;
+        let q = params.envelope.thresholds.map(|d| 1.0 / (d * d));
+        let scale = vehicle.input_scale(params.dt_s);
+        let n = vehicle.n_inputs();
+        let input_weights =
+            Input::from_fn(
+                |j, _| if j < n && scale[j] > 0.0 { params.input_weight / (scale[j] * scale[j]) } else { 0.0 },
+            );
+        let hessian = vehicle
+            .control_matrix_is_constant()
+            .then(|| Hessian::new(&vehicle.control_matrix(&State9::zeros(), params.dt_s), n, &q, &input_weights));
+        let classifier = AreaClassifier::new(params.areas.areas);
+        Ok(Arc::new(Self { params, vehicle, q, input_weights, classifier, hessian }))
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &ControllerParams {
+        &self.params
+    }
+
+    /// The vehicle model.
+    pub fn vehicle(&self) -> &VehicleModel {
+        &self.vehicle
+    }
+}
+
+/// Marks an empty area in the per-area scratch.
+const EMPTY: u32 = u32::MAX;
 
 /// The controller of one UAV.
 #[derive(Debug, Clone)]
 pub struct ProximityController {
     id: UavId,
-    params: ControllerParams,
+    setup: Arc<ControllerSetup>,
     formation: Arc<Formation>,
     dependency: DependencySet,
-    vehicle: VehicleModel,
     tracks: NeighbourTracks,
-    q: State9,
-    input_weights: Input,
-    scratch: Scratch,
+    /// Per area: index into the observation slice of the nearest UAV (or `EMPTY`) and its
+    /// squared distance (f32 is ample to rank neighbours). Working memory, allocated once.
+    nearest: Box<[(u32, f32)]>,
 }
 
 impl ProximityController {
     /// A controller for UAV `id` of `formation`.
     pub fn new(
         id: UavId,
-        params: ControllerParams,
+        setup: Arc<ControllerSetup>,
         formation: Arc<Formation>,
         dependency: DependencySet,
-        vehicle: VehicleModel,
     ) -> Result<Self, ConfigError> {
-        params.validate()?;
-        vehicle.validate()?;
         if formation.slot(id).is_none() {
             return Err(ConfigError::UnknownUav { id, size: formation.len() });
         }
@@ -168,32 +202,21 @@ impl ProximityController {
                 return Err(ConfigError::BadReference { owner: id, reference: r, reason: "not in the formation" });
             }
         }
-        let m = params.areas.areas;
-        let tracks = NeighbourTracks::new(params.predictor, 2 * (m + dependency.refs().len()), params.track_timeout_s);
-        let q = params.envelope.thresholds.map(|d| 1.0 / (d * d));
-        let scale = vehicle.input_scale(params.dt_s);
-        let n = vehicle.n_inputs();
-        let input_weights =
-            Input::from_fn(
-                |j, _| {
-                    if j < n && scale[j] > 0.0 {
-                        params.input_weight / (scale[j] * scale[j])
-                    } else {
-                        0.0
-                    }
-                },
-            );
-        Ok(Self {
-            id,
-            params,
-            formation,
-            dependency,
-            vehicle,
-            tracks,
-            q,
-            input_weights,
-            scratch: Scratch { nearest: vec![None; m] },
-        })
+        let p = &setup.params;
+        let m = p.areas.areas;
+        let tracks = NeighbourTracks::new(p.predictor, m + dependency.refs().len(), p.track_timeout_s);
+        Ok(Self { id, setup, formation, dependency, tracks, nearest: vec![(EMPTY, 0.0); m].into_boxed_slice() })
+    }
+
+    /// A controller with its own [`ControllerSetup`] (convenient for a single UAV).
+    pub fn standalone(
+        id: UavId,
+        params: ControllerParams,
+        formation: Arc<Formation>,
+        dependency: DependencySet,
+        vehicle: VehicleModel,
+    ) -> Result<Self, ConfigError> {
+        Self::new(id, ControllerSetup::new(params, vehicle)?, formation, dependency)
     }
 
     /// This controller's UAV.
@@ -203,31 +226,38 @@ impl ProximityController {
 
     /// Its parameters.
     pub fn params(&self) -> &ControllerParams {
-        &self.params
+        &self.setup.params
     }
 
     /// Its vehicle model.
     pub fn vehicle(&self) -> &VehicleModel {
-        &self.vehicle
+        &self.setup.vehicle
+    }
+
+    /// Bytes this controller holds on the heap (shared setup and formation excluded).
+    pub fn heap_bytes(&self) -> usize {
+        self.tracks.heap_bytes() + std::mem::size_of_val(&*self.nearest)
     }
 
     /// One update period at time `now_s`: `own` is the UAV's estimate of its own state,
     /// `observations` what it perceives of the others (each id at most once).
     pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
-        let dt = self.params.dt_s;
-        let x_hold = self.vehicle.hold(own, dt); // F·X_i(t): keep the present course
-        let slot_i = match self.formation.slot(self.id) {
+        let Self { id: me, setup, formation, dependency, tracks, nearest } = self;
+        let (me, setup, formation) = (*me, &**setup, &**formation);
+        let (params, vehicle) = (&setup.params, &setup.vehicle);
+        let dt = params.dt_s;
+        let x_hold = vehicle.hold(own, dt); // F·X_i(t): keep the present course
+        let slot_i = match formation.slot(me) {
             Some(s) => *s,
             None => return alone(),
         };
 
         // §2: the nearest perceived UAV in each azimuth area.
-        let areas = self.params.areas;
-        let r2 = areas.sensing_range_m * areas.sensing_range_m;
-        self.scratch.nearest.iter_mut().for_each(|a| *a = None);
-        let yaw = own[state::BETA];
+        let r2 = params.areas.sensing_range_m.powi(2);
+        nearest.iter_mut().for_each(|a| a.0 = EMPTY);
+        let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
-            if o.id == self.id {
+            if o.id == me {
                 continue;
             }
             let (dx, dy, dz) = (o.state[X] - own[X], o.state[X + 1] - own[X + 1], o.state[X + 2] - own[X + 2]);
@@ -235,62 +265,65 @@ impl ProximityController {
             if o.source == ObservationSource::Onboard && d2 > r2 {
                 continue;
             }
-            let s = areas.area_of(yaw, dx, dy);
-            match self.scratch.nearest[s] {
-                Some((_, best)) if best <= d2 => {}
-                _ => self.scratch.nearest[s] = Some((k, d2)),
+            let s = setup.classifier.area(sin_yaw, cos_yaw, dx, dy);
+            let a = &mut nearest[s];
+            let d2 = d2 as f32;
+            if a.0 == EMPTY || d2 < a.1 {
+                *a = (k as u32, d2);
             }
         }
 
         // §3, §6 steps 1-3: per-neighbour estimates X̂_ij = F·X_j + W_ij, kept as deviations
         // from the course-keeping state (attitudes wrapped), then the area mean and the
-        // dependency-weighted mean.
+        // dependency-weighted mean. Area neighbours first, then main references perceived
+        // outside the areas' nearest.
         let mut sum_bar = State9::zeros();
         let mut n_bar = 0u16;
         let mut sum_dep = State9::zeros();
         let mut c_sum = 0.0;
         let mut main_refs = 0u16;
-        for (k, o) in observations.iter().enumerate() {
-            if o.id == self.id {
+        for a in 0..nearest.len() {
+            let k = nearest[a].0;
+            if k == EMPTY {
                 continue;
             }
-            let in_area = self.scratch.nearest.iter().any(|a| matches!(a, Some((idx, _)) if *idx == k));
-            let degree = self.dependency.degree(o.id);
-            if !in_area && degree.is_none() {
-                continue;
-            }
-            if !in_area && o.source == ObservationSource::Onboard {
-                let d = state::position(&o.state) - state::position(own);
-                if d.norm_squared() > r2 {
-                    continue;
-                }
-            }
-            let Some(slot_j) = self.formation.slot(o.id) else {
-                continue;
-            };
-            let x_j = self.tracks.predict(o, now_s, dt); // F·X_j(t) with the neighbour's track
-            let x_hat_ij = x_j + self.formation.w(&slot_i, slot_j, &x_j); // eq. 10
-            let delta = state::difference(&x_hat_ij, &x_hold);
-            if in_area {
-                sum_bar += delta;
-                n_bar += 1;
-            }
-            if let Some(c) = degree {
+            let o = &observations[k as usize];
+            let Some(delta) = deviation(tracks, formation, o, &slot_i, &x_hold, now_s, dt) else { continue };
+            sum_bar += delta;
+            n_bar += 1;
+            if let Some(c) = dependency.degree(o.id) {
                 sum_dep += c * delta;
                 c_sum += c;
                 main_refs += 1;
             }
+        }
+        for r in 0..dependency.refs().len() {
+            let (id, c) = dependency.refs()[r];
+            let Some(k) = observations.iter().position(|o| o.id == id) else { continue };
+            if nearest.iter().any(|a| a.0 == k as u32) {
+                continue; // already counted with its area
+            }
+            let o = &observations[k];
+            if o.source == ObservationSource::Onboard
+                && (state::position(&o.state) - state::position(own)).norm_squared() > r2
+            {
+                continue;
+            }
+            let Some(delta) = deviation(tracks, formation, o, &slot_i, &x_hold, now_s, dt) else { continue };
+            sum_dep += c * delta;
+            c_sum += c;
+            main_refs += 1;
         }
         if n_bar == 0 && main_refs == 0 {
             return alone();
         }
 
         // §6 step 4: O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i, as a deviation from the course.
-        let lambda = self.params.lambda;
+        let lambda = params.lambda;
         let x_bar = if n_bar > 0 { sum_bar / f64::from(n_bar) } else { sum_dep / c_sum };
         let mut centre = if main_refs > 0 { (1.0 - lambda) * x_bar + lambda * (sum_dep / c_sum) } else { x_bar };
         // Velocity part of W (paper §2.3): close the remaining position gap over τ.
-        if let Some(tau) = self.params.closing_time_s {
+        if let Some(tau) = params.closing_time_s {
             for k in X..VX {
                 centre[k + 3] += centre[k] / tau;
             }
@@ -298,7 +331,7 @@ impl ProximityController {
 
         // §6 steps 5-6: keep the course while X_hold lies inside the envelope around O.
         let r = -centre; // X_hold − O
-        let envelope = &self.params.envelope;
+        let envelope = &params.envelope;
         let normalised_sq = envelope.normalised_sq(&r);
         let occupied_areas = n_bar;
         if normalised_sq <= envelope.rho * envelope.rho {
@@ -306,11 +339,40 @@ impl ProximityController {
         }
 
         // §6 step 7: one-step predictive control, saturated by the vehicle's limits.
-        let b = self.vehicle.control_matrix(own, dt);
-        let (lo, hi) = self.vehicle.input_bounds(own, dt);
-        let input = saturated_least_squares(&b, self.vehicle.n_inputs(), &r, &self.q, &self.input_weights, &lo, &hi);
+        let b = vehicle.control_matrix(own, dt);
+        let (lo, hi) = vehicle.input_bounds(own, dt);
+        let input = match &setup.hessian {
+            Some(h) => solve(h, &b, &r, &setup.q, &lo, &hi),
+            None => {
+                let h = Hessian::new(&b, vehicle.n_inputs(), &setup.q, &setup.input_weights);
+                solve(&h, &b, &r, &setup.q, &lo, &hi)
+            }
+        };
         Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
     }
+}
+
+/// `X̂_ij − X_hold` for one observation (eq. 10, attitudes wrapped); None when the observed
+/// UAV is not in the formation.
+#[inline]
+fn deviation(
+    tracks: &mut NeighbourTracks,
+    formation: &Formation,
+    o: &Observation,
+    slot_i: &FormationSlot,
+    x_hold: &State9,
+    now_s: f64,
+    dt: f64,
+) -> Option<State9> {
+    let slot_j = formation.slot(o.id)?;
+    let x_j = tracks.predict(o, now_s, dt); // F·X_j(t) with the neighbour's track
+                                            // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold (eq. 10), built in place.
+    let mut delta = x_j - x_hold;
+    formation.add_w(slot_i, slot_j, &x_j, &mut delta);
+    for k in state::ALPHA..=state::GAMMA {
+        delta[k] = crate::angle::wrap_pi(delta[k]);
+    }
+    Some(delta)
 }
 
 fn alone() -> Decision {

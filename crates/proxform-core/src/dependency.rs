@@ -3,13 +3,17 @@
 //! Each UAV names its main reference UAVs with dependency degrees `c_ij > 0`. The controller
 //! uses the degree-weighted mean of the predictions from those it currently perceives.
 
+use std::sync::Arc;
+
 use crate::error::ConfigError;
 use crate::observation::UavId;
 
 /// Main references of one UAV with their dependency degrees.
+/// The table is immutable and shared: cloning it (one copy for the scenario, one for the
+/// controller) costs a reference count, not the entries.
 #[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct DependencySet {
-    refs: Vec<(UavId, f64)>,
+    refs: Arc<[(UavId, f64)]>,
 }
 
 impl DependencySet {
@@ -38,7 +42,7 @@ impl DependencySet {
                 return Err(ConfigError::BadReference { owner, reference: id, reason: "named twice" });
             }
         }
-        Ok(Self { refs })
+        Ok(Self { refs: refs.into() })
     }
 
     /// The dependency degree of `id`, if it is a main reference.

@@ -40,13 +40,25 @@ pub enum FormationFrame {
 
 impl FormationFrame {
     /// Formation-to-world rotation given the reference UAV's state.
-    #[inline]
     pub fn rotation(self, reference: &State9) -> Rotation3<f64> {
+        let (c, s) = self.course_cos_sin(reference);
+        Rotation3::from_matrix_unchecked(nalgebra::Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0))
+    }
+
+    /// Cosine and sine of the frame's yaw, from the reference's horizontal velocity (no
+    /// trigonometric call). A reference with no horizontal speed keeps the world frame.
+    #[inline]
+    pub fn course_cos_sin(self, reference: &State9) -> (f64, f64) {
         match self {
-            FormationFrame::World => Rotation3::identity(),
+            FormationFrame::World => (1.0, 0.0),
             FormationFrame::Course => {
-                let course = reference[state::VY].atan2(reference[state::VX]);
-                Rotation3::from_axis_angle(&Vector3::z_axis(), course)
+                let (vx, vy) = (reference[state::VX], reference[state::VY]);
+                let h = vx.hypot(vy);
+                if h > 1e-9 {
+                    (vx / h, vy / h)
+                } else {
+                    (1.0, 0.0)
+                }
             }
         }
     }
@@ -93,13 +105,28 @@ impl Formation {
         self.slots.get(id.index())
     }
 
+    /// Adds `W_ij` to `x` in place (the position and attitude rows; the velocity rows are 0).
+    #[inline]
+    pub fn add_w(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
+        let (c, s) = self.frame.course_cos_sin(reference);
+        let d = i.offset_m - j.offset_m;
+        x[0] += c * d.x - s * d.y;
+        x[1] += s * d.x + c * d.y;
+        x[2] += d.z;
+        let da = i.attitude_offset_rad - j.attitude_offset_rad;
+        x[6] += da.x;
+        x[7] += da.y;
+        x[8] += da.z;
+    }
+
     /// `W_ij` (eq. 7) for slots i and j, with `R_f` from the reference state `reference`
     /// (the observed j for [`FormationFrame::Course`]).
     #[inline]
     pub fn w(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9) -> State9 {
-        let dp = self.frame.rotation(reference) * (i.offset_m - j.offset_m);
+        let (c, s) = self.frame.course_cos_sin(reference);
+        let d = i.offset_m - j.offset_m;
         let da = i.attitude_offset_rad - j.attitude_offset_rad;
-        State9::from_column_slice(&[dp.x, dp.y, dp.z, 0.0, 0.0, 0.0, da.x, da.y, da.z])
+        State9::from_column_slice(&[c * d.x - s * d.y, s * d.x + c * d.y, d.z, 0.0, 0.0, 0.0, da.x, da.y, da.z])
     }
 }
 

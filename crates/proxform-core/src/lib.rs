@@ -19,7 +19,7 @@ pub mod state;
 pub mod vehicle;
 
 pub use azimuth::AzimuthAreas;
-pub use controller::{ControllerParams, Decision, Outcome, ProximityController};
+pub use controller::{ControllerParams, ControllerSetup, Decision, Outcome, ProximityController};
 pub use dependency::DependencySet;
 pub use envelope::Envelope;
 pub use error::ConfigError;

@@ -38,7 +38,7 @@ fn cruise_at(slot: &FormationSlot) -> State9 {
 fn controller(params: ControllerParams) -> ProximityController {
     let f = formation();
     let deps = DependencySet::new(UavId(1), 4, vec![(UavId(0), 0.7), (UavId(2), 0.3)]).expect("valid table");
-    ProximityController::new(UavId(1), params, f, deps, VehicleModel::Kinematic(KinematicModel::default()))
+    ProximityController::standalone(UavId(1), params, f, deps, VehicleModel::Kinematic(KinematicModel::default()))
         .expect("valid controller")
 }
 
@@ -121,8 +121,9 @@ fn keeps_only_the_nearest_uav_of_an_area() {
     p.lambda = 0.0;
     let f = formation();
     let deps = DependencySet::new(UavId(1), 4, vec![]).expect("empty table");
-    let mut c = ProximityController::new(UavId(1), p, f, deps, VehicleModel::Kinematic(KinematicModel::default()))
-        .expect("valid");
+    let mut c =
+        ProximityController::standalone(UavId(1), p, f, deps, VehicleModel::Kinematic(KinematicModel::default()))
+            .expect("valid");
     let s = everyone_in_slot();
     // UAV3 (id 2) displaced by 5 m in z but placed in area 0 behind UAV1 (id 0): further away.
     let mut decoy = s[0];
@@ -158,7 +159,7 @@ fn rejects_invalid_parameters_by_name() {
     p.lambda = 1.2;
     let f = formation();
     let deps = DependencySet::default();
-    let err = ProximityController::new(
+    let err = ProximityController::standalone(
         UavId(1),
         p,
         f.clone(),
@@ -169,7 +170,7 @@ fn rejects_invalid_parameters_by_name() {
     assert!(err.to_string().contains("lambda"), "{err}");
     let mut p = params();
     p.areas.areas = 0;
-    let err = ProximityController::new(
+    let err = ProximityController::standalone(
         UavId(1),
         p,
         f.clone(),
@@ -178,7 +179,13 @@ fn rejects_invalid_parameters_by_name() {
     )
     .expect_err("m = 0");
     assert!(err.to_string().contains("areas"), "{err}");
-    let err = ProximityController::new(UavId(9), params(), f, deps, VehicleModel::Kinematic(KinematicModel::default()))
-        .expect_err("not in formation");
+    let err = ProximityController::standalone(
+        UavId(9),
+        params(),
+        f,
+        deps,
+        VehicleModel::Kinematic(KinematicModel::default()),
+    )
+    .expect_err("not in formation");
     assert!(err.to_string().contains("UAV10"), "{err}");
 }

@@ -52,6 +52,8 @@ impl AxisErrors {
 pub struct Summary {
     /// Scenario name.
     pub scenario: String,
+    /// Number of UAVs.
+    pub uavs: u64,
     /// Number of runs.
     pub runs: u64,
     /// Base seed.
@@ -72,9 +74,15 @@ pub struct Summary {
     pub predicted_sigma: AxisErrors,
     /// Smallest separation between two UAVs over all runs (m).
     pub min_separation_m: f64,
+    /// The scenario's safety distance (m).
+    pub safety_distance_m: f64,
+    /// Runs in which some pair came closer than the safety distance.
+    pub unsafe_runs: u64,
     /// Adjustments per follower per minute of flight, mean over runs.
     pub adjustments_per_uav_minute: f64,
-    /// Per follower (UAV 2…): largest |error| over all runs.
+    /// Numbers (from 1) of the followers with per-UAV detail (the first followers).
+    pub per_uav: Vec<u32>,
+    /// Per listed follower: largest |error| over all runs.
     pub per_uav_worst: Vec<AxisErrors>,
     /// Per follower: mean adjustments per run.
     pub per_uav_adjustments: Vec<f64>,
@@ -154,39 +162,30 @@ fn percentile(values: &mut [f64], q: f64) -> f64 {
 /// Aggregates run summaries (in run order) into a [`Summary`].
 pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary {
     let n = runs.len().max(1) as f64;
-    let worst_per_run: Vec<[f64; 6]> = runs.iter().map(RunSummary::worst).collect();
     let mut worst = [0.0f64; 6];
     let mut p99 = [0.0f64; 6];
     let mut median = [0.0f64; 6];
     let mut rms = [0.0f64; 6];
     for k in 0..6 {
-        let mut col: Vec<f64> = worst_per_run.iter().map(|w| w[k]).collect();
+        let mut col: Vec<f64> = runs.iter().map(|r| r.max_abs_error[k]).collect();
         worst[k] = col.iter().copied().fold(0.0, f64::max);
         p99[k] = percentile(&mut col, 0.99);
         median[k] = percentile(&mut col, 0.5);
-        let ms: f64 = runs
-            .iter()
-            .map(|r| r.rms_error.iter().map(|e| e[k] * e[k]).sum::<f64>() / r.rms_error.len().max(1) as f64)
-            .sum();
-        rms[k] = (ms / n).sqrt();
+        rms[k] = (runs.iter().map(|r| r.rms_error[k] * r.rms_error[k]).sum::<f64>() / n).sqrt();
     }
-    let followers = runs.first().map_or(0, |r| r.max_abs_error.len());
-    let mut per_uav_worst = vec![[0.0f64; 6]; followers];
-    let mut per_uav_adj = vec![0.0f64; followers];
+    let sample = runs.first().map_or(0, |r| r.per_uav.len());
+    let mut per_uav_worst = vec![[0.0f64; 6]; sample];
+    let mut per_uav_adj = vec![0.0f64; sample];
     for r in runs {
-        for f in 0..followers {
+        for (f, u) in r.per_uav.iter().enumerate().take(sample) {
             for k in 0..6 {
-                per_uav_worst[f][k] = per_uav_worst[f][k].max(r.max_abs_error[f][k]);
+                per_uav_worst[f][k] = per_uav_worst[f][k].max(u.max_abs_error[k]);
             }
-            per_uav_adj[f] += r.adjustments[f] as f64 / n;
+            per_uav_adj[f] += u.adjustments as f64 / n;
         }
     }
     let minutes = scenario.duration_s / 60.0;
-    let adj_rate = runs
-        .iter()
-        .map(|r| r.adjustments.iter().sum::<u64>() as f64 / (followers.max(1) as f64 * minutes))
-        .sum::<f64>()
-        / n;
+    let adj_rate = runs.iter().map(|r| r.adjustments as f64 / (r.followers.max(1) as f64 * minutes)).sum::<f64>() / n;
     // eq. 17: σ = sqrt(σm² + σn²), σm measured as the RMS actuation-error effect per step.
     let sigma_n = scenario.noise.sigma();
     let mut model = [0.0f64; 9];
@@ -199,6 +198,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
     let predicted = idx.map(|k| (model[k] + sigma_n[k].powi(2)).sqrt());
     Summary {
         scenario: scenario.name.clone(),
+        uavs: scenario.len() as u64,
         runs: runs.len() as u64,
         seed,
         pass_fraction: runs.iter().filter(|r| r.pass).count() as f64 / n,
@@ -209,7 +209,10 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         allowable_error: AxisErrors::from_si(scenario.allowable.as_array()),
         predicted_sigma: AxisErrors::from_si(predicted),
         min_separation_m: runs.iter().map(|r| r.min_separation_m).fold(f64::INFINITY, f64::min),
+        safety_distance_m: scenario.safety_distance_m,
+        unsafe_runs: runs.iter().filter(|r| r.min_separation_m < scenario.safety_distance_m).count() as u64,
         adjustments_per_uav_minute: adj_rate,
+        per_uav: runs.first().map(|r| r.per_uav.iter().map(|u| u.uav + 1).collect()).unwrap_or_default(),
         per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
         per_uav_adjustments: per_uav_adj,
     }

@@ -1,42 +1,42 @@
 //! The stepping engine: fixed Δt, double-buffered state, seeded noise streams.
 //!
 //! Every UAV observes snapshot k before any UAV writes k + 1. Each follower gets a noisy
-//! estimate of its own state and noisy observations of the UAVs within its sensing range,
+//! estimate of its own state and what its proximity sensor reports ([`crate::sensing`]),
 //! runs its controller, and its plant applies the input with the actuation error. The
 //! navigator flies its scripted path. All randomness comes from [`crate::rng`] streams keyed
-//! by (seed, run, UAV, source) and the step number.
+//! by (seed, run, UAV, source) and the step number, so a UAV's update does not depend on
+//! which thread runs it: large swarms are stepped in parallel with identical results.
 
 use proxform_core::state::{self, Input, State9};
-use proxform_core::{Decision, Observation, ObservationSource, Outcome, ProximityController, UavId};
+use proxform_core::{ControllerSetup, Outcome, ProximityController, UavId};
 use rand::RngExt;
-use rand_distr::StandardNormal;
+use rayon::prelude::*;
 
-use crate::observer::{Observer, StepFrame};
+use crate::grid::NeighbourGrid;
+use crate::observer::{Observer, StepFrame, UavStep};
 use crate::rng::{stream_key, Source, StepRng};
 use crate::scenario::{Scenario, ScenarioError};
+use crate::sensing::{noisy, NeighbourSearch, ProximitySensor, SensorScratch};
 
-/// Random stream keys of one UAV.
-#[derive(Debug, Clone, Copy)]
-struct Keys {
-    own: u64,
-    sensing: u64,
-    actuation: u64,
-}
+/// Swarms at least this large are stepped in parallel within the run.
+pub const PARALLEL_MIN_UAVS: usize = 1024;
 
 /// One simulated flight.
 #[derive(Debug)]
 pub struct Simulation<'s> {
     scenario: &'s Scenario,
+    seed: u64,
+    run: u64,
     k: u64,
     current: Vec<State9>,
     next: Vec<State9>,
     controllers: Vec<Option<ProximityController>>,
-    decisions: Vec<Option<Decision>>,
-    model_error: Vec<State9>,
-    keys: Vec<Keys>,
-    observations: Vec<Observation>,
-    sigma: State9,
+    uavs: Vec<UavStep>,
+    grid: NeighbourGrid,
+    sensor: ProximitySensor,
+    search: NeighbourSearch,
     start: [f64; 3],
+    parallel: bool,
 }
 
 impl<'s> Simulation<'s> {
@@ -45,6 +45,7 @@ impl<'s> Simulation<'s> {
         scenario.validate()?;
         let n = scenario.len();
         let nav = scenario.navigator.index();
+        let setup = ControllerSetup::new(scenario.controller.clone(), scenario.vehicle.clone())?;
         let mut controllers = Vec::with_capacity(n);
         for i in 0..n {
             controllers.push(if i == nav {
@@ -52,34 +53,35 @@ impl<'s> Simulation<'s> {
             } else {
                 Some(ProximityController::new(
                     UavId(i as u32),
-                    scenario.controller.clone(),
+                    setup.clone(),
                     scenario.formation.clone(),
                     scenario.dependencies[i].clone(),
-                    scenario.vehicle.clone(),
                 )?)
             });
         }
-        let keys = (0..n as u64)
-            .map(|i| Keys {
-                own: stream_key(seed, run, i, Source::OwnState),
-                sensing: stream_key(seed, run, i, Source::Sensing),
-                actuation: stream_key(seed, run, i, Source::Actuation),
-            })
-            .collect();
         let s0 = scenario.initial[nav];
+        let areas = scenario.controller.areas;
         Ok(Self {
             scenario,
+            seed,
+            run,
             k: 0,
             current: scenario.initial.clone(),
             next: scenario.initial.clone(),
             controllers,
-            decisions: vec![None; n],
-            model_error: vec![State9::zeros(); n],
-            keys,
-            observations: Vec::with_capacity(n),
-            sigma: scenario.noise.sigma(),
+            uavs: vec![UavStep::default(); n],
+            grid: NeighbourGrid::new(),
+            sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise.sigma()),
+            search: scenario.neighbour_search,
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
+            parallel: n >= PARALLEL_MIN_UAVS,
         })
+    }
+
+    /// Forces serial or parallel stepping within the run (results are identical).
+    pub fn with_parallel(mut self, parallel: bool) -> Self {
+        self.parallel = parallel;
+        self
     }
 
     /// Current step index.
@@ -97,87 +99,161 @@ impl<'s> Simulation<'s> {
         &self.current
     }
 
+    /// Bytes held by the engine's per-UAV buffers, the grid and the controllers (shared
+    /// setup and scenario excluded).
+    pub fn heap_bytes(&self) -> usize {
+        let n = self.current.len();
+        let controllers: usize = self
+            .controllers
+            .iter()
+            .flatten()
+            .map(|c| c.heap_bytes() + std::mem::size_of::<ProximityController>())
+            .sum();
+        n * (2 * std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>()) + self.grid.heap_bytes() + controllers
+    }
+
     fn frame(&self) -> StepFrame<'_> {
-        StepFrame {
-            k: self.k,
-            t: self.t(),
-            states: &self.current,
-            decisions: &self.decisions,
-            model_error: &self.model_error,
-        }
+        StepFrame { k: self.k, t: self.t(), states: &self.current, uavs: &self.uavs }
     }
 
     /// Advances one update period.
     pub fn step(&mut self) {
         let sc = self.scenario;
-        let dt = sc.dt_s;
-        let t = self.t();
-        let nav = sc.navigator.index();
-        let range2 = sc.controller.areas.sensing_range_m.powi(2);
-        for i in 0..self.current.len() {
-            let Some(ctrl) = self.controllers[i].as_mut() else {
-                self.next[i] = sc.path.state_at(t + dt, self.start);
-                debug_assert_eq!(i, nav);
-                continue;
-            };
-            let me = self.current[i];
-            let keys = self.keys[i];
-            // Own state estimate.
-            let mut rng = StepRng::new(keys.own, self.k);
-            let own = noisy(&me, &self.sigma, &mut rng);
-            // Onboard observations of every UAV within sensing range, from snapshot k.
-            let mut rng = StepRng::new(keys.sensing, self.k);
-            self.observations.clear();
-            for (j, other) in self.current.iter().enumerate() {
-                if j == i {
-                    continue;
-                }
-                let d2 = (other[0] - me[0]).powi(2) + (other[1] - me[1]).powi(2) + (other[2] - me[2]).powi(2);
-                if d2 > range2 {
-                    continue;
-                }
-                self.observations.push(Observation {
-                    id: UavId(j as u32),
-                    state: noisy(other, &self.sigma, &mut rng),
-                    age_s: 0.0,
-                    source: ObservationSource::Onboard,
-                });
+        let range = sc.controller.areas.sensing_range_m;
+        if self.search == NeighbourSearch::Grid {
+            self.grid.rebuild(self.current.iter().map(|s| [s[0], s[1], s[2]]), range);
+        }
+        let ctx = StepContext {
+            scenario: sc,
+            seed: self.seed,
+            run: self.run,
+            k: self.k,
+            t: self.t(),
+            start: self.start,
+            current: &self.current,
+            grid: &self.grid,
+            sensor: &self.sensor,
+            search: self.search,
+        };
+        let m = sc.controller.areas.areas;
+        if self.parallel {
+            self.controllers
+                .par_iter_mut()
+                .zip(self.next.par_iter_mut())
+                .zip(self.uavs.par_iter_mut())
+                .enumerate()
+                .with_min_len(256)
+                .for_each_init(
+                    || SensorScratch::new(m),
+                    |scratch, (i, ((ctrl, next), aux))| ctx.update(i, ctrl.as_mut(), next, aux, scratch),
+                );
+        } else {
+            let mut scratch = SensorScratch::new(m);
+            for (i, ((ctrl, next), aux)) in
+                self.controllers.iter_mut().zip(self.next.iter_mut()).zip(self.uavs.iter_mut()).enumerate()
+            {
+                ctx.update(i, ctrl.as_mut(), next, aux, &mut scratch);
             }
-            let decision = ctrl.step(t, &own, &self.observations);
-            let commanded = if sc.adjustment_enabled { decision.input } else { Input::zeros() };
-            let applied = if matches!(decision.outcome, Outcome::Adjusted { .. }) && sc.actuation_error > 0.0 {
-                let mut rng = StepRng::new(keys.actuation, self.k);
-                commanded.map(|u| u * (1.0 + sc.actuation_error * rng.random_range(-1.0..=1.0)))
-            } else {
-                commanded
-            };
-            self.next[i] = sc.vehicle.propagate(&me, &applied, dt);
-            self.model_error[i] = self.next[i] - sc.vehicle.propagate(&me, &commanded, dt);
-            self.decisions[i] = Some(decision);
         }
         std::mem::swap(&mut self.current, &mut self.next);
         self.k += 1;
     }
 
     /// Runs the whole flight, showing every step (and the initial state) to `observer`.
-    pub fn run(mut self, observer: &mut impl Observer) {
-        observer.on_step(self.scenario, &self.frame());
+    pub fn run(self, observer: &mut impl Observer) {
         let steps = self.scenario.steps();
-        while self.k < steps {
+        self.run_steps(steps, observer);
+    }
+
+    /// Runs `steps` update periods (or fewer if the flight ends first).
+    pub fn run_steps(mut self, steps: u64, observer: &mut impl Observer) {
+        if self.k == 0 {
+            self.perceive_initial();
+            observer.on_step(self.scenario, &self.frame());
+        }
+        let end = (self.k + steps).min(self.scenario.steps());
+        while self.k < end {
             self.step();
             observer.on_step(self.scenario, &self.frame());
         }
     }
-}
 
-#[inline]
-fn noisy(x: &State9, sigma: &State9, rng: &mut StepRng) -> State9 {
-    let mut s = *x;
-    for k in 0..9 {
-        if sigma[k] > 0.0 {
-            let n: f64 = rng.sample(StandardNormal);
-            s[k] += sigma[k] * n;
+    /// Nearest-neighbour distances of the initial state, for the separation metric.
+    fn perceive_initial(&mut self) {
+        let range = self.scenario.controller.areas.sensing_range_m;
+        self.grid.rebuild(self.current.iter().map(|s| [s[0], s[1], s[2]]), range);
+        for (i, s) in self.current.iter().enumerate() {
+            let mut best = f64::INFINITY;
+            self.grid.for_each_within([s[0], s[1], s[2]], range, |j, _, d2| {
+                if j as usize != i {
+                    best = best.min(d2);
+                }
+            });
+            self.uavs[i].nearest_m = best.sqrt();
         }
     }
-    s
+}
+
+/// Read-only view of one step, shared by the threads that update the UAVs.
+struct StepContext<'a> {
+    scenario: &'a Scenario,
+    seed: u64,
+    run: u64,
+    k: u64,
+    t: f64,
+    start: [f64; 3],
+    current: &'a [State9],
+    grid: &'a NeighbourGrid,
+    sensor: &'a ProximitySensor,
+    search: NeighbourSearch,
+}
+
+impl StepContext<'_> {
+    /// Updates UAV `i`: perception, decision, plant.
+    #[inline]
+    fn update(
+        &self,
+        i: usize,
+        ctrl: Option<&mut ProximityController>,
+        next: &mut State9,
+        aux: &mut UavStep,
+        scratch: &mut SensorScratch,
+    ) {
+        let sc = self.scenario;
+        let dt = sc.dt_s;
+        let uav = i as u64;
+        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
+        let nearest = self.sensor.perceive(
+            i,
+            self.current,
+            self.search,
+            self.grid,
+            &sc.dependencies[i],
+            &sc.beacons,
+            &mut rng,
+            scratch,
+        );
+        aux.nearest_m = nearest;
+        let Some(ctrl) = ctrl else {
+            *next = sc.path.state_at(self.t + dt, self.start);
+            aux.outcome = None;
+            aux.model_error = [0.0; 9];
+            return;
+        };
+        let me = &self.current[i];
+        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
+        let own = noisy(me, &sc.noise.sigma(), &mut rng);
+        let decision = ctrl.step(self.t, &own, &scratch.observations);
+        let commanded = if sc.adjustment_enabled { decision.input } else { Input::zeros() };
+        let applied = if matches!(decision.outcome, Outcome::Adjusted { .. }) && sc.actuation_error > 0.0 {
+            let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Actuation), self.k);
+            commanded.map(|u| u * (1.0 + sc.actuation_error * rng.random_range(-1.0..=1.0)))
+        } else {
+            commanded
+        };
+        *next = sc.vehicle.propagate(me, &applied, dt);
+        let model_error = *next - sc.vehicle.propagate(me, &commanded, dt);
+        aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
+        aux.outcome = Some(decision.outcome);
+    }
 }

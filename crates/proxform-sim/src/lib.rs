@@ -5,13 +5,19 @@
 //! observers that measure a run, and batches of seeded runs in parallel. It writes no files:
 //! output belongs to the caller.
 
+pub mod autodeps;
 pub mod batch;
 pub mod engine;
+pub mod grid;
 pub mod metrics;
+pub mod normal;
 pub mod observer;
 pub mod path;
 pub mod rng;
 pub mod scenario;
+pub mod sensing;
+pub mod swarm;
+pub mod throughput;
 pub mod trajectory;
 
 pub use batch::{run_batch, AxisErrors, BatchResult, Summary};

@@ -1,10 +1,31 @@
 //! Per-run metrics: the formation errors, separations and corrections of one flight.
+//!
+//! Errors and adjustments are accumulated over every follower; per-UAV detail is kept for the
+//! first [`PER_UAV_SAMPLE`] followers only, so a run of a million UAVs stays small.
 
 use proxform_core::state::{State9, P};
 use proxform_core::Outcome;
 
 use crate::observer::{formation_error, Observer, StepFrame};
 use crate::scenario::Scenario;
+
+/// Followers with per-UAV detail in summaries and tables.
+pub const PER_UAV_SAMPLE: usize = 32;
+
+/// One follower's statistics over a run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UavStats {
+    /// UAV index.
+    pub uav: u32,
+    /// Max |error| x, y, z (m), α, β, γ (rad).
+    pub max_abs_error: [f64; 6],
+    /// RMS error over the flight, same units.
+    pub rms_error: [f64; 6],
+    /// Number of adjustments.
+    pub adjustments: u64,
+    /// Steps flown alone (nothing perceived).
+    pub alone_steps: u64,
+}
 
 /// What one run measured, small enough to keep for thousands of runs.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -13,15 +34,20 @@ pub struct RunSummary {
     pub run: u64,
     /// True when every follower stayed within every allowable error for the whole flight.
     pub pass: bool,
-    /// Per follower (in UAV order, navigator excluded): max |error| x, y, z (m), α, β, γ (rad).
-    pub max_abs_error: Vec<[f64; 6]>,
-    /// Per follower: RMS error over the flight, same units.
-    pub rms_error: Vec<[f64; 6]>,
-    /// Per follower: number of adjustments.
-    pub adjustments: Vec<u64>,
-    /// Per follower: steps flown alone (nothing perceived).
-    pub alone_steps: Vec<u64>,
-    /// Smallest distance between any two UAVs (m).
+    /// Number of followers.
+    pub followers: u64,
+    /// Max |error| over all followers: x, y, z (m), α, β, γ (rad).
+    pub max_abs_error: [f64; 6],
+    /// RMS error over all followers and steps, same units.
+    pub rms_error: [f64; 6],
+    /// Adjustments of all followers.
+    pub adjustments: u64,
+    /// Steps flown alone, all followers.
+    pub alone_steps: u64,
+    /// Per-UAV detail for the first followers.
+    pub per_uav: Vec<UavStats>,
+    /// Smallest distance between any two UAVs (m); separations beyond the sensing range are
+    /// not tracked and count as the sensing range.
     pub min_separation_m: f64,
     /// RMS model error σm per state parameter over all follower steps.
     pub model_error_rms: [f64; P],
@@ -29,29 +55,24 @@ pub struct RunSummary {
     pub duration_s: f64,
 }
 
-impl RunSummary {
-    /// Max |error| over all followers, per axis.
-    pub fn worst(&self) -> [f64; 6] {
-        let mut w = [0.0f64; 6];
-        for e in &self.max_abs_error {
-            for k in 0..6 {
-                w[k] = w[k].max(e[k]);
-            }
-        }
-        w
-    }
+#[derive(Debug, Clone, Default)]
+struct Acc {
+    max_abs: [f64; 6],
+    sum_sq: [f64; 6],
+    adjustments: u64,
+    alone: u64,
 }
 
 /// Observer accumulating a [`RunSummary`].
 #[derive(Debug, Clone)]
 pub struct RunMetrics {
-    followers: Vec<usize>,
-    max_abs: Vec<[f64; 6]>,
-    sum_sq: Vec<[f64; 6]>,
+    nav: usize,
+    total: Acc,
+    sample: Vec<(usize, Acc)>,
     samples: u64,
-    adjustments: Vec<u64>,
-    alone: Vec<u64>,
-    min_sep2: f64,
+    followers: u64,
+    min_sep: f64,
+    range: f64,
     model_sq: State9,
     model_n: u64,
     allowable: [f64; 6],
@@ -60,16 +81,17 @@ pub struct RunMetrics {
 impl RunMetrics {
     /// Metrics for `scenario`.
     pub fn new(scenario: &Scenario) -> Self {
-        let followers: Vec<usize> = (0..scenario.len()).filter(|&i| i != scenario.navigator.index()).collect();
-        let nf = followers.len();
+        let nav = scenario.navigator.index();
+        let sample =
+            (0..scenario.len()).filter(|&i| i != nav).take(PER_UAV_SAMPLE).map(|i| (i, Acc::default())).collect();
         Self {
-            followers,
-            max_abs: vec![[0.0; 6]; nf],
-            sum_sq: vec![[0.0; 6]; nf],
+            nav,
+            total: Acc::default(),
+            sample,
             samples: 0,
-            adjustments: vec![0; nf],
-            alone: vec![0; nf],
-            min_sep2: f64::INFINITY,
+            followers: scenario.len() as u64 - 1,
+            min_sep: f64::INFINITY,
+            range: scenario.controller.areas.sensing_range_m,
             model_sq: State9::zeros(),
             model_n: 0,
             allowable: scenario.allowable.as_array(),
@@ -78,9 +100,9 @@ impl RunMetrics {
 
     /// The summary of run `run` lasting `duration_s`.
     pub fn finish(self, run: u64, duration_s: f64) -> RunSummary {
-        let n = self.samples.max(1) as f64;
-        let rms_error = self.sum_sq.iter().map(|s| s.map(|v| (v / n).sqrt())).collect();
-        let pass = self.max_abs.iter().all(|e| e.iter().zip(&self.allowable).all(|(v, a)| v <= a));
+        let steps = self.samples.max(1) as f64;
+        let rms = |a: &Acc, n: f64| a.sum_sq.map(|v| (v / n).sqrt());
+        let pass = self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a);
         let mn = self.model_n.max(1) as f64;
         let mut model_error_rms = [0.0; P];
         for (k, v) in model_error_rms.iter_mut().enumerate() {
@@ -89,48 +111,110 @@ impl RunMetrics {
         RunSummary {
             run,
             pass,
-            max_abs_error: self.max_abs,
-            rms_error,
-            adjustments: self.adjustments,
-            alone_steps: self.alone,
-            min_separation_m: self.min_sep2.sqrt(),
+            followers: self.followers,
+            max_abs_error: self.total.max_abs,
+            rms_error: rms(&self.total, steps * self.followers.max(1) as f64),
+            adjustments: self.total.adjustments,
+            alone_steps: self.total.alone,
+            per_uav: self
+                .sample
+                .iter()
+                .map(|(i, a)| UavStats {
+                    uav: *i as u32,
+                    max_abs_error: a.max_abs,
+                    rms_error: rms(a, steps),
+                    adjustments: a.adjustments,
+                    alone_steps: a.alone,
+                })
+                .collect(),
+            min_separation_m: self.min_sep.min(self.range),
             model_error_rms,
             duration_s,
         }
     }
 }
 
+#[inline]
+fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<Outcome>) {
+    for k in 0..6 {
+        let a = e[k].abs();
+        if a > acc.max_abs[k] {
+            acc.max_abs[k] = a;
+        }
+        acc.sum_sq[k] += e[k] * e[k];
+    }
+    match outcome {
+        Some(Outcome::Adjusted { .. }) => acc.adjustments += 1,
+        Some(Outcome::Alone) => acc.alone += 1,
+        _ => {}
+    }
+}
+
+/// Followers per chunk of the (possibly parallel) metric pass; partial results are combined
+/// in chunk order, so the result does not depend on the number of threads.
+const CHUNK: usize = 4096;
+
+/// Partial sums over one chunk of UAVs.
+#[derive(Debug, Clone, Default)]
+struct Partial {
+    acc: Acc,
+    model_sq: State9,
+    model_n: u64,
+    min_sep: f64,
+}
+
+fn partial(nav: usize, scenario: &Scenario, frame: &StepFrame<'_>, range: std::ops::Range<usize>) -> Partial {
+    let mut p = Partial { min_sep: f64::INFINITY, ..Partial::default() };
+    for i in range {
+        let u = &frame.uavs[i];
+        p.min_sep = p.min_sep.min(u.nearest_m);
+        if i == nav {
+            continue;
+        }
+        let e = formation_error(scenario, frame.states, i);
+        accumulate(&mut p.acc, &e, u.outcome);
+        match u.outcome {
+            Some(Outcome::Adjusted { .. }) => {
+                for k in 0..P {
+                    p.model_sq[k] += f64::from(u.model_error[k]).powi(2);
+                }
+                p.model_n += 1;
+            }
+            Some(Outcome::Held) => p.model_n += 1,
+            _ => {}
+        }
+    }
+    p
+}
+
 impl Observer for RunMetrics {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        use rayon::prelude::*;
         self.samples += 1;
-        for (f, &i) in self.followers.iter().enumerate() {
-            let e = formation_error(scenario, frame.states, i);
+        let n = frame.states.len();
+        let nav = self.nav;
+        let parts: Vec<Partial> = if n >= crate::engine::PARALLEL_MIN_UAVS {
+            (0..n.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|c| partial(nav, scenario, frame, c * CHUNK..((c + 1) * CHUNK).min(n)))
+                .collect()
+        } else {
+            vec![partial(nav, scenario, frame, 0..n)]
+        };
+        for p in parts {
             for k in 0..6 {
-                let a = e[k].abs();
-                if a > self.max_abs[f][k] {
-                    self.max_abs[f][k] = a;
-                }
-                self.sum_sq[f][k] += e[k] * e[k];
+                self.total.max_abs[k] = self.total.max_abs[k].max(p.acc.max_abs[k]);
+                self.total.sum_sq[k] += p.acc.sum_sq[k];
             }
-            match frame.decisions[i].map(|d| d.outcome) {
-                Some(Outcome::Adjusted { .. }) => {
-                    self.adjustments[f] += 1;
-                    self.model_sq += frame.model_error[i].component_mul(&frame.model_error[i]);
-                    self.model_n += 1;
-                }
-                Some(Outcome::Alone) => self.alone[f] += 1,
-                Some(Outcome::Held) => self.model_n += 1,
-                None => {}
-            }
+            self.total.adjustments += p.acc.adjustments;
+            self.total.alone += p.acc.alone;
+            self.model_sq += p.model_sq;
+            self.model_n += p.model_n;
+            self.min_sep = self.min_sep.min(p.min_sep);
         }
-        let s = frame.states;
-        for a in 0..s.len() {
-            for b in a + 1..s.len() {
-                let d2 = (s[a][0] - s[b][0]).powi(2) + (s[a][1] - s[b][1]).powi(2) + (s[a][2] - s[b][2]).powi(2);
-                if d2 < self.min_sep2 {
-                    self.min_sep2 = d2;
-                }
-            }
+        for (i, acc) in self.sample.iter_mut() {
+            let e = formation_error(scenario, frame.states, *i);
+            accumulate(acc, &e, frame.uavs[*i].outcome);
         }
     }
 }

@@ -4,7 +4,7 @@
 //! and once after every step with the new states and the decisions that produced them.
 
 use proxform_core::state::State9;
-use proxform_core::Decision;
+use proxform_core::Outcome;
 
 use crate::scenario::Scenario;
 
@@ -17,11 +17,26 @@ pub struct StepFrame<'a> {
     pub t: f64,
     /// True states at t_k, indexed by UAV.
     pub states: &'a [State9],
-    /// Decisions taken at t_{k−1} (None for the navigator and at k = 0).
-    pub decisions: &'a [Option<Decision>],
-    /// Per UAV: effect on the state of the actuation error of the last step (true minus
-    /// commanded), the model error σm of eq. 17.
-    pub model_error: &'a [State9],
+    /// Per UAV: what its last update produced.
+    pub uavs: &'a [UavStep],
+}
+
+/// What one UAV's update produced, besides its next state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UavStep {
+    /// The controller's outcome at t_{k−1} (None for the navigator and at k = 0).
+    pub outcome: Option<Outcome>,
+    /// Effect on the state of the actuation error of the last step (true minus commanded):
+    /// the model error σm of eq. 17. Kept in f32: it only feeds an RMS statistic.
+    pub model_error: [f32; 9],
+    /// Distance to its nearest neighbour within the sensing range at t_k (m; ∞ if none).
+    pub nearest_m: f64,
+}
+
+impl Default for UavStep {
+    fn default() -> Self {
+        Self { outcome: None, model_error: [0.0; 9], nearest_m: f64::INFINITY }
+    }
 }
 
 /// Something that watches a run.

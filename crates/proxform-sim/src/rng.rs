@@ -53,6 +53,12 @@ impl StepRng {
         Self { state: mix(key ^ mix(step.wrapping_add(GOLDEN))) }
     }
 
+    /// The next 64 random bits.
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        self.next()
+    }
+
     #[inline]
     fn next(&mut self) -> u64 {
         self.state = self.state.wrapping_add(GOLDEN);

@@ -111,6 +111,13 @@ pub struct Scenario {
     /// When false the followers' inputs are discarded: the method switched off, to show
     /// that the pass criterion can fail.
     pub adjustment_enabled: bool,
+    /// Pairs closer than this are reported as unsafe (m). Paper scenario: 50 m.
+    pub safety_distance_m: f64,
+    /// UAVs whose state every UAV hears over the radio each period (ideal link, the
+    /// broadcaster's measurement noise). Empty in the paper scenario.
+    pub beacons: Vec<UavId>,
+    /// How the sensors find candidates: the grid, or all pairs (reference only).
+    pub neighbour_search: crate::sensing::NeighbourSearch,
 }
 
 impl Scenario {
@@ -175,6 +182,12 @@ impl Scenario {
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(ScenarioError::Value { field, value: v, expected: "a finite value ≥ 0" });
+            }
+        }
+        positive("safety_distance_m", self.safety_distance_m)?;
+        for b in &self.beacons {
+            if b.index() >= n {
+                return Err(ConfigError::UnknownUav { id: *b, size: n }.into());
             }
         }
         for v in self.allowable.as_array() {
@@ -242,6 +255,9 @@ impl Scenario {
             actuation_error: 0.1,
             allowable: AllowableErrors { position_m: [0.5, 0.6, 0.2], attitude_rad: [deg(0.4), deg(0.3), deg(1.0)] },
             adjustment_enabled: true,
+            safety_distance_m: 50.0,
+            beacons: Vec::new(),
+            neighbour_search: crate::sensing::NeighbourSearch::Grid,
         }
     }
 }

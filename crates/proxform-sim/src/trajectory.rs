@@ -25,21 +25,32 @@ pub struct TrajectoryRow {
     pub within_allowable: bool,
 }
 
-/// Observer collecting every row of a run.
-#[derive(Debug, Clone, Default)]
+/// UAVs recorded by default: all of a small formation, the first ones of a large swarm.
+pub const DEFAULT_SAMPLE: usize = 64;
+
+/// Observer collecting the rows of a run for the first `sample` UAVs.
+#[derive(Debug, Clone)]
 pub struct Trajectory {
     /// Rows in time order, then UAV order.
     pub rows: Vec<TrajectoryRow>,
+    /// Number of UAVs recorded (the first ones).
+    pub sample: usize,
+}
+
+impl Default for Trajectory {
+    fn default() -> Self {
+        Self { rows: Vec::new(), sample: DEFAULT_SAMPLE }
+    }
 }
 
 impl Observer for Trajectory {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
         let nav = scenario.navigator.index();
         let allowable = scenario.allowable.as_array();
-        for (i, s) in frame.states.iter().enumerate() {
+        for (i, s) in frame.states.iter().enumerate().take(self.sample) {
             let error = if i == nav { [0.0; 6] } else { formation_error(scenario, frame.states, i) };
-            let (outcome, in_envelope) = match frame.decisions[i] {
-                Some(d) => (d.outcome.label(), d.outcome == proxform_core::Outcome::Held),
+            let (outcome, in_envelope) = match frame.uavs[i].outcome {
+                Some(o) => (o.label(), o == proxform_core::Outcome::Held),
                 None if i == nav => ("navigator", false),
                 None => ("initial", false),
             };

@@ -53,6 +53,14 @@ impl VehicleModel {
         }
     }
 
+    /// True when B does not depend on the state (so its cost Hessian can be cached).
+    #[inline]
+    pub fn control_matrix_is_constant(&self) -> bool {
+        match self {
+            VehicleModel::Kinematic(_) => true,
+        }
+    }
+
     /// Per-step input bounds `(lo, hi)` at state `x`.
     #[inline]
     pub fn input_bounds(&self, x: &State9, dt: f64) -> (Input, Input) {

@@ -1,0 +1,148 @@
+//! `proxform bench`: throughput and memory of the engine on the swarm scenario, N = 10^2 …
+//! 10^6, on one thread and on all, plus the naive all-pairs neighbour search as a reference.
+//!
+//! Every measurement runs in a child process so that its peak memory is its own.
+
+use std::path::PathBuf;
+use std::process::{Command, ExitCode};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use proxform_sim::sensing::NeighbourSearch;
+use proxform_sim::throughput::{measure, Throughput};
+
+use crate::memory::{mib, peak_rss_bytes};
+
+/// Arguments of `proxform bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Largest swarm measured (powers of ten from 100 up to it).
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
+    max_uavs: u64,
+    /// Largest swarm measured with the naive all-pairs search.
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
+    naive_max_uavs: u64,
+    /// Output directory [default: out/bench].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Internal: measure one configuration and print it as JSON.
+    #[arg(long, hide = true, num_args = 4, value_names = ["UAVS", "STEPS", "THREADS", "SEARCH"])]
+    one: Option<Vec<String>>,
+}
+
+/// One row of the report.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Row {
+    uavs: u64,
+    search: String,
+    threads: usize,
+    steps: u64,
+    updates_per_s: f64,
+    ns_per_update: f64,
+    setup_s: f64,
+    peak_rss_bytes: Option<u64>,
+}
+
+fn search_name(s: NeighbourSearch) -> &'static str {
+    match s {
+        NeighbourSearch::Grid => "grid",
+        NeighbourSearch::AllPairs => "all-pairs",
+    }
+}
+
+/// Runs the command.
+pub fn run(args: &BenchArgs) -> Result<ExitCode> {
+    if let Some(one) = &args.one {
+        return measure_one(one);
+    }
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out/bench"));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let mut sizes = Vec::new();
+    let mut n = 100u64;
+    while n <= args.max_uavs {
+        sizes.push(n);
+        n *= 10;
+    }
+    let mut plan: Vec<(u64, usize, NeighbourSearch)> = Vec::new();
+    for &n in &sizes {
+        for threads in [1, cores] {
+            plan.push((n, threads, NeighbourSearch::Grid));
+        }
+        if n <= args.naive_max_uavs {
+            plan.push((n, cores, NeighbourSearch::AllPairs));
+        }
+    }
+    plan.dedup();
+    println!("proxform bench: swarm scenario, {} core(s); each line is one child process\n", cores);
+    println!(
+        "{:>9} {:>10} {:>8} {:>6} {:>16} {:>12} {:>10}",
+        "UAVs", "search", "threads", "steps", "updates/s", "ns/update", "peak mem"
+    );
+    let exe = std::env::current_exe().context("cannot find the proxform executable")?;
+    let mut rows = Vec::new();
+    for (n, threads, search) in plan {
+        // Enough steps for about three million updates (all-pairs: N² work), at least 5.
+        let work = if search == NeighbourSearch::AllPairs { (n * n / 200).max(n) } else { n };
+        let steps = (3_000_000 / work).clamp(5, 200);
+        let output = Command::new(&exe)
+            .args(["bench", "--one", &n.to_string(), &steps.to_string(), &threads.to_string(), search_name(search)])
+            .output()
+            .context("cannot start a measurement process")?;
+        if !output.status.success() {
+            bail!("measurement of {n} UAVs failed: {}", String::from_utf8_lossy(&output.stderr));
+        }
+        let row: Row = serde_json::from_slice(&output.stdout).context("unreadable measurement")?;
+        println!(
+            "{:>9} {:>10} {:>8} {:>6} {:>16.3e} {:>12.0} {:>10}",
+            row.uavs,
+            row.search,
+            row.threads,
+            row.steps,
+            row.updates_per_s,
+            row.ns_per_update,
+            mib(row.peak_rss_bytes)
+        );
+        rows.push(row);
+    }
+    let mut w = csv::Writer::from_path(out.join("bench.csv"))?;
+    for r in &rows {
+        w.serialize(r)?;
+    }
+    w.flush()?;
+    let plot = crate::figures::bench_plot(
+        &out,
+        &rows.iter().map(|r| (r.uavs, r.search.clone(), r.threads, r.ns_per_update)).collect::<Vec<_>>(),
+    )?;
+    println!(
+        "\nwrote {}, {}",
+        out.join("bench.csv").display(),
+        plot.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn measure_one(one: &[String]) -> Result<ExitCode> {
+    let parse = |k: usize| -> Result<u64> { one[k].parse().with_context(|| format!("bad --one argument {}", one[k])) };
+    let (n, steps, threads) = (parse(0)?, parse(1)?, parse(2)? as usize);
+    let search = match one[3].as_str() {
+        "grid" => NeighbourSearch::Grid,
+        "all-pairs" => NeighbourSearch::AllPairs,
+        other => bail!("unknown search '{other}'"),
+    };
+    let scenario = proxform_sim::swarm::scenario(n as usize)?;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let t: Throughput = pool.install(|| measure(&scenario, steps, search, threads > 1))?;
+    let row = Row {
+        uavs: t.uavs,
+        search: search_name(search).into(),
+        threads: t.threads,
+        steps: t.steps,
+        updates_per_s: t.updates_per_s,
+        ns_per_update: t.ns_per_update,
+        setup_s: t.setup_s,
+        peak_rss_bytes: peak_rss_bytes(),
+    };
+    println!("{}", serde_json::to_string(&row)?);
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,18 @@
+//! One engine step of the swarm scenario (perception, control and plant of every UAV).
+
+use proxform_sim::engine::Simulation;
+use proxform_sim::swarm;
+
+fn main() {
+    divan::main();
+}
+
+#[divan::bench(args = [1_000, 10_000], sample_count = 20)]
+fn swarm_step(bencher: divan::Bencher, uavs: usize) {
+    let scenario = swarm::scenario(uavs).expect("valid");
+    let mut sim = Simulation::new(&scenario, 1, 0).expect("valid");
+    for _ in 0..5 {
+        sim.step();
+    }
+    bencher.counter(divan::counter::ItemsCount::new(uavs - 1)).bench_local(|| sim.step());
+}

@@ -1,0 +1,169 @@
+//! The onboard proximity sensor: what one UAV perceives of the others at one instant.
+//!
+//! A UAV's sensors report, within the sensing range, the nearest UAV in each of its azimuth
+//! areas (METHOD §2) and the main references it tracks, each with white measurement noise.
+//! Areas are taken from the true relative geometry; the controller re-sorts the noisy reports
+//! into its own areas. Candidates come from the neighbour grid, or from every UAV for the naive
+//! all-pairs reference search.
+
+use proxform_core::azimuth::AreaClassifier;
+use proxform_core::state::{self, State9};
+use proxform_core::{DependencySet, Observation, ObservationSource, UavId};
+
+use crate::grid::NeighbourGrid;
+use crate::normal::Ziggurat;
+use crate::rng::StepRng;
+
+/// How candidates are found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NeighbourSearch {
+    /// Uniform grid: O(N) per step.
+    #[default]
+    Grid,
+    /// Every pair: O(N²), the reference for benchmarks.
+    AllPairs,
+}
+
+/// Per-thread working memory of the sensor.
+#[derive(Debug, Clone)]
+pub struct SensorScratch {
+    /// Nearest candidate per area: squared distance (∞ when empty) and id.
+    best_d2: Vec<f64>,
+    best_id: Vec<u32>,
+    /// Main references found in range.
+    refs: Vec<u32>,
+    /// The observations handed to the controller.
+    pub observations: Vec<Observation>,
+}
+
+impl SensorScratch {
+    /// Scratch for `m` areas.
+    pub fn new(m: usize) -> Self {
+        Self {
+            best_d2: vec![f64::INFINITY; m],
+            best_id: vec![0; m],
+            refs: Vec::with_capacity(8),
+            observations: Vec::with_capacity(m + 8),
+        }
+    }
+}
+
+/// The sensor model shared by all UAVs of a scenario.
+#[derive(Debug, Clone)]
+pub struct ProximitySensor {
+    classifier: AreaClassifier,
+    range_m: f64,
+    sigma: State9,
+}
+
+impl ProximitySensor {
+    /// A sensor with `m` areas, range `range_m` and noise σ per parameter.
+    pub fn new(m: usize, range_m: f64, sigma: State9) -> Self {
+        Self { classifier: AreaClassifier::new(m), range_m, sigma }
+    }
+
+    /// Fills `scratch.observations` with what UAV `i` perceives of `states`; returns the
+    /// distance to its nearest neighbour within range (∞ if none).
+    #[allow(clippy::too_many_arguments)]
+    pub fn perceive(
+        &self,
+        i: usize,
+        states: &[State9],
+        search: NeighbourSearch,
+        grid: &NeighbourGrid,
+        deps: &DependencySet,
+        beacons: &[UavId],
+        rng: &mut StepRng,
+        scratch: &mut SensorScratch,
+    ) -> f64 {
+        let me = &states[i];
+        let (sin_yaw, cos_yaw) = me[state::BETA].sin_cos();
+        scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
+        scratch.refs.clear();
+        let mut nearest2 = f64::INFINITY;
+        let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
+            if j as usize == i {
+                return;
+            }
+            nearest2 = nearest2.min(d2);
+            let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
+            // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
+            let better = d2 < scratch.best_d2[a];
+            scratch.best_id[a] = if better { j } else { scratch.best_id[a] };
+            scratch.best_d2[a] = if better { d2 } else { scratch.best_d2[a] };
+        };
+        let p = [me[0], me[1], me[2]];
+        match search {
+            NeighbourSearch::Grid => grid.for_each_within(p, self.range_m, &mut consider),
+            NeighbourSearch::AllPairs => {
+                let r2 = self.range_m * self.range_m;
+                for (j, s) in states.iter().enumerate() {
+                    let q = [s[0], s[1], s[2]];
+                    let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                    if d2 <= r2 {
+                        consider(j as u32, &q, d2);
+                    }
+                }
+            }
+        }
+        // Main references within range (the sensor tracks them).
+        let r2 = self.range_m * self.range_m;
+        for &(id, _) in deps.refs() {
+            let Some(q) = states.get(id.index()) else { continue };
+            let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+            if id.index() != i && d2 <= r2 {
+                scratch.refs.push(id.0);
+            }
+        }
+        // Deterministic report order: areas in order, then references by id.
+        scratch.refs.sort_unstable();
+        scratch.observations.clear();
+        for a in 0..scratch.best_d2.len() {
+            if scratch.best_d2[a] < f64::INFINITY {
+                scratch.observations.push(self.observe(scratch.best_id[a], states, rng));
+            }
+        }
+        for k in 0..scratch.refs.len() {
+            let j = scratch.refs[k];
+            let picked =
+                (0..scratch.best_d2.len()).any(|a| scratch.best_d2[a] < f64::INFINITY && scratch.best_id[a] == j);
+            if !picked {
+                scratch.observations.push(self.observe(j, states, rng));
+            }
+        }
+        // Beacons heard over the radio, unless already perceived onboard.
+        for b in beacons {
+            if b.index() != i && b.index() < states.len() && !scratch.observations.iter().any(|o| o.id == *b) {
+                let mut o = self.observe(b.0, states, rng);
+                o.source = ObservationSource::Radio;
+                scratch.observations.push(o);
+            }
+        }
+        nearest2.sqrt()
+    }
+
+    #[inline]
+    fn observe(&self, j: u32, states: &[State9], rng: &mut StepRng) -> Observation {
+        Observation {
+            id: UavId(j),
+            state: noisy(&states[j as usize], &self.sigma, rng),
+            age_s: 0.0,
+            source: ObservationSource::Onboard,
+        }
+    }
+}
+
+/// `x` plus white Gaussian noise of standard deviation `sigma` per parameter.
+#[inline]
+pub fn noisy(x: &State9, sigma: &State9, rng: &mut StepRng) -> State9 {
+    let z = Ziggurat::get();
+    let mut s = *x;
+    for k in (0..8).step_by(2) {
+        let (a, b) = z.pair(rng);
+        s[k] += sigma[k] * a;
+        s[k + 1] += sigma[k + 1] * b;
+    }
+    s[8] += sigma[8] * z.sample(rng);
+    s
+}

@@ -1,0 +1,68 @@
+//! The large-swarm scenario: parallel stepping is bit-identical to serial stepping, the grid
+//! finds what all-pairs finds, and the formation stays bounded and safe.
+
+use proxform_sim::engine::Simulation;
+use proxform_sim::metrics::RunMetrics;
+use proxform_sim::sensing::NeighbourSearch;
+use proxform_sim::{swarm, Scenario};
+
+fn run(scenario: &Scenario, threads: usize, parallel: bool) -> proxform_sim::RunSummary {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+    pool.install(|| {
+        let sim = Simulation::new(scenario, 7, 0).expect("valid").with_parallel(parallel);
+        let mut m = RunMetrics::new(scenario);
+        sim.run(&mut m);
+        m.finish(0, scenario.duration_s)
+    })
+}
+
+#[test]
+fn parallel_stepping_is_bit_identical_to_serial() {
+    let mut s = swarm::scenario(1500).expect("valid");
+    s.duration_s = 3.0;
+    let serial = run(&s, 1, false);
+    let par1 = run(&s, 1, true);
+    let par2 = run(&s, 2, true);
+    let par3 = run(&s, 3, true);
+    assert_eq!(serial, par1);
+    assert_eq!(serial, par2);
+    assert_eq!(serial, par3);
+}
+
+#[test]
+fn grid_search_sees_what_all_pairs_sees() {
+    let mut s = swarm::scenario(300).expect("valid");
+    s.duration_s = 5.0;
+    let grid = run(&s, 2, false);
+    s.neighbour_search = NeighbourSearch::AllPairs;
+    let naive = run(&s, 2, false);
+    assert_eq!(grid, naive);
+}
+
+#[test]
+fn a_deep_swarm_stays_bounded_and_safe() {
+    let s = swarm::scenario(2000).expect("valid");
+    let r = run(&s, 2, true);
+    let allow = s.allowable.as_array();
+    for k in 0..6 {
+        assert!(r.max_abs_error[k] < allow[k], "axis {k}: {} ≥ {}", r.max_abs_error[k], allow[k]);
+    }
+    assert!(r.min_separation_m >= s.safety_distance_m, "min separation {}", r.min_separation_m);
+}
+
+#[test]
+fn without_the_navigator_beacon_errors_grow_along_the_chains() {
+    // The same lattice with purely local dependency tables and no radio beacon.
+    let mut local = swarm::scenario(2000).expect("valid");
+    local.beacons.clear();
+    local.dependencies =
+        proxform_sim::autodeps::derive(&local.formation.slots, local.navigator, 3, 80.0, 0.0).expect("valid");
+    let with = run(&swarm::scenario(2000).expect("valid"), 2, true);
+    let without = run(&local, 2, true);
+    assert!(
+        without.max_abs_error[1] > 3.0 * with.max_abs_error[1],
+        "{:?} vs {:?}",
+        without.max_abs_error,
+        with.max_abs_error
+    );
+}
