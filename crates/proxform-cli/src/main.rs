@@ -6,6 +6,7 @@ mod memory;
 mod output;
 mod report;
 mod run;
+mod scenarios;
 
 use clap::{Parser, Subcommand};
 
@@ -21,6 +22,10 @@ struct Cli {
 enum Command {
     /// Run a scenario (by default the paper's six-UAV experiment) over one or more seeds.
     Run(run::RunArgs),
+    /// List the built-in scenarios.
+    Scenarios,
+    /// Write an annotated example scenario file.
+    Init(scenarios::InitArgs),
     /// Measure agent-updates per second and peak memory of the swarm scenario, 10^2 … 10^6 UAVs.
     Bench(bench::BenchArgs),
 }
@@ -30,6 +35,8 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Scenarios => scenarios::list(),
+        Command::Init(args) => scenarios::init(&args),
     };
     match result {
         Ok(code) => code,

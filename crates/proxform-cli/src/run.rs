@@ -9,15 +9,17 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use proxform_core::PredictorKind;
-use proxform_sim::{run_batch, Scenario};
+use proxform_sim::run_batch;
 
 use crate::{figures, output, report};
 
 /// Arguments of `proxform run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Built-in scenario to run: the paper's experiment, or a large lattice swarm.
-    #[arg(long, default_value = "paper", value_parser = ["paper", "swarm"])]
+    /// Scenario file (TOML) to run; see `proxform init` and docs/scenarios.md.
+    file: Option<PathBuf>,
+    /// Built-in scenario to run when no file is given (see `proxform scenarios`).
+    #[arg(long, default_value = "paper", value_parser = crate::scenarios::NAMES)]
     scenario: String,
     /// Number of UAVs of the swarm scenario (2 to 10^7).
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..=10_000_000))]
@@ -74,11 +76,14 @@ enum Predictor {
 
 /// Runs the command; the exit code is 0 when every run passed, 1 otherwise.
 pub fn run(args: &RunArgs) -> Result<ExitCode> {
-    let mut scenario = match (args.scenario.as_str(), args.uavs) {
-        ("paper", None) => Scenario::paper(),
-        ("paper", Some(_)) => bail!("--uavs applies to --scenario swarm only; the paper experiment has 6 UAVs"),
-        ("swarm", n) => proxform_sim::swarm::scenario(n.unwrap_or(1000) as usize).context("invalid swarm")?,
-        (other, _) => bail!("unknown scenario '{other}'"),
+    let mut scenario = match &args.file {
+        Some(path) => {
+            if args.uavs.is_some() {
+                bail!("--uavs applies to --scenario swarm only, not to a scenario file");
+            }
+            crate::scenarios::load_file(path)?
+        }
+        None => crate::scenarios::built_in(&args.scenario, args.uavs)?,
     };
     if let Some(d) = args.duration_s {
         scenario.duration_s = d;

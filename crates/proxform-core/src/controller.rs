@@ -172,6 +172,9 @@ impl ControllerSetup {
 
 /// Marks an empty area in the per-area scratch.
 const EMPTY: u32 = u32::MAX;
+/// Marks an area candidate that is a coasting track (its slot in the low bits), not an
+/// observation index.
+const TRACK: u32 = 1 << 31;
 
 /// The controller of one UAV.
 #[derive(Debug, Clone)]
@@ -272,6 +275,24 @@ impl ProximityController {
                 *a = (k as u32, d2);
             }
         }
+        // §3: neighbours perceived recently but missing now coast on their tracks.
+        for s in 0..tracks.slots() {
+            let Some(id) = tracks.coasting(s, now_s) else { continue };
+            if id == me || observations.iter().any(|o| o.id == id) {
+                continue;
+            }
+            let x = tracks.state_at(s, now_s);
+            let (dx, dy, dz) = (x[X] - own[X], x[X + 1] - own[X + 1], x[X + 2] - own[X + 2]);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if d2 > r2 {
+                continue;
+            }
+            let a = &mut nearest[setup.classifier.area(sin_yaw, cos_yaw, dx, dy)];
+            let d2 = d2 as f32;
+            if a.0 == EMPTY || d2 < a.1 {
+                *a = (TRACK | s as u32, d2);
+            }
+        }
 
         // §3, §6 steps 1-3: per-neighbour estimates X̂_ij = F·X_j + W_ij, kept as deviations
         // from the course-keeping state (attitudes wrapped), then the area mean and the
@@ -287,11 +308,20 @@ impl ProximityController {
             if k == EMPTY {
                 continue;
             }
-            let o = &observations[k as usize];
-            let Some(delta) = deviation(tracks, formation, o, &slot_i, &x_hold, now_s, dt) else { continue };
+            let (id, x_j) = if k & TRACK != 0 {
+                let s = (k & !TRACK) as usize;
+                match tracks.coasting(s, now_s) {
+                    Some(id) => (id, tracks.state_at(s, now_s + dt)),
+                    None => continue,
+                }
+            } else {
+                let o = &observations[k as usize];
+                (o.id, tracks.predict(o, now_s, dt)) // F·X_j(t) with the neighbour's track
+            };
+            let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold) else { continue };
             sum_bar += delta;
             n_bar += 1;
-            if let Some(c) = dependency.degree(o.id) {
+            if let Some(c) = dependency.degree(id) {
                 sum_dep += c * delta;
                 c_sum += c;
                 main_refs += 1;
@@ -299,17 +329,31 @@ impl ProximityController {
         }
         for r in 0..dependency.refs().len() {
             let (id, c) = dependency.refs()[r];
-            let Some(k) = observations.iter().position(|o| o.id == id) else { continue };
-            if nearest.iter().any(|a| a.0 == k as u32) {
-                continue; // already counted with its area
-            }
-            let o = &observations[k];
-            if o.source == ObservationSource::Onboard
-                && (state::position(&o.state) - state::position(own)).norm_squared() > r2
-            {
-                continue;
-            }
-            let Some(delta) = deviation(tracks, formation, o, &slot_i, &x_hold, now_s, dt) else { continue };
+            let x_j = match observations.iter().position(|o| o.id == id) {
+                Some(k) => {
+                    if nearest.iter().any(|a| a.0 == k as u32) {
+                        continue; // already counted with its area
+                    }
+                    let o = &observations[k];
+                    if o.source == ObservationSource::Onboard
+                        && (state::position(&o.state) - state::position(own)).norm_squared() > r2
+                    {
+                        continue;
+                    }
+                    tracks.predict(o, now_s, dt)
+                }
+                None => {
+                    // Not observed now: coast on its track, unless its area already did.
+                    let Some(s) = (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s) == Some(id)) else {
+                        continue;
+                    };
+                    if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
+                        continue;
+                    }
+                    tracks.state_at(s, now_s + dt)
+                }
+            };
+            let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold) else { continue };
             sum_dep += c * delta;
             c_sum += c;
             main_refs += 1;
@@ -352,23 +396,20 @@ impl ProximityController {
     }
 }
 
-/// `X̂_ij − X_hold` for one observation (eq. 10, attitudes wrapped); None when the observed
-/// UAV is not in the formation.
+/// `X̂_ij − X_hold` for neighbour `id` predicted at `x_j` (eq. 10, attitudes wrapped); None
+/// when the neighbour is not in the formation.
 #[inline]
 fn deviation(
-    tracks: &mut NeighbourTracks,
     formation: &Formation,
-    o: &Observation,
+    id: UavId,
+    x_j: &State9,
     slot_i: &FormationSlot,
     x_hold: &State9,
-    now_s: f64,
-    dt: f64,
 ) -> Option<State9> {
-    let slot_j = formation.slot(o.id)?;
-    let x_j = tracks.predict(o, now_s, dt); // F·X_j(t) with the neighbour's track
-                                            // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold (eq. 10), built in place.
+    let slot_j = formation.slot(id)?;
+    // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
     let mut delta = x_j - x_hold;
-    formation.add_w(slot_i, slot_j, &x_j, &mut delta);
+    formation.add_w(slot_i, slot_j, x_j, &mut delta);
     for k in state::ALPHA..=state::GAMMA {
         delta[k] = crate::angle::wrap_pi(delta[k]);
     }

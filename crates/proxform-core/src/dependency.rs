@@ -18,7 +18,8 @@ pub struct DependencySet {
 
 impl DependencySet {
     /// Builds the table of `owner` in a formation of `size` UAVs. Degrees must be finite and
-    /// positive; references must be other UAVs of the formation, each named once.
+    /// positive; references must be other UAVs of the formation, each named once. Entries are
+    /// kept in id order.
     pub fn new(owner: UavId, size: usize, refs: Vec<(UavId, f64)>) -> Result<Self, ConfigError> {
         for (k, &(id, degree)) in refs.iter().enumerate() {
             if id == owner {
@@ -42,6 +43,9 @@ impl DependencySet {
                 return Err(ConfigError::BadReference { owner, reference: id, reason: "named twice" });
             }
         }
+        // Canonical order (by id), so that equal tables give equal sums bit for bit.
+        let mut refs = refs;
+        refs.sort_by_key(|r| r.0);
         Ok(Self { refs: refs.into() })
     }
 

@@ -7,7 +7,8 @@
 //! and attitude (value and rate) and on position (advanced by the filtered velocity), and
 //! predicted with the filtered rates. The filter only smooths and extrapolates what was
 //! observed; it never differentiates raw observations, which is what makes mutual references
-//! unstable (METHOD §3).
+//! unstable (METHOD §3). A neighbour missing from one step's observations coasts on its track
+//! until the track times out.
 
 use crate::error::{unit_interval, ConfigError};
 use crate::observation::{Observation, UavId};
@@ -139,6 +140,25 @@ impl NeighbourTracks {
             }
         };
         extrapolate(&track, now + horizon_s - track.t)
+    }
+
+    /// Number of track slots in use.
+    pub fn slots(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// The neighbour of track slot `s` if its track can coast at `now`: measured before `now`
+    /// and no longer ago than the timeout. A neighbour missing from this step's
+    /// observations (a lost message, a dropped detection) is then predicted from its track.
+    pub fn coasting(&self, s: usize, now: f64) -> Option<UavId> {
+        let (id, _) = self.ids[s];
+        let age = now - self.tracks[s].t;
+        (id != FREE && age > 1e-9 && age <= self.timeout_s).then_some(UavId(id))
+    }
+
+    /// The state of track slot `s` extrapolated to time `t`.
+    pub fn state_at(&self, s: usize, t: f64) -> State9 {
+        extrapolate(&self.tracks[s], t - self.tracks[s].t)
     }
 
     /// Index of the track of `id`, or the slot to (re)use for it (marked free).

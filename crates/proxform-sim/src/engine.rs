@@ -12,11 +12,12 @@ use proxform_core::{ControllerSetup, Outcome, ProximityController, UavId};
 use rand::RngExt;
 use rayon::prelude::*;
 
+use crate::faults::{self, Fault, FaultStep};
 use crate::grid::NeighbourGrid;
 use crate::observer::{Observer, StepFrame, UavStep};
 use crate::rng::{stream_key, Source, StepRng};
 use crate::scenario::{Scenario, ScenarioError};
-use crate::sensing::{noisy, NeighbourSearch, ProximitySensor, SensorScratch};
+use crate::sensing::{noisy, Link, NeighbourSearch, ProximitySensor, SensorScratch};
 
 /// Swarms at least this large are stepped in parallel within the run.
 pub const PARALLEL_MIN_UAVS: usize = 1024;
@@ -33,6 +34,8 @@ pub struct Simulation<'s> {
     controllers: Vec<Option<ProximityController>>,
     uavs: Vec<UavStep>,
     grid: NeighbourGrid,
+    active: Vec<bool>,
+    faults: FaultStep,
     sensor: ProximitySensor,
     search: NeighbourSearch,
     start: [f64; 3],
@@ -71,6 +74,8 @@ impl<'s> Simulation<'s> {
             controllers,
             uavs: vec![UavStep::default(); n],
             grid: NeighbourGrid::new(),
+            active: (0..n).map(|i| faults::is_active(&scenario.faults, i, 0.0)).collect(),
+            faults: FaultStep { radio_up: true, ..FaultStep::default() },
             sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise.sigma()),
             search: scenario.neighbour_search,
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
@@ -113,15 +118,56 @@ impl<'s> Simulation<'s> {
     }
 
     fn frame(&self) -> StepFrame<'_> {
-        StepFrame { k: self.k, t: self.t(), states: &self.current, uavs: &self.uavs }
+        StepFrame { k: self.k, t: self.t(), states: &self.current, uavs: &self.uavs, active: &self.active }
+    }
+
+    /// Applies the schedule at the current time: removals, joins, and the sensor and radio
+    /// faults in force.
+    fn apply_faults(&mut self) {
+        let sc = self.scenario;
+        if sc.faults.is_empty() {
+            return;
+        }
+        let t = self.t();
+        let nav = sc.navigator.index();
+        for f in &sc.faults {
+            match *f {
+                Fault::Remove { uav, .. } => self.active[uav.index()] = faults::is_active(&sc.faults, uav.index(), t),
+                Fault::Join { uav, offset_m, .. } => {
+                    let i = uav.index();
+                    let now = faults::is_active(&sc.faults, i, t);
+                    if now && !self.active[i] {
+                        // Appears in its slot relative to the navigator (or to the formation's
+                        // estimate of it), shifted by the offset.
+                        let reference = crate::observer::navigator_reference(sc, &self.current, &self.active);
+                        let f = &sc.formation;
+                        let mut s = reference + f.w(&f.slots[i], &f.slots[nav], &reference);
+                        s[0] += offset_m.x;
+                        s[1] += offset_m.y;
+                        s[2] += offset_m.z;
+                        self.current[i] = s;
+                    }
+                    self.active[i] = now;
+                }
+                _ => {}
+            }
+        }
+        let (seed, run, k) = (self.seed, self.run, self.k);
+        let sigma = sc.noise.sigma();
+        let current = &self.current;
+        self.faults = faults::gather(&sc.faults, t, &self.faults, |i| {
+            let mut rng = StepRng::new(stream_key(seed, run, i as u64, Source::OwnState), k);
+            noisy(&current[i], &sigma, &mut rng)
+        });
     }
 
     /// Advances one update period.
     pub fn step(&mut self) {
+        self.apply_faults();
         let sc = self.scenario;
         let range = sc.controller.areas.sensing_range_m;
         if self.search == NeighbourSearch::Grid {
-            self.grid.rebuild(self.current.iter().map(|s| [s[0], s[1], s[2]]), range);
+            self.rebuild_grid(range);
         }
         let ctx = StepContext {
             scenario: sc,
@@ -134,6 +180,8 @@ impl<'s> Simulation<'s> {
             grid: &self.grid,
             sensor: &self.sensor,
             search: self.search,
+            active: &self.active,
+            faults: &self.faults,
         };
         let m = sc.controller.areas.areas;
         if self.parallel {
@@ -178,11 +226,22 @@ impl<'s> Simulation<'s> {
         }
     }
 
+    fn rebuild_grid(&mut self, range: f64) {
+        let active = &self.active;
+        self.grid.rebuild_ids(
+            self.current.iter().enumerate().filter(|(i, _)| active[*i]).map(|(i, s)| (i as u32, [s[0], s[1], s[2]])),
+            range,
+        );
+    }
+
     /// Nearest-neighbour distances of the initial state, for the separation metric.
     fn perceive_initial(&mut self) {
         let range = self.scenario.controller.areas.sensing_range_m;
-        self.grid.rebuild(self.current.iter().map(|s| [s[0], s[1], s[2]]), range);
+        self.rebuild_grid(range);
         for (i, s) in self.current.iter().enumerate() {
+            if !self.active[i] {
+                continue;
+            }
             let mut best = f64::INFINITY;
             self.grid.for_each_within([s[0], s[1], s[2]], range, |j, _, d2| {
                 if j as usize != i {
@@ -206,6 +265,8 @@ struct StepContext<'a> {
     grid: &'a NeighbourGrid,
     sensor: &'a ProximitySensor,
     search: NeighbourSearch,
+    active: &'a [bool],
+    faults: &'a FaultStep,
 }
 
 impl StepContext<'_> {
@@ -222,7 +283,13 @@ impl StepContext<'_> {
         let sc = self.scenario;
         let dt = sc.dt_s;
         let uav = i as u64;
+        if !self.active[i] {
+            *next = self.current[i];
+            *aux = UavStep::default();
+            return;
+        }
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
+        let link = Link { active: self.active, dropout: sc.dropout, radio_up: self.faults.radio_up };
         let nearest = self.sensor.perceive(
             i,
             self.current,
@@ -230,6 +297,7 @@ impl StepContext<'_> {
             self.grid,
             &sc.dependencies[i],
             &sc.beacons,
+            &link,
             &mut rng,
             scratch,
         );
@@ -242,7 +310,8 @@ impl StepContext<'_> {
         };
         let me = &self.current[i];
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
-        let own = noisy(me, &sc.noise.sigma(), &mut rng);
+        let mut own = noisy(me, &sc.noise.sigma(), &mut rng);
+        self.faults.corrupt(i, &mut own);
         let decision = ctrl.step(self.t, &own, &scratch.observations);
         let commanded = if sc.adjustment_enabled { decision.input } else { Input::zeros() };
         let applied = if matches!(decision.outcome, Outcome::Adjusted { .. }) && sc.actuation_error > 0.0 {

@@ -31,9 +31,15 @@ impl NeighbourGrid {
         Self::default()
     }
 
-    /// Rebins `positions` for queries of radius at most `radius` (m).
+    /// Rebins `positions` (point i has id i) for queries of radius at most `radius` (m).
     pub fn rebuild(&mut self, positions: impl ExactSizeIterator<Item = [f64; 3]> + Clone, radius: f64) {
-        let n = positions.len();
+        self.rebuild_ids(positions.enumerate().map(|(i, p)| (i as u32, p)), radius);
+    }
+
+    /// Rebins the points `(id, position)` for queries of radius at most `radius` (m).
+    pub fn rebuild_ids(&mut self, points: impl Iterator<Item = (u32, [f64; 3])> + Clone, radius: f64) {
+        let positions = points.clone().map(|(_, p)| p);
+        let n = points.clone().count();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in positions.clone() {
             for a in 0..2 {
@@ -77,11 +83,11 @@ impl NeighbourGrid {
         self.pos.resize(n, [0.0; 3]);
         // Stable counting sort: within a column, members keep id order.
         let mut fill: Vec<u32> = self.start[..cells].to_vec();
-        for (i, p) in positions.enumerate() {
-            let c = self.cell_of[i] as usize;
+        for (k, (id, p)) in points.enumerate() {
+            let c = self.cell_of[k] as usize;
             let slot = fill[c] as usize;
             fill[c] += 1;
-            self.ids[slot] = i as u32;
+            self.ids[slot] = id;
             self.pos[slot] = p;
         }
     }

@@ -8,7 +8,9 @@
 pub mod autodeps;
 pub mod batch;
 pub mod engine;
+pub mod faults;
 pub mod grid;
+pub mod load;
 pub mod metrics;
 pub mod normal;
 pub mod observer;
@@ -16,6 +18,8 @@ pub mod path;
 pub mod rng;
 pub mod scenario;
 pub mod sensing;
+pub mod shapes;
+pub mod spec;
 pub mod swarm;
 pub mod throughput;
 pub mod trajectory;

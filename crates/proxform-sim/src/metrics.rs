@@ -6,7 +6,7 @@
 use proxform_core::state::{State9, P};
 use proxform_core::Outcome;
 
-use crate::observer::{formation_error, Observer, StepFrame};
+use crate::observer::{formation_error_to, navigator_reference, Observer, StepFrame};
 use crate::scenario::Scenario;
 
 /// Followers with per-UAV detail in summaries and tables.
@@ -163,15 +163,24 @@ struct Partial {
     min_sep: f64,
 }
 
-fn partial(nav: usize, scenario: &Scenario, frame: &StepFrame<'_>, range: std::ops::Range<usize>) -> Partial {
+fn partial(
+    nav: usize,
+    scenario: &Scenario,
+    frame: &StepFrame<'_>,
+    reference: &State9,
+    range: std::ops::Range<usize>,
+) -> Partial {
     let mut p = Partial { min_sep: f64::INFINITY, ..Partial::default() };
     for i in range {
+        if !frame.active[i] {
+            continue;
+        }
         let u = &frame.uavs[i];
         p.min_sep = p.min_sep.min(u.nearest_m);
         if i == nav {
             continue;
         }
-        let e = formation_error(scenario, frame.states, i);
+        let e = formation_error_to(scenario, frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
         match u.outcome {
             Some(Outcome::Adjusted { .. }) => {
@@ -193,13 +202,14 @@ impl Observer for RunMetrics {
         self.samples += 1;
         let n = frame.states.len();
         let nav = self.nav;
+        let reference = navigator_reference(scenario, frame.states, frame.active);
         let parts: Vec<Partial> = if n >= crate::engine::PARALLEL_MIN_UAVS {
             (0..n.div_ceil(CHUNK))
                 .into_par_iter()
-                .map(|c| partial(nav, scenario, frame, c * CHUNK..((c + 1) * CHUNK).min(n)))
+                .map(|c| partial(nav, scenario, frame, &reference, c * CHUNK..((c + 1) * CHUNK).min(n)))
                 .collect()
         } else {
-            vec![partial(nav, scenario, frame, 0..n)]
+            vec![partial(nav, scenario, frame, &reference, 0..n)]
         };
         for p in parts {
             for k in 0..6 {
@@ -213,7 +223,10 @@ impl Observer for RunMetrics {
             self.min_sep = self.min_sep.min(p.min_sep);
         }
         for (i, acc) in self.sample.iter_mut() {
-            let e = formation_error(scenario, frame.states, *i);
+            if !frame.active[*i] {
+                continue;
+            }
+            let e = formation_error_to(scenario, frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
         }
     }

@@ -19,6 +19,8 @@ pub struct StepFrame<'a> {
     pub states: &'a [State9],
     /// Per UAV: what its last update produced.
     pub uavs: &'a [UavStep],
+    /// Per UAV: flying (false once removed, or before it joins).
+    pub active: &'a [bool],
 }
 
 /// What one UAV's update produced, besides its next state.
@@ -52,13 +54,47 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     }
 }
 
-/// Formation errors of UAV `i` relative to the navigator (METHOD §7):
+/// Formation errors of UAV `i` relative to the reference `nav_state` (METHOD §7):
 /// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped).
 #[inline]
-pub fn formation_error(scenario: &Scenario, states: &[State9], i: usize) -> [f64; 6] {
+pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &State9, i: usize) -> [f64; 6] {
     let nav = scenario.navigator.index();
     let f = &scenario.formation;
-    let w = f.w(&f.slots[i], &f.slots[nav], &states[nav]);
-    let e = proxform_core::state::difference(&states[i], &(states[nav] + w));
+    let w = f.w(&f.slots[i], &f.slots[nav], nav_state);
+    let e = proxform_core::state::difference(&states[i], &(nav_state + w));
     [e[0], e[1], e[2], e[6], e[7], e[8]]
+}
+
+/// Formation errors of UAV `i` relative to the navigator.
+#[inline]
+pub fn formation_error(scenario: &Scenario, states: &[State9], i: usize) -> [f64; 6] {
+    formation_error_to(scenario, states, &states[scenario.navigator.index()], i)
+}
+
+/// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
+/// over flying followers of `X_i − W_i,nav` (attitudes averaged as small differences from the
+/// first follower's).
+pub fn navigator_reference(scenario: &Scenario, states: &[State9], active: &[bool]) -> State9 {
+    let nav = scenario.navigator.index();
+    if active[nav] {
+        return states[nav];
+    }
+    let f = &scenario.formation;
+    let mut sum = State9::zeros();
+    let mut base: Option<State9> = None;
+    let mut n = 0.0;
+    for (i, s) in states.iter().enumerate() {
+        if i == nav || !active[i] {
+            continue;
+        }
+        let w = f.w(&f.slots[i], &f.slots[nav], s);
+        let implied = s - w;
+        let b = *base.get_or_insert(implied);
+        sum += proxform_core::state::difference(&implied, &b);
+        n += 1.0;
+    }
+    match base {
+        Some(b) => b + sum / n,
+        None => states[nav],
+    }
 }

@@ -5,7 +5,7 @@
 
 use std::sync::Arc;
 
-use proxform_core::angle::deg;
+use proxform_core::angle::{deg, kmh};
 use proxform_core::state::{self, State9};
 use proxform_core::{
     ConfigError, ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, UavId,
@@ -113,6 +113,10 @@ pub struct Scenario {
     pub adjustment_enabled: bool,
     /// Pairs closer than this are reported as unsafe (m). Paper scenario: 50 m.
     pub safety_distance_m: f64,
+    /// Probability that an onboard observation is lost, per observation and step.
+    pub dropout: f64,
+    /// Scheduled faults.
+    pub faults: Vec<crate::faults::Fault>,
     /// UAVs whose state every UAV hears over the radio each period (ideal link, the
     /// broadcaster's measurement noise). Empty in the paper scenario.
     pub beacons: Vec<UavId>,
@@ -185,6 +189,20 @@ impl Scenario {
             }
         }
         positive("safety_distance_m", self.safety_distance_m)?;
+        if !(0.0..=1.0).contains(&self.dropout) {
+            return Err(ScenarioError::Value {
+                field: "dropout",
+                value: self.dropout,
+                expected: "a probability in [0, 1]",
+            });
+        }
+        for f in &self.faults {
+            if let Some(u) = f.uav() {
+                if u.index() >= n {
+                    return Err(ConfigError::UnknownUav { id: u, size: n }.into());
+                }
+            }
+        }
         for b in &self.beacons {
             if b.index() >= n {
                 return Err(ConfigError::UnknownUav { id: *b, size: n }.into());
@@ -251,12 +269,14 @@ impl Scenario {
             dependencies,
             controller: ControllerParams::default(),
             vehicle: VehicleModel::Kinematic(KinematicModel::default()),
-            noise: MeasurementNoise { position_m: 0.02, velocity_mps: 0.05, attitude_rad: deg(0.01) },
+            noise: MeasurementNoise { position_m: 0.02, velocity_mps: kmh(0.18), attitude_rad: deg(0.01) },
             actuation_error: 0.1,
             allowable: AllowableErrors { position_m: [0.5, 0.6, 0.2], attitude_rad: [deg(0.4), deg(0.3), deg(1.0)] },
             adjustment_enabled: true,
             safety_distance_m: 50.0,
             beacons: Vec::new(),
+            dropout: 0.0,
+            faults: Vec::new(),
             neighbour_search: crate::sensing::NeighbourSearch::Grid,
         }
     }

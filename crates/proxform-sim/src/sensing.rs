@@ -74,6 +74,7 @@ impl ProximitySensor {
         grid: &NeighbourGrid,
         deps: &DependencySet,
         beacons: &[UavId],
+        link: &Link<'_>,
         rng: &mut StepRng,
         scratch: &mut SensorScratch,
     ) -> f64 {
@@ -99,6 +100,9 @@ impl ProximitySensor {
             NeighbourSearch::AllPairs => {
                 let r2 = self.range_m * self.range_m;
                 for (j, s) in states.iter().enumerate() {
+                    if !link.active[j] {
+                        continue;
+                    }
                     let q = [s[0], s[1], s[2]];
                     let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
                     if d2 <= r2 {
@@ -111,6 +115,9 @@ impl ProximitySensor {
         let r2 = self.range_m * self.range_m;
         for &(id, _) in deps.refs() {
             let Some(q) = states.get(id.index()) else { continue };
+            if !link.active[id.index()] {
+                continue;
+            }
             let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
             if id.index() != i && d2 <= r2 {
                 scratch.refs.push(id.0);
@@ -120,7 +127,7 @@ impl ProximitySensor {
         scratch.refs.sort_unstable();
         scratch.observations.clear();
         for a in 0..scratch.best_d2.len() {
-            if scratch.best_d2[a] < f64::INFINITY {
+            if scratch.best_d2[a] < f64::INFINITY && kept(link.dropout, rng) {
                 scratch.observations.push(self.observe(scratch.best_id[a], states, rng));
             }
         }
@@ -128,13 +135,18 @@ impl ProximitySensor {
             let j = scratch.refs[k];
             let picked =
                 (0..scratch.best_d2.len()).any(|a| scratch.best_d2[a] < f64::INFINITY && scratch.best_id[a] == j);
-            if !picked {
+            if !picked && kept(link.dropout, rng) {
                 scratch.observations.push(self.observe(j, states, rng));
             }
         }
         // Beacons heard over the radio, unless already perceived onboard.
-        for b in beacons {
-            if b.index() != i && b.index() < states.len() && !scratch.observations.iter().any(|o| o.id == *b) {
+        let radio: &[UavId] = if link.radio_up { beacons } else { &[] };
+        for b in radio {
+            if b.index() != i
+                && b.index() < states.len()
+                && link.active[b.index()]
+                && !scratch.observations.iter().any(|o| o.id == *b)
+            {
                 let mut o = self.observe(b.0, states, rng);
                 o.source = ObservationSource::Radio;
                 scratch.observations.push(o);
@@ -152,6 +164,23 @@ impl ProximitySensor {
             source: ObservationSource::Onboard,
         }
     }
+}
+
+/// What the links allow this step.
+#[derive(Debug, Clone, Copy)]
+pub struct Link<'a> {
+    /// Which UAVs are flying (removed or not yet joined ones are not).
+    pub active: &'a [bool],
+    /// Probability that an onboard observation is lost.
+    pub dropout: f64,
+    /// False during a radio blackout.
+    pub radio_up: bool,
+}
+
+/// Draws whether an observation survives a dropout of probability `p`.
+#[inline]
+fn kept(p: f64, rng: &mut StepRng) -> bool {
+    p <= 0.0 || ((rng.next_u64() >> 11) as f64) / ((1u64 << 53) as f64) >= p
 }
 
 /// `x` plus white Gaussian noise of standard deviation `sigma` per parameter.

@@ -2,7 +2,7 @@
 
 use proxform_core::state::State9;
 
-use crate::observer::{formation_error, Observer, StepFrame};
+use crate::observer::{formation_error_to, navigator_reference, Observer, StepFrame};
 use crate::scenario::Scenario;
 
 /// One UAV at one step.
@@ -47,8 +47,12 @@ impl Observer for Trajectory {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
         let nav = scenario.navigator.index();
         let allowable = scenario.allowable.as_array();
+        let reference = navigator_reference(scenario, frame.states, frame.active);
         for (i, s) in frame.states.iter().enumerate().take(self.sample) {
-            let error = if i == nav { [0.0; 6] } else { formation_error(scenario, frame.states, i) };
+            if !frame.active[i] {
+                continue;
+            }
+            let error = if i == nav { [0.0; 6] } else { formation_error_to(scenario, frame.states, &reference, i) };
             let (outcome, in_envelope) = match frame.uavs[i].outcome {
                 Some(o) => (o.label(), o == proxform_core::Outcome::Held),
                 None if i == nav => ("navigator", false),

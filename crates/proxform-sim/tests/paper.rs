@@ -73,3 +73,18 @@ fn summaries_do_not_depend_on_the_thread_count() {
     assert_eq!(one.summary, two.summary);
     assert_eq!(one.summary, four.summary);
 }
+
+#[test]
+fn the_paper_scenario_file_is_the_built_in_experiment() {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/paper.toml")).expect("file");
+    let from_file = proxform_sim::load::parse(&text, "paper.toml").expect("valid");
+    let built_in = Scenario::paper();
+    for seed in [1, 99] {
+        let (a, ta) = run_one(&from_file, seed, 0, true).expect("valid");
+        let (b, tb) = run_one(&built_in, seed, 0, true).expect("valid");
+        assert_eq!(a, b);
+        let (ta, tb) = (ta.expect("recorded"), tb.expect("recorded"));
+        assert!(ta.rows == tb.rows, "trajectories differ");
+    }
+}

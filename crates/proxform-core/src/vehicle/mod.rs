@@ -29,6 +29,13 @@ impl VehicleModel {
         }
     }
 
+    /// Smallest and largest forward speed the vehicle can fly (m/s).
+    pub fn forward_speed_range(&self) -> (f64, f64) {
+        match self {
+            VehicleModel::Kinematic(m) => (m.limits.vx_min_mps, m.limits.vx_max_mps),
+        }
+    }
+
     /// Number of inputs n_u.
     #[inline]
     pub fn n_inputs(&self) -> usize {

@@ -1,0 +1,688 @@
+//! Scenario files: TOML text → [`ScenarioSpec`] → checked [`Scenario`].
+//!
+//! Parsing rejects malformed TOML, unknown keys and wrong types; [`TryFrom`] then checks every
+//! value (finite, in range, consistent) and converts units once (km/h → m/s, degrees →
+//! radians). Every error names the key path (`controller.lambda`, `fault[2].at_s`), and
+//! [`parse`] adds the source name and the line where that key stands.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use nalgebra::Vector3;
+use proxform_core::angle::{deg, kmh};
+use proxform_core::state::{self, State9};
+use proxform_core::{
+    ControllerParams, DependencySet, Envelope, Formation, FormationFrame, FormationSlot, KinematicLimits,
+    KinematicModel, PredictorKind, UavId, VehicleModel,
+};
+
+use crate::faults::Fault;
+use crate::path::{NavigatorPath, PaperPath, Segment, SegmentsPath};
+use crate::scenario::{AllowableErrors, MeasurementNoise, Scenario};
+use crate::shapes::Shape;
+use crate::spec::{self, ScenarioSpec};
+
+/// A problem with one key of a scenario.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key}: {message}")]
+pub struct SpecError {
+    /// Dotted key path, with array indices from 1 (`fault[2].at_s`).
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// A scenario that could not be loaded, located in its source.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct LoadError {
+    /// The file name (or other source name).
+    pub source_name: String,
+    /// 1-based line of the offending key, when known.
+    pub line: Option<usize>,
+    /// The key path, when known.
+    pub key: Option<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.source_name)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+        }
+        if let Some(key) = &self.key {
+            write!(f, ": {key}")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+/// A slot's `depends_on` table as written: UAV number → degree.
+type ExplicitRefs = BTreeMap<String, f64>;
+
+fn err(key: impl Into<String>, message: impl Into<String>) -> SpecError {
+    SpecError { key: key.into(), message: message.into() }
+}
+
+/// Parses and checks a scenario file's text; `source_name` names it in errors.
+pub fn parse(text: &str, source_name: &str) -> Result<Scenario, LoadError> {
+    let spec: ScenarioSpec = toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start));
+        LoadError { source_name: source_name.into(), line, key: None, message: e.message().trim().replace('\n', " ") }
+    })?;
+    let default_name =
+        std::path::Path::new(source_name).file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
+    let spec = ScenarioSpec { name: spec.name.clone().or(Some(default_name)), ..spec };
+    Scenario::try_from(spec).map_err(|e| LoadError {
+        source_name: source_name.into(),
+        line: locate(text, &e.key),
+        key: Some(e.key),
+        message: e.message,
+    })
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].bytes().filter(|b| *b == b'\n').count() + 1
+}
+
+/// Finds the line of a key path such as `controller.lambda` or `fault[2].at_s`: under the
+/// matching `[table]` or the n-th `[[array]]` header, the line that assigns the first key
+/// component not in the header (a key inside an inline table is reported at its table's line).
+pub fn locate(text: &str, key: &str) -> Option<usize> {
+    let parts: Vec<(String, Option<usize>)> = key
+        .split('.')
+        .map(|p| match p.split_once('[') {
+            Some((name, idx)) => (name.to_string(), idx.trim_end_matches(']').parse().ok()),
+            None => (p.to_string(), None),
+        })
+        .collect();
+    let mut header: Vec<String> = Vec::new();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut best: Option<usize> = None;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if let Some(h) = line.strip_prefix("[[").and_then(|l| l.strip_suffix("]]")) {
+            let name = h.trim().to_string();
+            *counts.entry(name.clone()).or_default() += 1;
+            header = name.split('.').map(|s| s.trim().to_string()).collect();
+            let idx = counts[&name];
+            // An array-of-tables header matches `name[idx]` prefixes.
+            if header_matches(&header, Some(idx), &parts) && parts.len() == header.len() {
+                best = Some(n + 1);
+            }
+            header.push(format!("#{idx}"));
+            continue;
+        }
+        if let Some(h) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            header = h.split('.').map(|s| s.trim().to_string()).collect();
+            if header_matches(&header, None, &parts) && parts.len() == header.len() {
+                best = Some(n + 1);
+            }
+            continue;
+        }
+        let Some((k, _)) = line.split_once('=') else { continue };
+        let k = k.trim().trim_matches('"');
+        let mut path: Vec<String> = header.clone();
+        path.extend(k.split('.').map(|s| s.trim().to_string()));
+        if path_matches(&path, &parts) {
+            return Some(n + 1);
+        }
+    }
+    best
+}
+
+fn header_matches(header: &[String], idx: Option<usize>, parts: &[(String, Option<usize>)]) -> bool {
+    if header.len() > parts.len() {
+        return false;
+    }
+    for (k, h) in header.iter().enumerate() {
+        if parts[k].0 != *h {
+            return false;
+        }
+    }
+    match idx {
+        Some(i) => parts[header.len() - 1].1 == Some(i),
+        None => true,
+    }
+}
+
+/// Whether a flattened line path (header components, `#n` array markers, key components) is a
+/// prefix-compatible match for the wanted key path.
+fn path_matches(path: &[String], parts: &[(String, Option<usize>)]) -> bool {
+    let mut p = 0;
+    let mut k = 0;
+    while p < path.len() {
+        if k >= parts.len() {
+            return false;
+        }
+        if parts[k].0 != path[p] {
+            return false;
+        }
+        p += 1;
+        if let Some(i) = parts[k].1 {
+            if p < path.len() && path[p] == format!("#{i}") {
+                p += 1;
+            } else if p < path.len() && path[p].starts_with('#') {
+                return false;
+            }
+        } else if p < path.len() && path[p].starts_with('#') {
+            p += 1;
+        }
+        k += 1;
+    }
+    k >= 1
+}
+
+/// Checks a float is finite.
+fn finite(key: &str, v: f64) -> Result<f64, SpecError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(err(key, format!("{v} is not a finite number")))
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<f64, SpecError> {
+    let v = finite(key, v)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(err(key, format!("must be > 0, found {v}")))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Result<f64, SpecError> {
+    let v = finite(key, v)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(err(key, format!("must be ≥ 0, found {v}")))
+    }
+}
+
+fn probability(key: &str, v: f64) -> Result<f64, SpecError> {
+    let v = finite(key, v)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(err(key, format!("must be a probability in [0, 1], found {v}")))
+    }
+}
+
+fn vec3(key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SpecError> {
+    for (k, x) in v.iter().enumerate() {
+        finite(&format!("{key}[{}]", k + 1), *x)?;
+    }
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+fn required<T>(key: &str, v: Option<T>) -> Result<T, SpecError> {
+    v.ok_or_else(|| err(key, "is required"))
+}
+
+fn uav(key: &str, number: u32, n: usize) -> Result<UavId, SpecError> {
+    if number >= 1 && (number as usize) <= n {
+        Ok(UavId(number - 1))
+    } else {
+        Err(err(key, format!("UAV {number} is not in the formation (UAVs are numbered 1 to {n})")))
+    }
+}
+
+impl TryFrom<ScenarioSpec> for Scenario {
+    type Error = SpecError;
+
+    fn try_from(spec: ScenarioSpec) -> Result<Self, SpecError> {
+        let mut s = Scenario::paper();
+        s.name = spec.name.clone().unwrap_or_else(|| "scenario".into());
+        if let Some(v) = spec.dt_s {
+            s.dt_s = positive("dt_s", v)?;
+        }
+        if let Some(v) = spec.duration_s {
+            s.duration_s = positive("duration_s", v)?;
+        }
+        if let Some(v) = spec.safety_distance_m {
+            s.safety_distance_m = positive("safety_distance_m", v)?;
+        }
+        s.controller = controller(spec.controller.clone().unwrap_or_default(), s.dt_s)?;
+        s.vehicle = vehicle(spec.vehicle.clone().unwrap_or_default())?;
+
+        // Formation and dependency tables.
+        let fspec = required("formation", spec.formation.clone())?;
+        let (slots, explicit_deps) = formation_slots(&fspec)?;
+        let n = slots.len();
+        if n < 2 {
+            return Err(err("formation", format!("needs at least 2 UAVs, found {n}")));
+        }
+        s.navigator = uav("navigator", spec.navigator.unwrap_or(1), n)?;
+        let frame = match fspec.frame.as_deref() {
+            None | Some("world") => FormationFrame::World,
+            Some("course") => FormationFrame::Course,
+            Some(other) => {
+                return Err(err(
+                    "formation.frame",
+                    format!("unknown frame \"{other}\" (expected \"world\" or \"course\")"),
+                ))
+            }
+        };
+        for a in 0..n {
+            for b in a + 1..n {
+                let d = (slots[a].offset_m - slots[b].offset_m).norm();
+                if d < s.safety_distance_m {
+                    return Err(err(
+                        "formation",
+                        format!(
+                            "UAVs {} and {} are {d:.1} m apart, closer than the safety distance {} m",
+                            a + 1,
+                            b + 1,
+                            s.safety_distance_m
+                        ),
+                    ));
+                }
+            }
+        }
+        let auto = fspec.dependencies.clone().unwrap_or_default();
+        let k = auto.k.unwrap_or(2) as usize;
+        if k == 0 {
+            return Err(err("formation.dependencies.k", "must be ≥ 1"));
+        }
+        let max_d = match auto.max_distance_m {
+            Some(v) => positive("formation.dependencies.max_distance_m", v)?,
+            None => s.controller.areas.sensing_range_m,
+        };
+        let nav_degree = match auto.navigator_degree {
+            Some(v) => {
+                let v = probability("formation.dependencies.navigator_degree", v)?;
+                if v >= 1.0 {
+                    return Err(err("formation.dependencies.navigator_degree", "must be below 1"));
+                }
+                v
+            }
+            None => 0.0,
+        };
+        let derived = crate::autodeps::derive(&slots, s.navigator, k, max_d, nav_degree)
+            .map_err(|e| err("formation.dependencies", e.to_string()))?;
+        s.dependencies = (0..n)
+            .map(|i| match &explicit_deps[i] {
+                Some(refs) => {
+                    let key = format!("formation.slot[{}].depends_on", i + 1);
+                    let mut out = Vec::new();
+                    for (id, degree) in refs {
+                        let j: u32 = id.parse().map_err(|_| err(&key, format!("\"{id}\" is not a UAV number")))?;
+                        let j = uav(&key, j, n)?;
+                        if j.index() == i {
+                            return Err(err(&key, format!("UAV {} cannot depend on itself", i + 1)));
+                        }
+                        let d = finite(&key, *degree)?;
+                        if d <= 0.0 {
+                            return Err(err(&key, format!("degree of UAV {id} must be > 0, found {d}")));
+                        }
+                        out.push((j, d));
+                    }
+                    DependencySet::new(UavId(i as u32), n, out).map_err(|e| err(&key, e.to_string()))
+                }
+                None => Ok(derived[i].clone()),
+            })
+            .collect::<Result<_, _>>()?;
+        s.formation = Arc::new(Formation { slots: slots.clone(), frame });
+
+        // Path and initial states.
+        s.path = path(spec.path.clone().unwrap_or_default(), s.duration_s)?;
+        let nav0 = s.path.state_at(0.0, [0.0; 3]);
+        let speed = match spec.initial.as_ref().and_then(|i| i.speed_kmh) {
+            Some(v) => Some(kmh(positive("initial.speed_kmh", v)?)),
+            None => None,
+        };
+        s.initial = slots
+            .iter()
+            .map(|slot| {
+                let mut x = nav0;
+                let w = s.formation.w(slot, &slots[s.navigator.index()], &nav0);
+                x[state::X] = w[0];
+                x[state::Y] = w[1];
+                x[state::Z] = w[2];
+                if let Some(v) = speed {
+                    let h = nav0[state::VX].hypot(nav0[state::VY]).max(1e-9);
+                    x[state::VX] = v * nav0[state::VX] / h;
+                    x[state::VY] = v * nav0[state::VY] / h;
+                }
+                x
+            })
+            .collect();
+        let (vmin, vmax) = s.vehicle.forward_speed_range();
+        for (i, x) in s.initial.iter().enumerate() {
+            let v = x[state::VX];
+            if v < vmin - 1e-9 || v > vmax + 1e-9 {
+                return Err(err(
+                    if speed.is_some() { "initial.speed_kmh" } else { "vehicle.vx_min_kmh" },
+                    format!(
+                        "UAV {} starts at {:.1} km/h, outside the vehicle's {:.1}-{:.1} km/h",
+                        i + 1,
+                        v * 3.6,
+                        vmin * 3.6,
+                        vmax * 3.6
+                    ),
+                ));
+            }
+        }
+
+        // Noise, sensing, radio, pass criterion, faults.
+        let noise = spec.noise.clone().unwrap_or_default();
+        if let Some(v) = noise.position_m {
+            s.noise.position_m = non_negative("noise.position_m", v)?;
+        }
+        if let Some(v) = noise.velocity_kmh {
+            s.noise.velocity_mps = kmh(non_negative("noise.velocity_kmh", v)?);
+        }
+        if let Some(v) = noise.attitude_deg {
+            s.noise.attitude_rad = deg(non_negative("noise.attitude_deg", v)?);
+        }
+        if let Some(v) = noise.actuation_error {
+            s.actuation_error = probability("noise.actuation_error", v)?;
+        }
+        s.noise = MeasurementNoise { ..s.noise };
+        if let Some(v) = spec.sensing.as_ref().and_then(|x| x.dropout) {
+            s.dropout = probability("sensing.dropout", v)?;
+        }
+        if let Some(b) = spec.radio.as_ref().and_then(|r| r.beacons.clone()) {
+            s.beacons = b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?;
+        }
+        let a = spec.allowable.clone().unwrap_or_default();
+        let cur = s.allowable;
+        s.allowable = AllowableErrors {
+            position_m: [
+                a.x_m.map_or(Ok(cur.position_m[0]), |v| positive("allowable.x_m", v))?,
+                a.y_m.map_or(Ok(cur.position_m[1]), |v| positive("allowable.y_m", v))?,
+                a.z_m.map_or(Ok(cur.position_m[2]), |v| positive("allowable.z_m", v))?,
+            ],
+            attitude_rad: [
+                a.alpha_deg.map_or(Ok(cur.attitude_rad[0]), |v| positive("allowable.alpha_deg", v).map(deg))?,
+                a.beta_deg.map_or(Ok(cur.attitude_rad[1]), |v| positive("allowable.beta_deg", v).map(deg))?,
+                a.gamma_deg.map_or(Ok(cur.attitude_rad[2]), |v| positive("allowable.gamma_deg", v).map(deg))?,
+            ],
+        };
+        s.faults = spec.fault.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect::<Result<_, _>>()?;
+        s.validate().map_err(|e| err("scenario", e.to_string()))?;
+        Ok(s)
+    }
+}
+
+fn formation_slots(f: &spec::FormationSpec) -> Result<(Vec<FormationSlot>, Vec<Option<ExplicitRefs>>), SpecError> {
+    match (&f.shape, f.slot.is_empty()) {
+        (Some(_), false) => {
+            Err(err("formation", "give either [[formation.slot]] entries or a [formation.shape], not both"))
+        }
+        (None, true) => Err(err("formation", "needs [[formation.slot]] entries or a [formation.shape]")),
+        (Some(shape), true) => {
+            let slots = shape_of(shape)?.slots();
+            let n = slots.len();
+            Ok((slots, vec![None; n]))
+        }
+        (None, false) => {
+            let n = f.slot.len();
+            let mut slots = vec![None; n];
+            let mut deps = vec![None; n];
+            for (k, s) in f.slot.iter().enumerate() {
+                let key = format!("formation.slot[{}]", k + 1);
+                let id = required(&format!("{key}.id"), s.id)?;
+                if id == 0 || id as usize > n {
+                    return Err(err(
+                        format!("{key}.id"),
+                        format!("UAV numbers run from 1 to {n} (the number of slots), found {id}"),
+                    ));
+                }
+                let i = id as usize - 1;
+                if slots[i].is_some() {
+                    return Err(err(format!("{key}.id"), format!("duplicate id {id}")));
+                }
+                let offset = vec3(&format!("{key}.offset_m"), required(&format!("{key}.offset_m"), s.offset_m)?)?;
+                let att = match s.attitude_offset_deg {
+                    Some(a) => vec3(&format!("{key}.attitude_offset_deg"), a)?.map(deg),
+                    None => Vector3::zeros(),
+                };
+                slots[i] = Some(FormationSlot { offset_m: offset, attitude_offset_rad: att });
+                deps[i] = s.depends_on.clone();
+            }
+            let slots = slots.into_iter().map(|s| s.unwrap_or(FormationSlot::at(0.0, 0.0, 0.0))).collect();
+            Ok((slots, deps))
+        }
+    }
+}
+
+fn shape_of(s: &spec::ShapeSpec) -> Result<Shape, SpecError> {
+    let kind = required("formation.shape.kind", s.kind.clone())?;
+    let uavs = || -> Result<usize, SpecError> {
+        let n = required("formation.shape.uavs", s.uavs)? as usize;
+        if n < 2 {
+            return Err(err("formation.shape.uavs", format!("needs at least 2 UAVs, found {n}")));
+        }
+        Ok(n)
+    };
+    let spacing = || positive("formation.shape.spacing_m", required("formation.shape.spacing_m", s.spacing_m)?);
+    let angle = || -> Result<f64, SpecError> {
+        let a = finite("formation.shape.angle_deg", s.angle_deg.unwrap_or(30.0))?;
+        if a <= 0.0 || a >= 90.0 {
+            return Err(err("formation.shape.angle_deg", format!("must be in (0, 90), found {a}")));
+        }
+        Ok(deg(a))
+    };
+    let level = || finite("formation.shape.level_step_m", s.level_step_m.unwrap_or(0.0));
+    Ok(match kind.as_str() {
+        "triangle" => {
+            let rows = required("formation.shape.rows", s.rows)? as usize;
+            if rows < 2 {
+                return Err(err("formation.shape.rows", format!("needs at least 2 rows, found {rows}")));
+            }
+            Shape::Triangle { rows, spacing: spacing()?, level_step: level()? }
+        }
+        "v" => Shape::V { uavs: uavs()?, spacing: spacing()?, angle: angle()?, level_step: level()? },
+        "echelon" => {
+            let left = match s.side.as_deref() {
+                None | Some("right") => false,
+                Some("left") => true,
+                Some(o) => return Err(err("formation.shape.side", format!("unknown side \"{o}\" (expected \"left\" or \"right\")"))),
+            };
+            Shape::Echelon { uavs: uavs()?, spacing: spacing()?, angle: angle()?, left, level_step: level()? }
+        }
+        "line_abreast" => Shape::LineAbreast { uavs: uavs()?, spacing: spacing()?, level_step: level()? },
+        "column" => Shape::Column { uavs: uavs()?, spacing: spacing()?, level_step: level()? },
+        "diamond" => Shape::Diamond { uavs: uavs()?, spacing: spacing()? },
+        "grid" => Shape::Grid { uavs: uavs()?, spacing: spacing()? },
+        "circle" => Shape::Circle { uavs: uavs()?, radius: spacing()? },
+        other => {
+            return Err(err(
+                "formation.shape.kind",
+                format!("unknown shape \"{other}\" (expected triangle, v, echelon, line_abreast, column, diamond, grid or circle)"),
+            ))
+        }
+    })
+}
+
+fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, SpecError> {
+    let mut p = ControllerParams { dt_s, ..ControllerParams::default() };
+    if let Some(m) = c.areas {
+        if m < 1 {
+            return Err(err("controller.areas", format!("must be ≥ 1, found {m}")));
+        }
+        p.areas.areas = m as usize;
+    }
+    if let Some(v) = c.sensing_range_m {
+        p.areas.sensing_range_m = positive("controller.sensing_range_m", v)?;
+    }
+    if let Some(v) = c.lambda {
+        p.lambda = probability("controller.lambda", v)
+            .map_err(|_| err("controller.lambda", format!("λ must be in [0, 1], found {v}")))?;
+    }
+    if let Some(v) = c.rho {
+        let v = positive("controller.rho", v)?;
+        if v > 1.0 {
+            return Err(err("controller.rho", format!("ρ must be in (0, 1], found {v}")));
+        }
+        p.envelope.rho = v;
+    }
+    if let Some(v) = c.closing_time_s {
+        let v = non_negative("controller.closing_time_s", v)?;
+        p.closing_time_s = (v > 0.0).then_some(v);
+    }
+    if let Some(v) = c.input_weight {
+        p.input_weight = non_negative("controller.input_weight", v)?;
+    }
+    if let Some(v) = c.track_timeout_s {
+        p.track_timeout_s = positive("controller.track_timeout_s", v)?;
+    }
+    p.predictor = match c.predictor.as_deref() {
+        None | Some("alpha_beta") => {
+            let alpha = c.predictor_alpha.unwrap_or(0.8);
+            let alpha = positive("controller.predictor_alpha", alpha)?;
+            if alpha > 1.0 {
+                return Err(err("controller.predictor_alpha", format!("must be in (0, 1], found {alpha}")));
+            }
+            let beta = match c.predictor_beta {
+                Some(b) => probability("controller.predictor_beta", b)?,
+                None => alpha * alpha / (2.0 - alpha),
+            };
+            PredictorKind::AlphaBeta { alpha, beta }
+        }
+        Some("constant_velocity") => PredictorKind::ConstantVelocity,
+        Some(o) => {
+            return Err(err(
+                "controller.predictor",
+                format!("unknown predictor \"{o}\" (expected \"alpha_beta\" or \"constant_velocity\")"),
+            ))
+        }
+    };
+    if let Some(t) = c.thresholds {
+        let mut d = p.envelope.thresholds;
+        let set =
+            |d: &mut State9, k: usize, key: &str, v: Option<f64>, scale: fn(f64) -> f64| -> Result<(), SpecError> {
+                if let Some(v) = v {
+                    d[k] = scale(positive(key, v)?);
+                }
+                Ok(())
+            };
+        let id = |v| v;
+        set(&mut d, 0, "controller.thresholds.x_m", t.x_m, id)?;
+        set(&mut d, 1, "controller.thresholds.y_m", t.y_m, id)?;
+        set(&mut d, 2, "controller.thresholds.z_m", t.z_m, id)?;
+        set(&mut d, 3, "controller.thresholds.vx_kmh", t.vx_kmh, kmh)?;
+        set(&mut d, 4, "controller.thresholds.vy_kmh", t.vy_kmh, kmh)?;
+        set(&mut d, 5, "controller.thresholds.vz_kmh", t.vz_kmh, kmh)?;
+        set(&mut d, 6, "controller.thresholds.alpha_deg", t.alpha_deg, deg)?;
+        set(&mut d, 7, "controller.thresholds.beta_deg", t.beta_deg, deg)?;
+        set(&mut d, 8, "controller.thresholds.gamma_deg", t.gamma_deg, deg)?;
+        p.envelope = Envelope { thresholds: d, ..p.envelope };
+    }
+    Ok(p)
+}
+
+fn vehicle(v: spec::VehicleSpec) -> Result<VehicleModel, SpecError> {
+    match v.model.as_deref() {
+        None | Some("kinematic") => {}
+        Some(o) => return Err(err("vehicle.model", format!("unknown model \"{o}\" (expected \"kinematic\")"))),
+    }
+    let mut l = KinematicLimits::default();
+    if let Some(x) = v.vx_min_kmh {
+        l.vx_min_mps = kmh(positive("vehicle.vx_min_kmh", x)?);
+    }
+    if let Some(x) = v.vx_max_kmh {
+        l.vx_max_mps = kmh(positive("vehicle.vx_max_kmh", x)?);
+    }
+    if l.vx_min_mps >= l.vx_max_mps {
+        return Err(err("vehicle.vx_min_kmh", "must be below vehicle.vx_max_kmh"));
+    }
+    if let Some(x) = v.vy_max_kmh {
+        l.vy_max_mps = kmh(positive("vehicle.vy_max_kmh", x)?);
+    }
+    if let Some(x) = v.vz_max_kmh {
+        l.vz_max_mps = kmh(positive("vehicle.vz_max_kmh", x)?);
+    }
+    let pos3 = |key: &str, a: [f64; 3]| -> Result<Vector3<f64>, SpecError> {
+        let v = vec3(key, a)?;
+        for k in 0..3 {
+            positive(&format!("{key}[{}]", k + 1), v[k])?;
+        }
+        Ok(v)
+    };
+    if let Some(a) = v.attitude_max_deg {
+        l.attitude_max_rad = pos3("vehicle.attitude_max_deg", a)?.map(deg);
+    }
+    if let Some(a) = v.accel_kmh_s {
+        l.accel_max_mps2 = pos3("vehicle.accel_kmh_s", a)?.map(kmh);
+    }
+    if let Some(a) = v.attitude_rate_deg_s {
+        l.attitude_rate_max_radps = pos3("vehicle.attitude_rate_deg_s", a)?.map(deg);
+    }
+    Ok(VehicleModel::Kinematic(KinematicModel { limits: l }))
+}
+
+fn path(p: spec::PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> {
+    match p.kind.as_deref() {
+        None | Some("paper") => {
+            if p.speed_kmh.is_some() || p.course_deg.is_some() || p.transition_s.is_some() || !p.segment.is_empty() {
+                return Err(err("path", "the paper path takes no speed, course or segments (use kind = \"segments\")"));
+            }
+            Ok(NavigatorPath::Paper(PaperPath::default()))
+        }
+        Some("segments") => {
+            let v0 = kmh(positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?);
+            let course = deg(finite("path.course_deg", p.course_deg.unwrap_or(0.0))?);
+            let mut speed = v0;
+            let mut segments = Vec::new();
+            for (k, s) in p.segment.iter().enumerate() {
+                let key = format!("path.segment[{}]", k + 1);
+                let d = positive(&format!("{key}.duration_s"), required(&format!("{key}.duration_s"), s.duration_s)?)?;
+                let w = deg(finite(&format!("{key}.turn_rate_deg_s"), s.turn_rate_deg_s.unwrap_or(0.0))?);
+                let c = kmh(finite(&format!("{key}.climb_kmh"), s.climb_kmh.unwrap_or(0.0))?);
+                if let Some(v) = s.speed_kmh {
+                    speed = kmh(positive(&format!("{key}.speed_kmh"), v)?);
+                }
+                segments.push(Segment { duration_s: d, turn_rate_radps: w, climb_mps: c, end_speed_mps: speed });
+            }
+            let transition = positive("path.transition_s", p.transition_s.unwrap_or(8.0))?;
+            Ok(NavigatorPath::Segments(SegmentsPath::new(v0, course, segments, transition, duration_s + 1.0)))
+        }
+        Some(o) => Err(err("path.kind", format!("unknown path \"{o}\" (expected \"paper\" or \"segments\")"))),
+    }
+}
+
+fn fault(k: usize, f: &spec::FaultSpec, n: usize) -> Result<Fault, SpecError> {
+    let key = format!("fault[{k}]");
+    let kind = required(&format!("{key}.kind"), f.kind.clone())?;
+    let at_s = non_negative(&format!("{key}.at_s"), required(&format!("{key}.at_s"), f.at_s)?)?;
+    let who = || -> Result<UavId, SpecError> { uav(&format!("{key}.uav"), required(&format!("{key}.uav"), f.uav)?, n) };
+    let duration = || positive(&format!("{key}.duration_s"), required(&format!("{key}.duration_s"), f.duration_s)?);
+    let offset = || -> Result<Vector3<f64>, SpecError> {
+        match f.offset_m {
+            Some(o) => vec3(&format!("{key}.offset_m"), o),
+            None => Ok(Vector3::zeros()),
+        }
+    };
+    Ok(match kind.as_str() {
+        "remove" => Fault::Remove { uav: who()?, at_s },
+        "join" => Fault::Join { uav: who()?, at_s, offset_m: offset()? },
+        "glitch" => Fault::Glitch { uav: who()?, at_s, duration_s: duration()?, offset_m: offset()? },
+        "stuck_sensor" => Fault::StuckSensor { uav: who()?, at_s, duration_s: duration()? },
+        "radio_blackout" => Fault::RadioBlackout { at_s, duration_s: duration()? },
+        o => {
+            return Err(err(
+                format!("{key}.kind"),
+                format!("unknown fault \"{o}\" (expected remove, join, glitch, stuck_sensor or radio_blackout)"),
+            ))
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locates_keys_in_tables_and_arrays() {
+        let text = "name = \"x\"\n[controller]\nareas = 8\nlambda = 2.0\n\n[[fault]]\nkind = \"remove\"\nat_s = 1\n[[fault]]\nkind = \"join\"\nat_s = -1\n";
+        assert_eq!(locate(text, "controller.lambda"), Some(4));
+        assert_eq!(locate(text, "fault[2].at_s"), Some(11));
+        assert_eq!(locate(text, "fault[1].at_s"), Some(8));
+        assert_eq!(locate(text, "name"), Some(1));
+        assert_eq!(locate(text, "controller"), Some(2));
+    }
+}

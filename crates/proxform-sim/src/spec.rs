@@ -1,0 +1,273 @@
+//! The scenario file format: raw TOML tables as written by users, before any check.
+//!
+//! Units are always in the key: `_m`, `_s`, `_kmh` (speeds), `_kmh_s` (speed change per
+//! second), `_deg`, `_deg_s`. Every key is optional unless marked; omitted keys take the
+//! paper experiment's values. Unknown keys are errors. [`crate::load`] turns a spec into a
+//! checked [`crate::Scenario`]; `docs/scenarios.md` documents every key.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+/// A whole scenario file.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSpec {
+    /// Name used in reports. Default: the file name.
+    pub name: Option<String>,
+    /// Update period Δt (s). Default 0.1.
+    pub dt_s: Option<f64>,
+    /// Flight duration (s). Default 100.
+    pub duration_s: Option<f64>,
+    /// Number (from 1) of the navigator. Default 1.
+    pub navigator: Option<u32>,
+    /// Pairs closer than this are unsafe (m). Default 50.
+    pub safety_distance_m: Option<f64>,
+    /// The formation (required).
+    pub formation: Option<FormationSpec>,
+    /// The navigator's path. Default: the paper's.
+    pub path: Option<PathSpec>,
+    /// Initial state of every UAV. Default: the navigator's initial state, each in its slot.
+    pub initial: Option<InitialSpec>,
+    /// Controller parameters.
+    pub controller: Option<ControllerSpec>,
+    /// Vehicle model.
+    pub vehicle: Option<VehicleSpec>,
+    /// Measurement noise and actuation error.
+    pub noise: Option<NoiseSpec>,
+    /// Onboard sensing.
+    pub sensing: Option<SensingSpec>,
+    /// Radio.
+    pub radio: Option<RadioSpec>,
+    /// Pass criterion.
+    pub allowable: Option<AllowableSpec>,
+    /// Scheduled faults.
+    #[serde(default)]
+    pub fault: Vec<FaultSpec>,
+}
+
+/// `[formation]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationSpec {
+    /// "world" (default) or "course".
+    pub frame: Option<String>,
+    /// Explicit slots (`[[formation.slot]]`), or …
+    #[serde(default)]
+    pub slot: Vec<SlotSpec>,
+    /// … a generated shape (`[formation.shape]`).
+    pub shape: Option<ShapeSpec>,
+    /// How dependency tables are derived for slots without `depends_on`.
+    pub dependencies: Option<AutoDepsSpec>,
+}
+
+/// One explicit slot.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlotSpec {
+    /// UAV number, from 1, unique (required).
+    pub id: Option<u32>,
+    /// Offset in the formation frame: forward, left, up (m) (required).
+    pub offset_m: Option<[f64; 3]>,
+    /// Attitude offset: pitch, yaw, roll (deg). Default 0.
+    pub attitude_offset_deg: Option<[f64; 3]>,
+    /// Main references: UAV number (as a string key) → dependency degree.
+    pub depends_on: Option<BTreeMap<String, f64>>,
+}
+
+/// `[formation.shape]`: a generated formation.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSpec {
+    /// "triangle", "v", "echelon", "line_abreast", "column", "diamond", "grid", "circle".
+    pub kind: Option<String>,
+    /// Number of UAVs (all shapes but triangle, which uses `rows`).
+    pub uavs: Option<u32>,
+    /// Rows of the triangle (row r holds r + 1 UAVs) or of the grid.
+    pub rows: Option<u32>,
+    /// Distance between neighbouring UAVs (m).
+    pub spacing_m: Option<f64>,
+    /// Half-angle of a V or angle of an echelon from the course (deg). Default 30.
+    pub angle_deg: Option<f64>,
+    /// Height step between successive rows or ranks (m, may be negative). Default 0.
+    pub level_step_m: Option<f64>,
+    /// Echelon side: "left" or "right". Default "right".
+    pub side: Option<String>,
+}
+
+/// `[formation.dependencies]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutoDepsSpec {
+    /// Main references per UAV. Default 2.
+    pub k: Option<u32>,
+    /// Farthest reference (m). Default: the sensing range.
+    pub max_distance_m: Option<f64>,
+    /// Degree of every follower on the navigator (heard over the radio), in [0, 1). Default 0.
+    pub navigator_degree: Option<f64>,
+}
+
+/// `[path]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathSpec {
+    /// "paper" (default) or "segments".
+    pub kind: Option<String>,
+    /// Segments path: initial speed (km/h).
+    pub speed_kmh: Option<f64>,
+    /// Segments path: initial course (deg, counter-clockwise from x). Default 0.
+    pub course_deg: Option<f64>,
+    /// Segments path: blend time of turn and climb rates at each segment start (s). Default 8.
+    pub transition_s: Option<f64>,
+    /// Segments path: the pieces, flown in order; after the last, straight on.
+    #[serde(default)]
+    pub segment: Vec<SegmentSpec>,
+}
+
+/// One `[[path.segment]]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentSpec {
+    /// Duration (s, > 0) (required).
+    pub duration_s: Option<f64>,
+    /// Turn rate (deg/s, counter-clockwise positive). Default 0.
+    pub turn_rate_deg_s: Option<f64>,
+    /// Climb rate (km/h, up positive). Default 0.
+    pub climb_kmh: Option<f64>,
+    /// Speed at the end of the segment (km/h), reached smoothly. Default: unchanged.
+    pub speed_kmh: Option<f64>,
+}
+
+/// `[initial]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    /// Forward speed of every UAV (km/h). Default: the navigator's.
+    pub speed_kmh: Option<f64>,
+}
+
+/// `[controller]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSpec {
+    /// Azimuth areas m (≥ 1). Default 8.
+    pub areas: Option<i64>,
+    /// Sensing range (m). Default 250.
+    pub sensing_range_m: Option<f64>,
+    /// λ in [0, 1]. Default 0.8.
+    pub lambda: Option<f64>,
+    /// ρ in (0, 1]. Default 0.4.
+    pub rho: Option<f64>,
+    /// Position-closing time τ (s); 0 switches it off. Default 1.
+    pub closing_time_s: Option<f64>,
+    /// Input penalty (≥ 0). Default 0.01.
+    pub input_weight: Option<f64>,
+    /// "alpha_beta" (default) or "constant_velocity".
+    pub predictor: Option<String>,
+    /// α of the α-β predictor, in (0, 1]. Default 0.8.
+    pub predictor_alpha: Option<f64>,
+    /// β of the α-β predictor, in [0, 1]. Default α²/(2 − α).
+    pub predictor_beta: Option<f64>,
+    /// Track timeout (s). Default 1.
+    pub track_timeout_s: Option<f64>,
+    /// Permissible errors Δ.
+    pub thresholds: Option<ThresholdsSpec>,
+}
+
+/// `[controller.thresholds]`: permissible errors Δ, all > 0.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct ThresholdsSpec {
+    pub x_m: Option<f64>,
+    pub y_m: Option<f64>,
+    pub z_m: Option<f64>,
+    pub vx_kmh: Option<f64>,
+    pub vy_kmh: Option<f64>,
+    pub vz_kmh: Option<f64>,
+    pub alpha_deg: Option<f64>,
+    pub beta_deg: Option<f64>,
+    pub gamma_deg: Option<f64>,
+}
+
+/// `[vehicle]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleSpec {
+    /// "kinematic" (default).
+    pub model: Option<String>,
+    /// Forward speed limits (km/h). Default 180, 360.
+    pub vx_min_kmh: Option<f64>,
+    /// See `vx_min_kmh`.
+    pub vx_max_kmh: Option<f64>,
+    /// Lateral and vertical speed limits (km/h). Default 72, 54.
+    pub vy_max_kmh: Option<f64>,
+    /// See `vy_max_kmh`.
+    pub vz_max_kmh: Option<f64>,
+    /// Attitude limits α, β, γ (deg). Default 45, 15, 30.
+    pub attitude_max_deg: Option<[f64; 3]>,
+    /// Adjusting rates of vx, vy, vz (km/h per second). Default 18 each.
+    pub accel_kmh_s: Option<[f64; 3]>,
+    /// Adjusting rates of α, β, γ (deg/s). Default 3, 2, 2.
+    pub attitude_rate_deg_s: Option<[f64; 3]>,
+}
+
+/// `[noise]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseSpec {
+    /// Position noise 1σ (m). Default 0.02.
+    pub position_m: Option<f64>,
+    /// Velocity noise 1σ (km/h). Default 0.18 (0.05 m/s).
+    pub velocity_kmh: Option<f64>,
+    /// Attitude noise 1σ (deg). Default 0.01.
+    pub attitude_deg: Option<f64>,
+    /// Actuation error: relative, uniform in ±e, in [0, 1]. Default 0.1.
+    pub actuation_error: Option<f64>,
+}
+
+/// `[sensing]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensingSpec {
+    /// Probability that an onboard observation is lost, per observation and step, in [0, 1].
+    /// Default 0.
+    pub dropout: Option<f64>,
+}
+
+/// `[radio]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadioSpec {
+    /// UAVs whose state every UAV hears each period. Default none.
+    pub beacons: Option<Vec<u32>>,
+}
+
+/// `[allowable]`: pass criterion, all > 0.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct AllowableSpec {
+    pub x_m: Option<f64>,
+    pub y_m: Option<f64>,
+    pub z_m: Option<f64>,
+    pub alpha_deg: Option<f64>,
+    pub beta_deg: Option<f64>,
+    pub gamma_deg: Option<f64>,
+}
+
+/// One `[[fault]]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultSpec {
+    /// "remove", "join", "glitch", "stuck_sensor", "radio_blackout" (required).
+    pub kind: Option<String>,
+    /// The UAV concerned (all but radio_blackout).
+    pub uav: Option<u32>,
+    /// Start time (s) (required).
+    pub at_s: Option<f64>,
+    /// Duration (s) of a glitch, stuck sensor or blackout (required for those).
+    pub duration_s: Option<f64>,
+    /// Position offset of a glitch (m).
+    pub offset_m: Option<[f64; 3]>,
+}
