@@ -124,3 +124,54 @@ fn bench_measures_in_child_processes() {
     assert!(csv.lines().count() >= 3, "{csv}");
     assert!(out.join("cost_per_update.png").exists());
 }
+
+#[test]
+fn scenario_files_run_and_bad_ones_are_located() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    // The shipped paper file gives the built-in experiment's bytes.
+    let (a, b) = (scratch("cli-file-a"), scratch("cli-file-b"));
+    let o = proxform()
+        .arg("run")
+        .arg(root.join("scenarios/paper.toml"))
+        .args(["--no-figures", "-q", "--out"])
+        .arg(&a)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = proxform().args(["run", "--no-figures", "-q", "--out"]).arg(&b).output().expect("runs");
+    assert!(o.status.success());
+    let (ta, tb) =
+        (std::fs::read(a.join("trajectories.csv")).expect("a"), std::fs::read(b.join("trajectories.csv")).expect("b"));
+    assert!(ta == tb, "scenarios/paper.toml differs from the built-in experiment");
+    // A bad file: exit code 2, file:line: key: message on stderr.
+    let bad = root.join("crates/proxform-sim/tests/bad/lambda_range.toml");
+    let o = proxform().arg("run").arg(&bad).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("lambda_range.toml:3: controller.lambda: λ must be in [0, 1], found 1.2"), "{err}");
+    let o = proxform().args(["run", "/nonexistent/x.toml"]).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot read scenario file /nonexistent/x.toml"));
+}
+
+#[test]
+fn init_writes_an_example_that_runs_and_scenarios_lists_the_built_ins() {
+    let dir = scratch("cli-init");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = dir.join("mine.toml");
+    let o = proxform().arg("init").arg(&file).output().expect("runs");
+    assert!(o.status.success());
+    let o = proxform().arg("init").arg(&file).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2), "refuses to overwrite");
+    let o = proxform()
+        .arg("run")
+        .arg(&file)
+        .args(["--runs", "2", "--no-figures", "-q", "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .expect("runs");
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = proxform().arg("scenarios").output().expect("runs");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("paper") && out.contains("swarm"));
+}

@@ -74,12 +74,48 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scenario, LoadError> {
     let default_name =
         std::path::Path::new(source_name).file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
     let spec = ScenarioSpec { name: spec.name.clone().or(Some(default_name)), ..spec };
-    Scenario::try_from(spec).map_err(|e| LoadError {
-        source_name: source_name.into(),
-        line: locate(text, &e.key),
-        key: Some(e.key),
-        message: e.message,
+    Scenario::try_from(spec).map_err(|e| {
+        // A missing key is reported where its table starts.
+        let mut line = locate(text, &e.key);
+        let mut key = e.key.as_str();
+        while line.is_none() {
+            match key.rsplit_once('.') {
+                Some((parent, _)) => {
+                    key = parent;
+                    line = locate(text, key);
+                }
+                None => break,
+            }
+        }
+        LoadError { source_name: source_name.into(), line, key: Some(e.key.clone()), message: e.message }
     })
+}
+
+/// Longest flight accepted, in update periods.
+const MAX_STEPS: f64 = 1e8;
+/// Most UAVs a generated shape may have.
+const MAX_UAVS: usize = 10_000_000;
+/// Most azimuth areas.
+const MAX_AREAS: i64 = 1024;
+
+/// The first pair of slots (in index order) closer than `limit`, found with the grid.
+fn closest_pair_within(slots: &[FormationSlot], limit: f64) -> Option<(usize, usize, f64)> {
+    let mut grid = crate::grid::NeighbourGrid::new();
+    grid.rebuild(slots.iter().map(|s| [s.offset_m.x, s.offset_m.y, s.offset_m.z]), limit);
+    let mut found: Option<(usize, usize, f64)> = None;
+    for (a, s) in slots.iter().enumerate() {
+        grid.for_each_within([s.offset_m.x, s.offset_m.y, s.offset_m.z], limit, |b, _, d2| {
+            let b = b as usize;
+            let d = d2.sqrt();
+            if b > a && d < limit && found.is_none_or(|f| (a, b) < (f.0, f.1)) {
+                found = Some((a, b, d));
+            }
+        });
+        if found.is_some() {
+            break;
+        }
+    }
+    found
 }
 
 fn line_of(text: &str, offset: usize) -> usize {
@@ -100,12 +136,19 @@ pub fn locate(text: &str, key: &str) -> Option<usize> {
     let mut header: Vec<String> = Vec::new();
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     let mut best: Option<usize> = None;
+    // A sub-table of the key (`[[formation.slot]]` for `formation`) stands for it if the key
+    // has no header of its own.
+    let mut sub: Option<usize> = None;
+    let names: Vec<&str> = parts.iter().map(|p| p.0.as_str()).collect();
     for (n, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
         if let Some(h) = line.strip_prefix("[[").and_then(|l| l.strip_suffix("]]")) {
             let name = h.trim().to_string();
             *counts.entry(name.clone()).or_default() += 1;
             header = name.split('.').map(|s| s.trim().to_string()).collect();
+            if sub.is_none() && header.len() > names.len() && header.iter().zip(&names).all(|(h, p)| h == p) {
+                sub = Some(n + 1);
+            }
             let idx = counts[&name];
             // An array-of-tables header matches `name[idx]` prefixes.
             if header_matches(&header, Some(idx), &parts) && parts.len() == header.len() {
@@ -116,6 +159,9 @@ pub fn locate(text: &str, key: &str) -> Option<usize> {
         }
         if let Some(h) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
             header = h.split('.').map(|s| s.trim().to_string()).collect();
+            if sub.is_none() && header.len() > names.len() && header.iter().zip(&names).all(|(h, p)| h == p) {
+                sub = Some(n + 1);
+            }
             if header_matches(&header, None, &parts) && parts.len() == header.len() {
                 best = Some(n + 1);
             }
@@ -129,7 +175,7 @@ pub fn locate(text: &str, key: &str) -> Option<usize> {
             return Some(n + 1);
         }
     }
-    best
+    best.or(sub)
 }
 
 fn header_matches(header: &[String], idx: Option<usize>, parts: &[(String, Option<usize>)]) -> bool {
@@ -241,6 +287,12 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(v) = spec.duration_s {
             s.duration_s = positive("duration_s", v)?;
         }
+        if s.duration_s / s.dt_s > MAX_STEPS {
+            return Err(err(
+                "duration_s",
+                format!("{} s at Δt = {} s is more than {MAX_STEPS:e} steps", s.duration_s, s.dt_s),
+            ));
+        }
         if let Some(v) = spec.safety_distance_m {
             s.safety_distance_m = positive("safety_distance_m", v)?;
         }
@@ -265,21 +317,16 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ))
             }
         };
-        for a in 0..n {
-            for b in a + 1..n {
-                let d = (slots[a].offset_m - slots[b].offset_m).norm();
-                if d < s.safety_distance_m {
-                    return Err(err(
-                        "formation",
-                        format!(
-                            "UAVs {} and {} are {d:.1} m apart, closer than the safety distance {} m",
-                            a + 1,
-                            b + 1,
-                            s.safety_distance_m
-                        ),
-                    ));
-                }
-            }
+        if let Some((a, b, d)) = closest_pair_within(&slots, s.safety_distance_m) {
+            return Err(err(
+                "formation",
+                format!(
+                    "UAVs {} and {} are {d:.1} m apart, closer than the safety distance {} m",
+                    a + 1,
+                    b + 1,
+                    s.safety_distance_m
+                ),
+            ));
         }
         let auto = fspec.dependencies.clone().unwrap_or_default();
         let k = auto.k.unwrap_or(2) as usize;
@@ -453,8 +500,8 @@ fn shape_of(s: &spec::ShapeSpec) -> Result<Shape, SpecError> {
     let kind = required("formation.shape.kind", s.kind.clone())?;
     let uavs = || -> Result<usize, SpecError> {
         let n = required("formation.shape.uavs", s.uavs)? as usize;
-        if n < 2 {
-            return Err(err("formation.shape.uavs", format!("needs at least 2 UAVs, found {n}")));
+        if !(2..=MAX_UAVS).contains(&n) {
+            return Err(err("formation.shape.uavs", format!("needs 2 to {MAX_UAVS} UAVs, found {n}")));
         }
         Ok(n)
     };
@@ -470,8 +517,8 @@ fn shape_of(s: &spec::ShapeSpec) -> Result<Shape, SpecError> {
     Ok(match kind.as_str() {
         "triangle" => {
             let rows = required("formation.shape.rows", s.rows)? as usize;
-            if rows < 2 {
-                return Err(err("formation.shape.rows", format!("needs at least 2 rows, found {rows}")));
+            if !(2..=4000).contains(&rows) {
+                return Err(err("formation.shape.rows", format!("needs 2 to 4000 rows, found {rows}")));
             }
             Shape::Triangle { rows, spacing: spacing()?, level_step: level()? }
         }
@@ -501,8 +548,8 @@ fn shape_of(s: &spec::ShapeSpec) -> Result<Shape, SpecError> {
 fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, SpecError> {
     let mut p = ControllerParams { dt_s, ..ControllerParams::default() };
     if let Some(m) = c.areas {
-        if m < 1 {
-            return Err(err("controller.areas", format!("must be ≥ 1, found {m}")));
+        if !(1..=MAX_AREAS).contains(&m) {
+            return Err(err("controller.areas", format!("m must be between 1 and {MAX_AREAS}, found {m}")));
         }
         p.areas.areas = m as usize;
     }
@@ -510,8 +557,11 @@ fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, Sp
         p.areas.sensing_range_m = positive("controller.sensing_range_m", v)?;
     }
     if let Some(v) = c.lambda {
-        p.lambda = probability("controller.lambda", v)
-            .map_err(|_| err("controller.lambda", format!("λ must be in [0, 1], found {v}")))?;
+        let v = finite("controller.lambda", v)?;
+        if !(0.0..=1.0).contains(&v) {
+            return Err(err("controller.lambda", format!("λ must be in [0, 1], found {v}")));
+        }
+        p.lambda = v;
     }
     if let Some(v) = c.rho {
         let v = positive("controller.rho", v)?;

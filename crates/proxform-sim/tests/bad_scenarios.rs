@@ -1,0 +1,123 @@
+//! Every invalid scenario gets a located, named error, and the loader never panics.
+//!
+//! `tests/bad/*.toml` each start with `# expect: TEXT` (a part of the message) and optionally
+//! `# line: N` (the line the error must point at; `none` for a key missing from the file).
+
+use std::path::Path;
+
+use proxform_sim::engine::Simulation;
+use proxform_sim::load::parse;
+use proxform_sim::metrics::RunMetrics;
+
+fn header(text: &str, tag: &str) -> Option<String> {
+    text.lines().find_map(|l| l.strip_prefix(tag).map(|v| v.trim().to_string()))
+}
+
+#[test]
+fn every_bad_scenario_is_refused_with_a_located_message() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad");
+    let mut files: Vec<_> = std::fs::read_dir(&dir).expect("tests/bad").map(|e| e.expect("entry").path()).collect();
+    files.sort();
+    assert!(files.len() >= 30, "only {} bad scenarios", files.len());
+    for path in files {
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let name = path.file_name().and_then(|n| n.to_str()).expect("name").to_string();
+        let expect = header(&text, "# expect:").unwrap_or_else(|| panic!("{name}: no '# expect:' line"));
+        let e = match parse(&text, &name) {
+            Ok(_) => panic!("{name}: accepted"),
+            Err(e) => e,
+        };
+        let msg = e.to_string();
+        assert!(msg.starts_with(&name), "{name}: message does not name the file: {msg}");
+        assert!(msg.contains(&expect), "{name}: expected «{expect}» in «{msg}»");
+        match header(&text, "# line:").as_deref() {
+            // A key missing from the whole file has no line to point at.
+            Some("none") => assert_eq!(e.line, None, "{name}: «{msg}»"),
+            Some(line) => assert_eq!(e.line, line.parse().ok(), "{name}: wrong line in «{msg}»"),
+            None => assert!(e.line.is_some(), "{name}: no line in «{msg}»"),
+        }
+    }
+}
+
+/// A small deterministic generator for the mutation test.
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 >> 17
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+fn mutate(text: &str, rng: &mut Lcg) -> String {
+    let mut s: Vec<char> = text.chars().collect();
+    const VALUES: [&str; 12] =
+        ["nan", "inf", "-inf", "0", "-1", "1e308", "-1e308", "1e-300", "4294967295", "\"x\"", "[]", "{}"];
+    for _ in 0..1 + rng.below(4) {
+        let at = rng.below(s.len());
+        match rng.below(5) {
+            0 => {
+                let end = (at + rng.below(20)).min(s.len());
+                s.drain(at..end);
+            }
+            1 => {
+                const CHARS: &[u8] = b"=[]{}\",.#\n 0123456789-eabcxyz_";
+                let c = CHARS[rng.below(CHARS.len())] as char;
+                s.insert(at, c);
+            }
+            2 => {
+                // Replace the number that follows an '=' with an extreme value.
+                if let Some(eq) = s[at..].iter().position(|c| *c == '=') {
+                    let start = at + eq + 1;
+                    let end = s[start..].iter().position(|c| *c == '\n').map_or(s.len(), |p| start + p);
+                    let v: Vec<char> = format!(" {}", VALUES[rng.below(VALUES.len())]).chars().collect();
+                    s.splice(start..end, v);
+                }
+            }
+            3 => {
+                let line_start = s[..at].iter().rposition(|c| *c == '\n').map_or(0, |p| p + 1);
+                let line_end = s[at..].iter().position(|c| *c == '\n').map_or(s.len(), |p| at + p);
+                let line: Vec<char> = s[line_start..line_end].to_vec();
+                s.splice(line_end..line_end, std::iter::once('\n').chain(line));
+            }
+            _ => s.truncate(at),
+        }
+    }
+    s.into_iter().collect()
+}
+
+#[test]
+fn the_loader_never_panics_on_mutated_scenarios() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    let mut sources = Vec::new();
+    for e in std::fs::read_dir(&root).expect("scenarios/") {
+        let p = e.expect("entry").path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            sources.push(std::fs::read_to_string(&p).expect("readable"));
+        }
+    }
+    let mut rng = Lcg(0x5EED);
+    let (mut ok, mut refused) = (0, 0);
+    for k in 0..4000 {
+        let text = mutate(&sources[k % sources.len()], &mut rng);
+        match parse(&text, "mutant.toml") {
+            Ok(mut s) if s.len() <= 200 => {
+                // A scenario that loads must also fly a few steps without panicking.
+                s.duration_s = s.dt_s * 3.0;
+                let sim = Simulation::new(&s, 1, 0).expect("a loaded scenario is valid");
+                let mut m = RunMetrics::new(&s);
+                sim.run(&mut m);
+                ok += 1;
+            }
+            Ok(_) => ok += 1,
+            Err(e) => {
+                assert!(!e.message.is_empty());
+                refused += 1;
+            }
+        }
+    }
+    assert!(ok > 100 && refused > 100, "mutations too mild or too harsh: {ok} loaded, {refused} refused");
+}
