@@ -72,6 +72,26 @@ pub fn print(
         s.min_separation_m, s.safety_distance_m, s.unsafe_runs
     )?;
     writeln!(out, "adjustments per UAV-min  {:.1}", s.adjustments_per_uav_minute)?;
+    let m = &s.swarm;
+    writeln!(
+        out,
+        "inside envelope          {:.1} % of follower steps held; {:.1} % within the allowable errors",
+        100.0 * m.held_fraction,
+        100.0 * m.within_allowable_fraction
+    )?;
+    writeln!(out, "control effort           {:.3} (inputs over their per-step limits, RSS, mean)", m.control_effort)?;
+    writeln!(out, "pairs closer than safety {:.2} per run (max {})", m.close_pairs_mean, m.close_pairs_max)?;
+    writeln!(
+        out,
+        "order, connectivity      order mean {:.4}, min {:.4}; largest connected group ≥ {:.1} %",
+        m.order_mean,
+        m.order_min,
+        100.0 * m.connectivity_min
+    )?;
+    writeln!(out, "radio                    {:.1} messages per UAV per second", m.radio_msgs_per_uav_s)?;
+    if m.alone_s_per_uav > 0.0 {
+        writeln!(out, "flown alone              {:.2} s per follower (nothing perceived)", m.alone_s_per_uav)?;
+    }
     let updates = (s.uavs.saturating_sub(1) * s.runs) as f64 * scenario.steps() as f64;
     writeln!(out, "agent-updates per second {:.3e}", updates / elapsed.as_secs_f64().max(1e-9))?;
     Ok(())

@@ -147,13 +147,13 @@ impl NeighbourTracks {
         self.ids.len()
     }
 
-    /// The neighbour of track slot `s` if its track can coast at `now`: measured before `now`
-    /// and no longer ago than the timeout. A neighbour missing from this step's
+    /// The neighbour of track slot `s` if its track can coast at `now`: measured before `now`,
+    /// no longer ago than `max_s` (and the timeout). A neighbour missing from this step's
     /// observations (a lost message, a dropped detection) is then predicted from its track.
-    pub fn coasting(&self, s: usize, now: f64) -> Option<UavId> {
+    pub fn coasting(&self, s: usize, now: f64, max_s: f64) -> Option<UavId> {
         let (id, _) = self.ids[s];
         let age = now - self.tracks[s].t;
-        (id != FREE && age > 1e-9 && age <= self.timeout_s).then_some(UavId(id))
+        (id != FREE && age > 1e-9 && age <= max_s.min(self.timeout_s) + 1e-9).then_some(UavId(id))
     }
 
     /// The state of track slot `s` extrapolated to time `t`.

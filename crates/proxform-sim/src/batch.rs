@@ -80,12 +80,42 @@ pub struct Summary {
     pub unsafe_runs: u64,
     /// Adjustments per follower per minute of flight, mean over runs.
     pub adjustments_per_uav_minute: f64,
+    /// Swarm and control metrics, each the mean over runs of the run's value.
+    pub swarm: SwarmMetrics,
     /// Numbers (from 1) of the followers with per-UAV detail (the first followers).
     pub per_uav: Vec<u32>,
     /// Per listed follower: largest |error| over all runs.
     pub per_uav_worst: Vec<AxisErrors>,
     /// Per follower: mean adjustments per run.
     pub per_uav_adjustments: Vec<f64>,
+}
+
+/// Swarm and control metrics of a batch (means over runs, but `close_pairs_max` and the
+/// minima, which are over all runs).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SwarmMetrics {
+    /// Fraction of follower steps whose course stayed inside the envelope (held).
+    pub held_fraction: f64,
+    /// Fraction of follower steps within every allowable error.
+    pub within_allowable_fraction: f64,
+    /// Mean control effort per follower step (inputs over their per-step limits, root sum of
+    /// squares).
+    pub control_effort: f64,
+    /// Distinct pairs closer than the safety distance, mean per run.
+    pub close_pairs_mean: f64,
+    /// The same, largest run.
+    pub close_pairs_max: u64,
+    /// Radio messages received per UAV per second.
+    pub radio_msgs_per_uav_s: f64,
+    /// Order (polarisation), mean over the flight.
+    pub order_mean: f64,
+    /// Order, smallest over all runs and steps.
+    pub order_min: f64,
+    /// Largest connected group of the sensing graph as a fraction of the UAVs, smallest over
+    /// all runs.
+    pub connectivity_min: f64,
+    /// Seconds per follower flown alone.
+    pub alone_s_per_uav: f64,
 }
 
 /// A batch's results.
@@ -212,6 +242,18 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         safety_distance_m: scenario.safety_distance_m,
         unsafe_runs: runs.iter().filter(|r| r.min_separation_m < scenario.safety_distance_m).count() as u64,
         adjustments_per_uav_minute: adj_rate,
+        swarm: SwarmMetrics {
+            held_fraction: runs.iter().map(|r| r.held_fraction).sum::<f64>() / n,
+            within_allowable_fraction: runs.iter().map(|r| r.within_allowable_fraction).sum::<f64>() / n,
+            control_effort: runs.iter().map(|r| r.control_effort).sum::<f64>() / n,
+            close_pairs_mean: runs.iter().map(|r| r.close_pairs as f64).sum::<f64>() / n,
+            close_pairs_max: runs.iter().map(|r| r.close_pairs).max().unwrap_or(0),
+            radio_msgs_per_uav_s: runs.iter().map(|r| r.radio_msgs_per_uav_s).sum::<f64>() / n,
+            order_mean: runs.iter().map(|r| r.order_mean).sum::<f64>() / n,
+            order_min: runs.iter().map(|r| r.order_min).fold(1.0, f64::min),
+            connectivity_min: runs.iter().map(|r| r.connectivity_min).fold(1.0, f64::min),
+            alone_s_per_uav: runs.iter().map(|r| r.alone_s_per_uav).sum::<f64>() / n,
+        },
         per_uav: runs.first().map(|r| r.per_uav.iter().map(|u| u.uav + 1).collect()).unwrap_or_default(),
         per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
         per_uav_adjustments: per_uav_adj,

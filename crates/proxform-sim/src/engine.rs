@@ -8,7 +8,7 @@
 //! which thread runs it: large swarms are stepped in parallel with identical results.
 
 use proxform_core::state::{self, Input, State9};
-use proxform_core::{ControllerSetup, Outcome, ProximityController, UavId};
+use proxform_core::{ControllerSetup, ObservationSource, Outcome, ProximityController, UavId};
 use rand::RngExt;
 use rayon::prelude::*;
 
@@ -242,13 +242,14 @@ impl<'s> Simulation<'s> {
             if !self.active[i] {
                 continue;
             }
-            let mut best = f64::INFINITY;
+            let mut best = (f64::INFINITY, u32::MAX);
             self.grid.for_each_within([s[0], s[1], s[2]], range, |j, _, d2| {
-                if j as usize != i {
-                    best = best.min(d2);
+                if j as usize != i && d2 < best.0 {
+                    best = (d2, j);
                 }
             });
-            self.uavs[i].nearest_m = best.sqrt();
+            self.uavs[i].nearest_m = best.0.sqrt();
+            self.uavs[i].nearest_id = best.1;
         }
     }
 }
@@ -301,7 +302,8 @@ impl StepContext<'_> {
             &mut rng,
             scratch,
         );
-        aux.nearest_m = nearest;
+        (aux.nearest_m, aux.nearest_id) = nearest;
+        aux.radio_msgs = scratch.observations.iter().filter(|o| o.source == ObservationSource::Radio).count() as u16;
         let Some(ctrl) = ctrl else {
             *next = sc.path.state_at(self.t + dt, self.start);
             aux.outcome = None;
@@ -324,5 +326,10 @@ impl StepContext<'_> {
         let model_error = *next - sc.vehicle.propagate(me, &commanded, dt);
         aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
         aux.outcome = Some(decision.outcome);
+        let scale = ctrl.vehicle().input_scale(dt);
+        aux.effort = (0..ctrl.vehicle().n_inputs())
+            .map(|j| if scale[j] > 0.0 { (decision.input[j] / scale[j]).powi(2) } else { 0.0 })
+            .sum::<f64>()
+            .sqrt() as f32;
     }
 }

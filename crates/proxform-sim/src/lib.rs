@@ -24,7 +24,7 @@ pub mod swarm;
 pub mod throughput;
 pub mod trajectory;
 
-pub use batch::{run_batch, AxisErrors, BatchResult, Summary};
+pub use batch::{run_batch, AxisErrors, BatchResult, Summary, SwarmMetrics};
 pub use engine::Simulation;
 pub use metrics::{RunMetrics, RunSummary};
 pub use observer::{Observer, StepFrame};

@@ -580,6 +580,16 @@ fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, Sp
     if let Some(v) = c.track_timeout_s {
         p.track_timeout_s = positive("controller.track_timeout_s", v)?;
     }
+    if let Some(v) = c.coast_s {
+        p.coast_s = non_negative("controller.coast_s", v)?;
+    }
+    if let Some(v) = c.own_filter_gain {
+        let v = positive("controller.own_filter_gain", v)?;
+        if v > 1.0 {
+            return Err(err("controller.own_filter_gain", format!("must be in (0, 1], found {v}")));
+        }
+        p.own_filter_gain = v;
+    }
     p.predictor = match c.predictor.as_deref() {
         None | Some("alpha_beta") => {
             let alpha = c.predictor_alpha.unwrap_or(0.8);

@@ -33,11 +33,24 @@ pub struct UavStep {
     pub model_error: [f32; 9],
     /// Distance to its nearest neighbour within the sensing range at t_k (m; ∞ if none).
     pub nearest_m: f64,
+    /// That neighbour (`u32::MAX` if none).
+    pub nearest_id: u32,
+    /// Radio messages it received in the step.
+    pub radio_msgs: u16,
+    /// Size of its input: the root sum of squares of each input over its per-step limit.
+    pub effort: f32,
 }
 
 impl Default for UavStep {
     fn default() -> Self {
-        Self { outcome: None, model_error: [0.0; 9], nearest_m: f64::INFINITY }
+        Self {
+            outcome: None,
+            model_error: [0.0; 9],
+            nearest_m: f64::INFINITY,
+            nearest_id: u32::MAX,
+            radio_msgs: 0,
+            effort: 0.0,
+        }
     }
 }
 

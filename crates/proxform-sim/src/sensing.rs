@@ -64,7 +64,7 @@ impl ProximitySensor {
     }
 
     /// Fills `scratch.observations` with what UAV `i` perceives of `states`; returns the
-    /// distance to its nearest neighbour within range (∞ if none).
+    /// distance to its nearest neighbour within range (∞ if none) and that neighbour.
     #[allow(clippy::too_many_arguments)]
     pub fn perceive(
         &self,
@@ -77,17 +77,21 @@ impl ProximitySensor {
         link: &Link<'_>,
         rng: &mut StepRng,
         scratch: &mut SensorScratch,
-    ) -> f64 {
+    ) -> (f64, u32) {
         let me = &states[i];
         let (sin_yaw, cos_yaw) = me[state::BETA].sin_cos();
         scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
         scratch.refs.clear();
         let mut nearest2 = f64::INFINITY;
+        let mut nearest_id = u32::MAX;
         let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
             if j as usize == i {
                 return;
             }
-            nearest2 = nearest2.min(d2);
+            if d2 < nearest2 {
+                nearest2 = d2;
+                nearest_id = j;
+            }
             let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
             // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
             let better = d2 < scratch.best_d2[a];
@@ -152,7 +156,7 @@ impl ProximitySensor {
                 scratch.observations.push(o);
             }
         }
-        nearest2.sqrt()
+        (nearest2.sqrt(), nearest_id)
     }
 
     #[inline]

@@ -1,0 +1,78 @@
+//! Faults and degraded sensing on the paper experiment.
+
+use nalgebra::Vector3;
+use proxform_core::UavId;
+use proxform_sim::batch::{run_batch, run_one};
+use proxform_sim::faults::Fault;
+use proxform_sim::Scenario;
+
+#[test]
+fn removing_uav2_keeps_the_rest_safe_and_in_formation() {
+    let mut s = Scenario::paper();
+    s.faults = vec![Fault::Remove { uav: UavId(1), at_s: 40.0 }];
+    let r = run_batch(&s, 3, 60, false, &|| {}).expect("valid");
+    assert!(r.summary.min_separation_m >= 50.0, "{}", r.summary.min_separation_m);
+    let allow = r.summary.allowable_error.as_array();
+    let worst = r.summary.worst_abs_error.as_array();
+    for k in 0..6 {
+        assert!(worst[k] <= 2.0 * allow[k], "axis {k}: {} > 2 × {}", worst[k], allow[k]);
+    }
+}
+
+#[test]
+fn losing_the_navigator_leaves_a_formation_that_holds_together() {
+    let mut s = Scenario::paper();
+    s.faults = vec![Fault::Remove { uav: UavId(0), at_s: 50.0 }];
+    let (r, _) = run_one(&s, 5, 0, false).expect("valid");
+    // Errors are measured against the formation's own estimate of the navigator's slot.
+    assert!(r.max_abs_error[1] < 2.0, "{:?}", r.max_abs_error);
+    assert!(r.min_separation_m > 50.0);
+    assert!(r.connectivity_min >= 1.0);
+}
+
+#[test]
+fn a_glitch_pushes_its_uav_off_and_a_joining_uav_takes_its_slot() {
+    let base = Scenario::paper();
+    let mut glitch = base.clone();
+    glitch.faults =
+        vec![Fault::Glitch { uav: UavId(4), at_s: 50.0, duration_s: 3.0, offset_m: Vector3::new(0.0, 5.0, 0.0) }];
+    let (a, _) = run_one(&base, 1, 0, false).expect("valid");
+    let (b, _) = run_one(&glitch, 1, 0, false).expect("valid");
+    assert!(b.max_abs_error[1] > 2.0 && a.max_abs_error[1] < 1.0, "{:?} vs {:?}", b.max_abs_error, a.max_abs_error);
+
+    let mut join = base.clone();
+    join.faults = vec![Fault::Join { uav: UavId(5), at_s: 20.0, offset_m: Vector3::zeros() }];
+    let (j, t) = run_one(&join, 1, 0, true).expect("valid");
+    let rows = t.expect("recorded").rows;
+    assert!(rows.iter().filter(|r| r.uav == 5).all(|r| r.t >= 20.0 - 1e-9), "UAV6 flew before joining");
+    assert!(rows.iter().any(|r| r.uav == 5 && r.t > 90.0));
+    assert!(j.min_separation_m > 50.0);
+}
+
+#[test]
+fn a_stuck_sensor_misleads_its_uav() {
+    let base = Scenario::paper();
+    let mut stuck = base.clone();
+    stuck.faults = vec![Fault::StuckSensor { uav: UavId(2), at_s: 20.0, duration_s: 2.0 }];
+    let (a, _) = run_one(&base, 2, 0, false).expect("valid");
+    let (b, _) = run_one(&stuck, 2, 0, false).expect("valid");
+    assert!(
+        b.max_abs_error.iter().zip(&a.max_abs_error).any(|(b, a)| b > &(2.0 * a)),
+        "{:?} vs {:?}",
+        b.max_abs_error,
+        a.max_abs_error
+    );
+}
+
+#[test]
+fn dropout_degrades_gracefully() {
+    let mut s = Scenario::paper();
+    s.dropout = 0.1;
+    let r = run_batch(&s, 11, 100, false, &|| {}).expect("valid");
+    assert!(r.summary.pass_fraction >= 0.85, "{}", r.summary.pass_fraction);
+    assert!(r.summary.swarm.within_allowable_fraction > 0.999);
+    s.dropout = 1.0;
+    let (all_lost, _) = run_one(&s, 11, 0, false).expect("valid");
+    assert!(all_lost.alone_s_per_uav > 90.0, "{}", all_lost.alone_s_per_uav);
+    assert!(!all_lost.pass);
+}
