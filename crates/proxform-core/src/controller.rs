@@ -296,6 +296,11 @@ impl ProximityController {
         decision
     }
 
+    /// Forgets the own-state prediction (after inputs that were not applied).
+    pub fn forget_own_prediction(&mut self) {
+        self.own_prediction = None;
+    }
+
     /// The method proper, from the UAV's own state estimate.
     fn decide(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
         let Self { id: me, setup, formation, dependency, tracks, nearest, .. } = self;

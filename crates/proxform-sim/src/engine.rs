@@ -64,6 +64,7 @@ impl<'s> Simulation<'s> {
         }
         let s0 = scenario.initial[nav];
         let areas = scenario.controller.areas;
+        let parallel = n >= PARALLEL_MIN_UAVS;
         Ok(Self {
             scenario,
             seed,
@@ -79,8 +80,75 @@ impl<'s> Simulation<'s> {
             sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise.sigma()),
             search: scenario.neighbour_search,
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
-            parallel: n >= PARALLEL_MIN_UAVS,
-        })
+            parallel,
+        }
+        .warmed())
+    }
+
+    fn warmed(mut self) -> Self {
+        self.warm_up();
+        self
+    }
+
+    /// The formation's flight before t = 0 (METHOD §9 Choice, see README): for
+    /// `scenario.warmup_s`, every follower perceives its neighbours in the ideal formation
+    /// around the navigator's path and runs its controller, whose inputs are discarded, so
+    /// that at t = 0 its neighbour tracks know their rates. The formation is then maintained
+    /// from an established flight rather than from a standing start.
+    fn warm_up(&mut self) {
+        let sc = self.scenario;
+        let steps = (sc.warmup_s / sc.dt_s).round() as u64;
+        if steps == 0 {
+            return;
+        }
+        let nav = sc.navigator.index();
+        let f = &sc.formation;
+        let real = std::mem::take(&mut self.current);
+        for w in 0..steps {
+            let t = -((steps - w) as f64) * sc.dt_s;
+            let nav_state = sc.path.state_at(t, self.start);
+            self.current = real
+                .iter()
+                .enumerate()
+                .map(
+                    |(i, _)| if i == nav { nav_state } else { nav_state + f.w(&f.slots[i], &f.slots[nav], &nav_state) },
+                )
+                .collect();
+            let range = sc.controller.areas.sensing_range_m;
+            self.rebuild_grid(range);
+            let ctx = StepContext {
+                scenario: self.scenario,
+                seed: self.seed,
+                run: self.run,
+                k: WARMUP_STEP_BASE + w,
+                t,
+                start: self.start,
+                current: &self.current,
+                grid: &self.grid,
+                sensor: &self.sensor,
+                search: self.search,
+                active: &self.active,
+                faults: &self.faults,
+                warm: true,
+            };
+            let m = sc.controller.areas.areas;
+            if self.parallel {
+                self.controllers
+                    .par_iter_mut()
+                    .enumerate()
+                    .with_min_len(256)
+                    .for_each_init(|| SensorScratch::new(m), |scratch, (i, ctrl)| ctx.warm(i, ctrl.as_mut(), scratch));
+            } else {
+                let mut scratch = SensorScratch::new(m);
+                for (i, ctrl) in self.controllers.iter_mut().enumerate() {
+                    ctx.warm(i, ctrl.as_mut(), &mut scratch);
+                }
+            }
+        }
+        self.current = real;
+        for c in self.controllers.iter_mut().flatten() {
+            c.forget_own_prediction();
+        }
     }
 
     /// Forces serial or parallel stepping within the run (results are identical).
@@ -169,12 +237,13 @@ impl<'s> Simulation<'s> {
         if self.search == NeighbourSearch::Grid {
             self.rebuild_grid(range);
         }
+        let (k, t) = (self.k, self.t());
         let ctx = StepContext {
-            scenario: sc,
+            scenario: self.scenario,
             seed: self.seed,
             run: self.run,
-            k: self.k,
-            t: self.t(),
+            k,
+            t,
             start: self.start,
             current: &self.current,
             grid: &self.grid,
@@ -182,6 +251,7 @@ impl<'s> Simulation<'s> {
             search: self.search,
             active: &self.active,
             faults: &self.faults,
+            warm: false,
         };
         let m = sc.controller.areas.areas;
         if self.parallel {
@@ -268,9 +338,41 @@ struct StepContext<'a> {
     search: NeighbourSearch,
     active: &'a [bool],
     faults: &'a FaultStep,
+    /// Warm-up step: perceive and decide, change nothing.
+    warm: bool,
 }
 
+/// Step counters of the warm-up draws, far from those of the flight.
+const WARMUP_STEP_BASE: u64 = 1 << 62;
+
 impl StepContext<'_> {
+    /// A warm-up update of UAV `i`: perception and decision, nothing applied.
+    fn warm(&self, i: usize, ctrl: Option<&mut ProximityController>, scratch: &mut SensorScratch) {
+        debug_assert!(self.warm);
+        let Some(ctrl) = ctrl else { return };
+        if !self.active[i] {
+            return;
+        }
+        let sc = self.scenario;
+        let uav = i as u64;
+        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
+        let link = Link { active: self.active, dropout: 0.0, radio_up: true };
+        self.sensor.perceive(
+            i,
+            self.current,
+            self.search,
+            self.grid,
+            &sc.dependencies[i],
+            &sc.beacons,
+            &link,
+            &mut rng,
+            scratch,
+        );
+        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
+        let own = noisy(&self.current[i], &sc.noise.sigma(), &mut rng);
+        ctrl.step(self.t, &own, &scratch.observations);
+    }
+
     /// Updates UAV `i`: perception, decision, plant.
     #[inline]
     fn update(

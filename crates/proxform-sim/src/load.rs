@@ -296,6 +296,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(v) = spec.safety_distance_m {
             s.safety_distance_m = positive("safety_distance_m", v)?;
         }
+        if let Some(v) = spec.warmup_s {
+            s.warmup_s = non_negative("warmup_s", v)?;
+        }
         s.controller = controller(spec.controller.clone().unwrap_or_default(), s.dt_s)?;
         s.vehicle = vehicle(spec.vehicle.clone().unwrap_or_default())?;
 

@@ -254,7 +254,15 @@ impl SegmentsPath {
 
     /// The navigator's state at `t` from `start`.
     pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
-        let (v, course, turn, climb) = self.kinematics(t);
+        let (v, course, turn, climb) = self.kinematics(t.max(0.0));
+        if t < 0.0 {
+            // Before the path starts: straight on at the initial state.
+            let mut s = self.state_at(0.0, start);
+            for k in 0..3 {
+                s[k] += t * s[k + 3];
+            }
+            return s;
+        }
         let x = t / PATH_STEP_S;
         let k = (x.floor().max(0.0) as usize).min(self.table.len().saturating_sub(2));
         let f = (x - k as f64).clamp(0.0, 1.0);

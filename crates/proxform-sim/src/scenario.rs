@@ -113,6 +113,9 @@ pub struct Scenario {
     pub adjustment_enabled: bool,
     /// Pairs closer than this are reported as unsafe (m). Paper scenario: 50 m.
     pub safety_distance_m: f64,
+    /// How long the formation has been flying before t = 0 (s, ≥ 0): the controllers watch
+    /// that ideal flight so their neighbour tracks are established at t = 0. Default 1 s.
+    pub warmup_s: f64,
     /// Probability that an onboard observation is lost, per observation and step.
     pub dropout: f64,
     /// Scheduled faults.
@@ -189,6 +192,13 @@ impl Scenario {
             }
         }
         positive("safety_distance_m", self.safety_distance_m)?;
+        if !(self.warmup_s.is_finite() && self.warmup_s >= 0.0) {
+            return Err(ScenarioError::Value {
+                field: "warmup_s",
+                value: self.warmup_s,
+                expected: "a finite time ≥ 0 s",
+            });
+        }
         if !(0.0..=1.0).contains(&self.dropout) {
             return Err(ScenarioError::Value {
                 field: "dropout",
@@ -275,6 +285,7 @@ impl Scenario {
             adjustment_enabled: true,
             safety_distance_m: 50.0,
             beacons: Vec::new(),
+            warmup_s: 1.0,
             dropout: 0.0,
             faults: Vec::new(),
             neighbour_search: crate::sensing::NeighbourSearch::Grid,

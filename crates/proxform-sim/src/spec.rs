@@ -23,6 +23,8 @@ pub struct ScenarioSpec {
     pub navigator: Option<u32>,
     /// Pairs closer than this are unsafe (m). Default 50.
     pub safety_distance_m: Option<f64>,
+    /// How long the formation has flown before t = 0 (s, ≥ 0). Default 1.
+    pub warmup_s: Option<f64>,
     /// The formation (required).
     pub formation: Option<FormationSpec>,
     /// The navigator's path. Default: the paper's.
