@@ -34,6 +34,8 @@ pub struct Simulation<'s> {
     controllers: Vec<Option<ProximityController>>,
     uavs: Vec<UavStep>,
     grid: NeighbourGrid,
+    /// True states of the last `delay + 1` steps, oldest first (radio with delay only).
+    history: std::collections::VecDeque<Vec<State9>>,
     active: Vec<bool>,
     faults: FaultStep,
     sensor: ProximitySensor,
@@ -75,6 +77,7 @@ impl<'s> Simulation<'s> {
             controllers,
             uavs: vec![UavStep::default(); n],
             grid: NeighbourGrid::new(),
+            history: std::collections::VecDeque::new(),
             active: (0..n).map(|i| faults::is_active(&scenario.faults, i, 0.0)).collect(),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
             sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise.sigma()),
@@ -129,6 +132,7 @@ impl<'s> Simulation<'s> {
                 search: self.search,
                 active: &self.active,
                 faults: &self.faults,
+                sent: Some((&self.current[..], WARMUP_STEP_BASE + w)),
                 warm: true,
             };
             let m = sc.controller.areas.areas;
@@ -238,6 +242,21 @@ impl<'s> Simulation<'s> {
             self.rebuild_grid(range);
         }
         let (k, t) = (self.k, self.t());
+        let delay = u64::from(sc.radio.delay_steps);
+        if delay > 0 {
+            let mut old =
+                if self.history.len() as u64 > delay { self.history.pop_front() } else { None }.unwrap_or_default();
+            old.clear();
+            old.extend_from_slice(&self.current);
+            self.history.push_back(old);
+        }
+        let sent = if delay == 0 {
+            Some((&self.current[..], k))
+        } else if self.history.len() as u64 == delay + 1 {
+            self.history.front().map(|h| (&h[..], k - delay))
+        } else {
+            None
+        };
         let ctx = StepContext {
             scenario: self.scenario,
             seed: self.seed,
@@ -251,6 +270,7 @@ impl<'s> Simulation<'s> {
             search: self.search,
             active: &self.active,
             faults: &self.faults,
+            sent,
             warm: false,
         };
         let m = sc.controller.areas.areas;
@@ -338,6 +358,8 @@ struct StepContext<'a> {
     search: NeighbourSearch,
     active: &'a [bool],
     faults: &'a FaultStep,
+    /// True states when the radio messages arriving now were sent, and that step.
+    sent: Option<(&'a [State9], u64)>,
     /// Warm-up step: perceive and decide, change nothing.
     warm: bool,
 }
@@ -356,7 +378,20 @@ impl StepContext<'_> {
         let sc = self.scenario;
         let uav = i as u64;
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
-        let link = Link { active: self.active, dropout: 0.0, radio_up: true };
+        let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
+        let ideal = sc.radio.ideal();
+        let link = Link {
+            active: self.active,
+            dropout: 0.0,
+            radio_up: true,
+            radio: &ideal,
+            sent: self.sent.map(|s| s.0),
+            send_step: self.sent.map(|s| s.1),
+            delay_s: 0.0,
+            channel_bad: false,
+            seed: self.seed,
+            run: self.run,
+        };
         self.sensor.perceive(
             i,
             self.current,
@@ -366,6 +401,7 @@ impl StepContext<'_> {
             &sc.beacons,
             &link,
             &mut rng,
+            &mut radio_rng,
             scratch,
         );
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
@@ -392,7 +428,22 @@ impl StepContext<'_> {
             return;
         }
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
-        let link = Link { active: self.active, dropout: sc.dropout, radio_up: self.faults.radio_up };
+        let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
+        let mut bad = aux.channel_bad;
+        sc.radio.step_channel(&mut bad, &mut radio_rng);
+        aux.channel_bad = bad;
+        let link = Link {
+            active: self.active,
+            dropout: sc.dropout,
+            radio_up: self.faults.radio_up,
+            radio: &sc.radio,
+            sent: self.sent.map(|s| s.0),
+            send_step: self.sent.map(|s| s.1),
+            delay_s: f64::from(sc.radio.delay_steps) * dt,
+            channel_bad: bad,
+            seed: self.seed,
+            run: self.run,
+        };
         let nearest = self.sensor.perceive(
             i,
             self.current,
@@ -402,6 +453,7 @@ impl StepContext<'_> {
             &sc.beacons,
             &link,
             &mut rng,
+            &mut radio_rng,
             scratch,
         );
         (aux.nearest_m, aux.nearest_id) = nearest;

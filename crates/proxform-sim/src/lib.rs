@@ -15,6 +15,7 @@ pub mod metrics;
 pub mod normal;
 pub mod observer;
 pub mod path;
+pub mod radio;
 pub mod rng;
 pub mod scenario;
 pub mod sensing;

@@ -434,8 +434,11 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(v) = spec.sensing.as_ref().and_then(|x| x.dropout) {
             s.dropout = probability("sensing.dropout", v)?;
         }
-        if let Some(b) = spec.radio.as_ref().and_then(|r| r.beacons.clone()) {
-            s.beacons = b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?;
+        if let Some(r) = spec.radio.clone() {
+            if let Some(b) = &r.beacons {
+                s.beacons = b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?;
+            }
+            s.radio = radio(&r, s.dt_s)?;
         }
         let a = spec.allowable.clone().unwrap_or_default();
         let cur = s.allowable;
@@ -706,6 +709,44 @@ fn path(p: spec::PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> 
         }
         Some(o) => Err(err("path.kind", format!("unknown path \"{o}\" (expected \"paper\" or \"segments\")"))),
     }
+}
+
+fn radio(r: &spec::RadioSpec, dt_s: f64) -> Result<crate::radio::RadioModel, SpecError> {
+    let mut m = crate::radio::RadioModel { broadcast_all: r.broadcast_all.unwrap_or(false), ..Default::default() };
+    if let Some(v) = r.range_m {
+        m.range_m = positive("radio.range_m", v)?;
+    }
+    if let Some(v) = r.delay_s {
+        let v = non_negative("radio.delay_s", v)?;
+        let steps = (v / dt_s).round();
+        if (v / dt_s - steps).abs() > 1e-6 || steps > 10_000.0 {
+            return Err(err(
+                "radio.delay_s",
+                format!("{v} s is not a multiple of dt_s = {dt_s} s (at most 10000 periods)"),
+            ));
+        }
+        m.delay_steps = steps as u32;
+    }
+    if let Some(v) = r.loss {
+        m.loss = probability("radio.loss", v)?;
+    }
+    match (r.burst_p_good_to_bad, r.burst_p_bad_to_good) {
+        (None, None) => {
+            if r.burst_loss_bad.is_some() {
+                return Err(err("radio.burst_loss_bad", "needs burst_p_good_to_bad and burst_p_bad_to_good"));
+            }
+        }
+        (Some(gb), Some(bg)) => {
+            m.burst = Some(crate::radio::GilbertElliott {
+                p_good_to_bad: probability("radio.burst_p_good_to_bad", gb)?,
+                p_bad_to_good: probability("radio.burst_p_bad_to_good", bg)?,
+                loss_bad: probability("radio.burst_loss_bad", r.burst_loss_bad.unwrap_or(1.0))?,
+            });
+        }
+        (None, Some(_)) => return Err(err("radio.burst_p_good_to_bad", "is required with burst_p_bad_to_good")),
+        (Some(_), None) => return Err(err("radio.burst_p_bad_to_good", "is required with burst_p_good_to_bad")),
+    }
+    Ok(m)
 }
 
 fn fault(k: usize, f: &spec::FaultSpec, n: usize) -> Result<Fault, SpecError> {

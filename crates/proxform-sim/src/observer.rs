@@ -39,6 +39,8 @@ pub struct UavStep {
     pub radio_msgs: u16,
     /// Size of its input: the root sum of squares of each input over its per-step limit.
     pub effort: f32,
+    /// Its radio channel is in the bad state of its Gilbert-Elliott model.
+    pub channel_bad: bool,
 }
 
 impl Default for UavStep {
@@ -50,6 +52,7 @@ impl Default for UavStep {
             nearest_id: u32::MAX,
             radio_msgs: 0,
             effort: 0.0,
+            channel_bad: false,
         }
     }
 }

@@ -20,6 +20,8 @@ pub enum Source {
     Sensing = 2,
     /// Error on the inputs it applies.
     Actuation = 3,
+    /// Losses on its radio channel.
+    Radio = 4,
 }
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;

@@ -123,6 +123,8 @@ pub struct Scenario {
     /// UAVs whose state every UAV hears over the radio each period (ideal link, the
     /// broadcaster's measurement noise). Empty in the paper scenario.
     pub beacons: Vec<UavId>,
+    /// The radio: broadcasters, range, delay and losses.
+    pub radio: crate::radio::RadioModel,
     /// How the sensors find candidates: the grid, or all pairs (reference only).
     pub neighbour_search: crate::sensing::NeighbourSearch,
 }
@@ -285,6 +287,7 @@ impl Scenario {
             adjustment_enabled: true,
             safety_distance_m: 50.0,
             beacons: Vec::new(),
+            radio: crate::radio::RadioModel::default(),
             warmup_s: 1.0,
             dropout: 0.0,
             faults: Vec::new(),

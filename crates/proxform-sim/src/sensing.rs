@@ -12,7 +12,9 @@ use proxform_core::{DependencySet, Observation, ObservationSource, UavId};
 
 use crate::grid::NeighbourGrid;
 use crate::normal::Ziggurat;
+use crate::radio::RadioModel;
 use crate::rng::StepRng;
+use crate::rng::{stream_key, Source};
 
 /// How candidates are found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -76,6 +78,7 @@ impl ProximitySensor {
         beacons: &[UavId],
         link: &Link<'_>,
         rng: &mut StepRng,
+        radio_rng: &mut StepRng,
         scratch: &mut SensorScratch,
     ) -> (f64, u32) {
         let me = &states[i];
@@ -143,17 +146,31 @@ impl ProximitySensor {
                 scratch.observations.push(self.observe(j, states, rng));
             }
         }
-        // Beacons heard over the radio, unless already perceived onboard.
-        let radio: &[UavId] = if link.radio_up { beacons } else { &[] };
-        for b in radio {
-            if b.index() != i
-                && b.index() < states.len()
-                && link.active[b.index()]
-                && !scratch.observations.iter().any(|o| o.id == *b)
-            {
-                let mut o = self.observe(b.0, states, rng);
-                o.source = ObservationSource::Radio;
-                scratch.observations.push(o);
+        // Messages heard over the radio (crate::radio), unless the sender is perceived onboard.
+        if let (true, Some(sent), Some(send_k)) = (link.radio_up, link.sent, link.send_step) {
+            let radio = link.radio;
+            let r2 = radio.range_m * radio.range_m;
+            let n = states.len();
+            let all = if radio.broadcast_all { n } else { 0 };
+            let senders =
+                beacons.iter().map(|b| b.index()).chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)));
+            for j in senders {
+                if j == i || j >= n || !link.active[j] || scratch.observations.iter().any(|o| o.id.index() == j) {
+                    continue;
+                }
+                let q = &sent[j];
+                let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                if d2 > r2 || !radio.delivered(link.channel_bad, radio_rng) {
+                    continue;
+                }
+                // The sender's own measured state when it sent: its own-state noise stream.
+                let mut own_rng = StepRng::new(stream_key(link.seed, link.run, j as u64, Source::OwnState), send_k);
+                scratch.observations.push(Observation {
+                    id: UavId(j as u32),
+                    state: noisy(q, &self.sigma, &mut own_rng),
+                    age_s: link.delay_s,
+                    source: ObservationSource::Radio,
+                });
             }
         }
         (nearest2.sqrt(), nearest_id)
@@ -179,6 +196,20 @@ pub struct Link<'a> {
     pub dropout: f64,
     /// False during a radio blackout.
     pub radio_up: bool,
+    /// The radio model.
+    pub radio: &'a RadioModel,
+    /// True states when the messages arriving now were sent (None before the first arrive).
+    pub sent: Option<&'a [State9]>,
+    /// Step at which they were sent.
+    pub send_step: Option<u64>,
+    /// Age of a radio message on arrival (s).
+    pub delay_s: f64,
+    /// The receiver's Gilbert-Elliott channel is in its bad state.
+    pub channel_bad: bool,
+    /// Seed and run, for the senders' own-state noise streams.
+    pub seed: u64,
+    /// See `seed`.
+    pub run: u64,
 }
 
 /// Draws whether an observation survives a dropout of probability `p`.

@@ -245,8 +245,22 @@ pub struct SensingSpec {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RadioSpec {
-    /// UAVs whose state every UAV hears each period. Default none.
+    /// UAVs that broadcast their state to every UAV (regardless of `broadcast_all`).
     pub beacons: Option<Vec<u32>>,
+    /// Every UAV broadcasts its state each period. Default false.
+    pub broadcast_all: Option<bool>,
+    /// Range of a message (m). Default unlimited.
+    pub range_m: Option<f64>,
+    /// Delay of every message (s, a multiple of dt_s). Default 0.
+    pub delay_s: Option<f64>,
+    /// i.i.d. loss probability per message, in [0, 1]. Default 0.
+    pub loss: Option<f64>,
+    /// Gilbert-Elliott channel per receiver: probability per period of good → bad.
+    pub burst_p_good_to_bad: Option<f64>,
+    /// … of bad → good.
+    pub burst_p_bad_to_good: Option<f64>,
+    /// … loss probability in the bad state. Default 1.
+    pub burst_loss_bad: Option<f64>,
 }
 
 /// `[allowable]`: pass criterion, all > 0.
