@@ -8,7 +8,10 @@ use clap::Args;
 use proxform_sim::Scenario;
 
 /// Names of the built-in scenarios.
-pub const NAMES: [&str; 2] = ["paper", "swarm"];
+pub const NAMES: [&str; 3] = ["paper", "swarm", "fixed-wing-v"];
+
+/// The built-in fixed-wing scenario (also scenarios/fixed-wing-v.toml).
+const FIXED_WING_V: &str = include_str!("../../../scenarios/fixed-wing-v.toml");
 
 /// The annotated example written by `proxform init`.
 const EXAMPLE: &str = include_str!("../../../scenarios/example.toml");
@@ -19,6 +22,8 @@ pub fn built_in(name: &str, uavs: Option<u64>) -> Result<Scenario> {
         ("paper", None) => Scenario::paper(),
         ("paper", Some(_)) => bail!("--uavs applies to --scenario swarm only; the paper experiment has 6 UAVs"),
         ("swarm", n) => proxform_sim::swarm::scenario(n.unwrap_or(1000) as usize).context("invalid swarm")?,
+        ("fixed-wing-v", None) => proxform_sim::load::parse(FIXED_WING_V, "fixed-wing-v.toml")?,
+        ("fixed-wing-v", Some(_)) => bail!("--uavs applies to --scenario swarm only"),
         (other, _) => bail!("unknown scenario '{other}' (see `proxform scenarios`)"),
     })
 }
@@ -35,6 +40,8 @@ pub fn list() -> Result<ExitCode> {
     println!("Built-in scenarios (proxform run --scenario NAME):");
     println!("  paper   the paper's six-UAV experiment (METHOD §9); also scenarios/paper.toml");
     println!("  swarm   N UAVs (--uavs N, default 1000) in a multi-level lattice, for large-swarm runs");
+    println!("  fixed-wing-v  12 fixed-wing UAVs in a V: climb and 180° turn in moderate turbulence;");
+    println!("                also scenarios/fixed-wing-v.toml");
     println!("\nScenario files in scenarios/ run with `proxform run FILE.toml`; `proxform init` writes an");
     println!("annotated example; docs/scenarios.md lists every key.");
     Ok(ExitCode::SUCCESS)
@@ -64,6 +71,12 @@ pub fn init(args: &InitArgs) -> Result<ExitCode> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_built_in_files_are_valid_scenarios() {
+        let s = proxform_sim::load::parse(FIXED_WING_V, "fixed-wing-v.toml").expect("loads");
+        assert_eq!(s.len(), 12);
+    }
 
     #[test]
     fn the_example_is_a_valid_scenario() {

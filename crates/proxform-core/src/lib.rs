@@ -27,4 +27,4 @@ pub use formation::{Formation, FormationFrame, FormationSlot};
 pub use observation::{Observation, ObservationSource, UavId};
 pub use predictor::PredictorKind;
 pub use state::{Input, State9};
-pub use vehicle::{KinematicLimits, KinematicModel, VehicleModel};
+pub use vehicle::{FixedWingModel, KinematicLimits, KinematicModel, VehicleModel};

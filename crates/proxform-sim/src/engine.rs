@@ -12,6 +12,7 @@ use proxform_core::{ControllerSetup, ObservationSource, Outcome, ProximityContro
 use rand::RngExt;
 use rayon::prelude::*;
 
+use crate::disturbance::course_to_world;
 use crate::faults::{self, Fault, FaultStep};
 use crate::grid::NeighbourGrid;
 use crate::observer::{Observer, StepFrame, UavStep};
@@ -75,7 +76,7 @@ impl<'s> Simulation<'s> {
             current: scenario.initial.clone(),
             next: scenario.initial.clone(),
             controllers,
-            uavs: vec![UavStep::default(); n],
+            uavs: vec![UavStep { wind_now: scenario.wind.common(0.0), ..UavStep::default() }; n],
             grid: NeighbourGrid::new(),
             history: std::collections::VecDeque::new(),
             active: (0..n).map(|i| faults::is_active(&scenario.faults, i, 0.0)).collect(),
@@ -424,7 +425,7 @@ impl StepContext<'_> {
         let uav = i as u64;
         if !self.active[i] {
             *next = self.current[i];
-            *aux = UavStep::default();
+            *aux = UavStep { wind_now: aux.wind_now, turbulence: aux.turbulence, ..UavStep::default() };
             return;
         }
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
@@ -476,8 +477,33 @@ impl StepContext<'_> {
         } else {
             commanded
         };
-        *next = sc.vehicle.propagate(me, &applied, dt);
-        let model_error = *next - sc.vehicle.propagate(me, &commanded, dt);
+        let model_error = if sc.wind.is_calm() {
+            *next = sc.vehicle.propagate(me, &applied, dt);
+            proxform_core::state::difference(next, &sc.vehicle.propagate(me, &commanded, dt))
+        } else {
+            // The vehicle moves through the air; the wind carries it (crate::disturbance).
+            let w_now = aux.wind_now;
+            let mut w_next = sc.wind.common(self.t + dt);
+            if let Some(turb) = &sc.wind.turbulence {
+                let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Wind), self.k);
+                let speed = (me[3] * me[3] + me[4] * me[4] + me[5] * me[5]).sqrt();
+                w_next += course_to_world(me, &aux.turbulence.step(turb, speed, dt, &mut rng));
+            }
+            let mut air = *me;
+            for k in 0..3 {
+                air[3 + k] -= w_now[k];
+            }
+            let carry = |mut x: State9| {
+                for k in 0..3 {
+                    x[3 + k] += w_next[k];
+                    x[k] += 0.5 * dt * (w_now[k] + w_next[k]);
+                }
+                x
+            };
+            *next = carry(sc.vehicle.propagate(&air, &applied, dt));
+            aux.wind_now = w_next;
+            proxform_core::state::difference(next, &carry(sc.vehicle.propagate(&air, &commanded, dt)))
+        };
         aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
         aux.outcome = Some(decision.outcome);
         let scale = ctrl.vehicle().input_scale(dt);

@@ -454,6 +454,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 a.gamma_deg.map_or(Ok(cur.attitude_rad[2]), |v| positive("allowable.gamma_deg", v).map(deg))?,
             ],
         };
+        if let Some(w) = spec.wind.clone() {
+            s.wind = wind(&w)?;
+        }
         s.faults = spec.fault.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect::<Result<_, _>>()?;
         s.validate().map_err(|e| err("scenario", e.to_string()))?;
         Ok(s)
@@ -642,9 +645,64 @@ fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, Sp
 }
 
 fn vehicle(v: spec::VehicleSpec) -> Result<VehicleModel, SpecError> {
-    match v.model.as_deref() {
-        None | Some("kinematic") => {}
-        Some(o) => return Err(err("vehicle.model", format!("unknown model \"{o}\" (expected \"kinematic\")"))),
+    let kinematic_keys = [
+        ("vx_min_kmh", v.vx_min_kmh.is_some()),
+        ("vx_max_kmh", v.vx_max_kmh.is_some()),
+        ("vy_max_kmh", v.vy_max_kmh.is_some()),
+        ("vz_max_kmh", v.vz_max_kmh.is_some()),
+        ("attitude_max_deg", v.attitude_max_deg.is_some()),
+        ("accel_kmh_s", v.accel_kmh_s.is_some()),
+        ("attitude_rate_deg_s", v.attitude_rate_deg_s.is_some()),
+    ];
+    let fixed_keys = [
+        ("stall_speed_kmh", v.stall_speed_kmh.is_some()),
+        ("max_speed_kmh", v.max_speed_kmh.is_some()),
+        ("bank_max_deg", v.bank_max_deg.is_some()),
+        ("load_factor_max", v.load_factor_max.is_some()),
+        ("pitch_max_deg", v.pitch_max_deg.is_some()),
+        ("roll_rate_max_deg_s", v.roll_rate_max_deg_s.is_some()),
+        ("pitch_rate_max_deg_s", v.pitch_rate_max_deg_s.is_some()),
+        ("yaw_rate_max_deg_s", v.yaw_rate_max_deg_s.is_some()),
+        ("throttle_accel_kmh_s", v.throttle_accel_kmh_s.is_some()),
+    ];
+    let model = v.model.as_deref().unwrap_or("kinematic");
+    let foreign = match model {
+        "kinematic" => fixed_keys.iter().find(|k| k.1).map(|k| (k.0, "fixed_wing")),
+        "fixed_wing" => kinematic_keys.iter().find(|k| k.1).map(|k| (k.0, "kinematic")),
+        o => {
+            return Err(err(
+                "vehicle.model",
+                format!("unknown model \"{o}\" (expected \"kinematic\" or \"fixed_wing\")"),
+            ))
+        }
+    };
+    if let Some((key, owner)) = foreign {
+        return Err(err(format!("vehicle.{key}"), format!("applies to model = \"{owner}\", not \"{model}\"")));
+    }
+    if model == "fixed_wing" {
+        let mut m = proxform_core::FixedWingModel::default();
+        let set = |key: &str, v: Option<f64>, scale: fn(f64) -> f64, dst: &mut f64| -> Result<(), SpecError> {
+            if let Some(x) = v {
+                *dst = scale(positive(&format!("vehicle.{key}"), x)?);
+            }
+            Ok(())
+        };
+        set("stall_speed_kmh", v.stall_speed_kmh, kmh, &mut m.stall_speed_mps)?;
+        set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
+        set("bank_max_deg", v.bank_max_deg, deg, &mut m.bank_max_rad)?;
+        set("load_factor_max", v.load_factor_max, |x| x, &mut m.load_factor_max)?;
+        set("pitch_max_deg", v.pitch_max_deg, deg, &mut m.pitch_max_rad)?;
+        set("roll_rate_max_deg_s", v.roll_rate_max_deg_s, deg, &mut m.roll_rate_max_radps)?;
+        set("pitch_rate_max_deg_s", v.pitch_rate_max_deg_s, deg, &mut m.pitch_rate_max_radps)?;
+        set("yaw_rate_max_deg_s", v.yaw_rate_max_deg_s, deg, &mut m.yaw_rate_max_radps)?;
+        set("throttle_accel_kmh_s", v.throttle_accel_kmh_s, kmh, &mut m.accel_max_mps2)?;
+        if m.stall_speed_mps >= m.max_speed_mps {
+            return Err(err("vehicle.stall_speed_kmh", "must be below vehicle.max_speed_kmh"));
+        }
+        if m.load_factor_max < 1.0 {
+            return Err(err("vehicle.load_factor_max", format!("must be ≥ 1, found {}", m.load_factor_max)));
+        }
+        return Ok(VehicleModel::FixedWing(m));
     }
     let mut l = KinematicLimits::default();
     if let Some(x) = v.vx_min_kmh {
@@ -709,6 +767,40 @@ fn path(p: spec::PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> 
         }
         Some(o) => Err(err("path.kind", format!("unknown path \"{o}\" (expected \"paper\" or \"segments\")"))),
     }
+}
+
+fn wind(w: &spec::WindSpec) -> Result<crate::disturbance::Wind, SpecError> {
+    use crate::disturbance::{Gust, Severity, Turbulence, Wind};
+    let mut out = Wind::default();
+    if let Some(v) = w.steady_kmh {
+        out.steady_mps = vec3("wind.steady_kmh", v)?.map(kmh);
+    }
+    let severity = match w.turbulence.as_deref() {
+        None | Some("none") => None,
+        Some("light") => Some(Severity::Light),
+        Some("moderate") => Some(Severity::Moderate),
+        Some("severe") => Some(Severity::Severe),
+        Some(o) => {
+            return Err(err(
+                "wind.turbulence",
+                format!("unknown turbulence \"{o}\" (expected none, light, moderate or severe)"),
+            ))
+        }
+    };
+    let altitude = positive("wind.altitude_m", w.altitude_m.unwrap_or(300.0))?;
+    out.turbulence = severity.map(|severity| Turbulence { severity, altitude_m: altitude });
+    match (w.gust_at_s, w.gust_duration_s, w.gust_peak_kmh) {
+        (None, None, None) => {}
+        (Some(at), Some(d), Some(peak)) => {
+            out.gust = Some(Gust {
+                at_s: non_negative("wind.gust_at_s", at)?,
+                duration_s: positive("wind.gust_duration_s", d)?,
+                peak_mps: vec3("wind.gust_peak_kmh", peak)?.map(kmh),
+            });
+        }
+        _ => return Err(err("wind.gust_at_s", "a gust needs gust_at_s, gust_duration_s and gust_peak_kmh")),
+    }
+    Ok(out)
 }
 
 fn radio(r: &spec::RadioSpec, dt_s: f64) -> Result<crate::radio::RadioModel, SpecError> {

@@ -41,6 +41,10 @@ pub struct UavStep {
     pub effort: f32,
     /// Its radio channel is in the bad state of its Gilbert-Elliott model.
     pub channel_bad: bool,
+    /// The wind where it is now (m/s, world frame).
+    pub wind_now: nalgebra::Vector3<f64>,
+    /// Its turbulence filters.
+    pub turbulence: crate::disturbance::TurbulenceState,
 }
 
 impl Default for UavStep {
@@ -53,6 +57,8 @@ impl Default for UavStep {
             radio_msgs: 0,
             effort: 0.0,
             channel_bad: false,
+            wind_now: nalgebra::Vector3::zeros(),
+            turbulence: crate::disturbance::TurbulenceState::default(),
         }
     }
 }

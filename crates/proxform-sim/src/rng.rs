@@ -22,6 +22,8 @@ pub enum Source {
     Actuation = 3,
     /// Losses on its radio channel.
     Radio = 4,
+    /// Its turbulence field.
+    Wind = 5,
 }
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;

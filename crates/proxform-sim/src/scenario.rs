@@ -123,6 +123,8 @@ pub struct Scenario {
     /// UAVs whose state every UAV hears over the radio each period (ideal link, the
     /// broadcaster's measurement noise). Empty in the paper scenario.
     pub beacons: Vec<UavId>,
+    /// Wind, turbulence and gusts.
+    pub wind: crate::disturbance::Wind,
     /// The radio: broadcasters, range, delay and losses.
     pub radio: crate::radio::RadioModel,
     /// How the sensors find candidates: the grid, or all pairs (reference only).
@@ -288,6 +290,7 @@ impl Scenario {
             safety_distance_m: 50.0,
             beacons: Vec::new(),
             radio: crate::radio::RadioModel::default(),
+            wind: crate::disturbance::Wind::default(),
             warmup_s: 1.0,
             dropout: 0.0,
             faults: Vec::new(),

@@ -41,6 +41,8 @@ pub struct ScenarioSpec {
     pub sensing: Option<SensingSpec>,
     /// Radio.
     pub radio: Option<RadioSpec>,
+    /// Wind, turbulence and gusts.
+    pub wind: Option<WindSpec>,
     /// Pass criterion.
     pub allowable: Option<AllowableSpec>,
     /// Scheduled faults.
@@ -216,6 +218,42 @@ pub struct VehicleSpec {
     pub accel_kmh_s: Option<[f64; 3]>,
     /// Adjusting rates of α, β, γ (deg/s). Default 3, 2, 2.
     pub attitude_rate_deg_s: Option<[f64; 3]>,
+    /// Fixed wing: stall speed (km/h). Default 90.
+    pub stall_speed_kmh: Option<f64>,
+    /// Fixed wing: maximum airspeed (km/h). Default 300.
+    pub max_speed_kmh: Option<f64>,
+    /// Fixed wing: bank limit (deg). Default 45.
+    pub bank_max_deg: Option<f64>,
+    /// Fixed wing: structural load-factor limit (≥ 1). Default 2.5.
+    pub load_factor_max: Option<f64>,
+    /// Fixed wing: pitch limit (deg). Default 20.
+    pub pitch_max_deg: Option<f64>,
+    /// Fixed wing: roll rate at full aileron (deg/s). Default 45.
+    pub roll_rate_max_deg_s: Option<f64>,
+    /// Fixed wing: pitch rate at full elevator (deg/s). Default 15.
+    pub pitch_rate_max_deg_s: Option<f64>,
+    /// Fixed wing: yaw rate at full rudder (deg/s). Default 10.
+    pub yaw_rate_max_deg_s: Option<f64>,
+    /// Fixed wing: airspeed change at full throttle (km/h per second). Default 10.8.
+    pub throttle_accel_kmh_s: Option<f64>,
+}
+
+/// `[wind]`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindSpec {
+    /// Steady wind `[x, y, z]` (km/h, world frame). Default calm.
+    pub steady_kmh: Option<[f64; 3]>,
+    /// Dryden turbulence: "none" (default), "light", "moderate", "severe".
+    pub turbulence: Option<String>,
+    /// Altitude above ground for the turbulence model (m). Default 300.
+    pub altitude_m: Option<f64>,
+    /// A 1 − cos gust: start (s).
+    pub gust_at_s: Option<f64>,
+    /// Gust duration (s).
+    pub gust_duration_s: Option<f64>,
+    /// Gust peak `[x, y, z]` (km/h, world frame).
+    pub gust_peak_kmh: Option<[f64; 3]>,
 }
 
 /// `[noise]`.

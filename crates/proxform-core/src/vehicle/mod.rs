@@ -4,8 +4,10 @@
 //! `F·X`, the control matrix B at the current state, and the per-step input bounds that keep
 //! the vehicle inside its limits. The simulator uses [`VehicleModel::propagate`] as the plant.
 
+mod fixed_wing;
 mod kinematic;
 
+pub use fixed_wing::FixedWingModel;
 pub use kinematic::{KinematicLimits, KinematicModel};
 
 use crate::control::ControlMatrix;
@@ -19,6 +21,8 @@ use crate::state::{Input, State9};
 pub enum VehicleModel {
     /// The paper's §4 simulation model (METHOD §5, model 1).
     Kinematic(KinematicModel),
+    /// Aileron, rudder, elevator and throttle (METHOD §5, model 2).
+    FixedWing(FixedWingModel),
 }
 
 impl VehicleModel {
@@ -26,6 +30,7 @@ impl VehicleModel {
     pub fn validate(&self) -> Result<(), ConfigError> {
         match self {
             VehicleModel::Kinematic(m) => m.limits.validate(),
+            VehicleModel::FixedWing(m) => m.validate(),
         }
     }
 
@@ -33,6 +38,7 @@ impl VehicleModel {
     pub fn forward_speed_range(&self) -> (f64, f64) {
         match self {
             VehicleModel::Kinematic(m) => (m.limits.vx_min_mps, m.limits.vx_max_mps),
+            VehicleModel::FixedWing(m) => (m.stall_speed_mps, m.max_speed_mps),
         }
     }
 
@@ -41,6 +47,7 @@ impl VehicleModel {
     pub fn n_inputs(&self) -> usize {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::N_INPUTS,
+            VehicleModel::FixedWing(_) => FixedWingModel::N_INPUTS,
         }
     }
 
@@ -49,6 +56,7 @@ impl VehicleModel {
     pub fn hold(&self, x: &State9, dt: f64) -> State9 {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::hold(x, dt),
+            VehicleModel::FixedWing(m) => m.hold(x, dt),
         }
     }
 
@@ -57,6 +65,7 @@ impl VehicleModel {
     pub fn control_matrix(&self, x: &State9, dt: f64) -> ControlMatrix {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::control_matrix(x, dt),
+            VehicleModel::FixedWing(m) => m.control_matrix(x, dt),
         }
     }
 
@@ -65,6 +74,7 @@ impl VehicleModel {
     pub fn control_matrix_is_constant(&self) -> bool {
         match self {
             VehicleModel::Kinematic(_) => true,
+            VehicleModel::FixedWing(_) => false,
         }
     }
 
@@ -73,6 +83,7 @@ impl VehicleModel {
     pub fn input_bounds(&self, x: &State9, dt: f64) -> (Input, Input) {
         match self {
             VehicleModel::Kinematic(m) => m.input_bounds(x, dt),
+            VehicleModel::FixedWing(m) => m.input_bounds(x, dt),
         }
     }
 
@@ -81,6 +92,7 @@ impl VehicleModel {
     pub fn propagate(&self, x: &State9, u: &Input, dt: f64) -> State9 {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::propagate(x, u, dt),
+            VehicleModel::FixedWing(m) => m.propagate(x, u, dt),
         }
     }
 
@@ -89,6 +101,7 @@ impl VehicleModel {
     pub fn input_scale(&self, dt: f64) -> Input {
         match self {
             VehicleModel::Kinematic(m) => m.input_scale(dt),
+            VehicleModel::FixedWing(m) => m.input_scale(),
         }
     }
 }

@@ -1,0 +1,39 @@
+//! The fixed-wing V: a climb and a 180° turn in moderate Dryden turbulence, safely.
+
+use proxform_sim::batch::{run_batch, run_one};
+use proxform_sim::disturbance::Wind;
+
+fn scenario() -> proxform_sim::Scenario {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/fixed-wing-v.toml"))
+        .expect("file");
+    proxform_sim::load::parse(&text, "fixed-wing-v.toml").expect("valid")
+}
+
+#[test]
+fn the_v_turns_and_climbs_without_any_pair_closer_than_15_m() {
+    let s = scenario();
+    let r = run_batch(&s, 7, 40, false, &|| {}).expect("valid");
+    assert!(r.summary.min_separation_m >= 15.0, "{}", r.summary.min_separation_m);
+    assert_eq!(r.summary.swarm.close_pairs_max, 0);
+    // It does turn: the navigator flew 180° and the followers' yaw errors stay bounded.
+    assert!(r.summary.worst_abs_error.beta_deg < 60.0, "{:?}", r.summary.worst_abs_error);
+    assert!(r.summary.worst_abs_error.z_m < 40.0, "{:?}", r.summary.worst_abs_error);
+}
+
+#[test]
+fn without_adjustment_the_v_falls_apart() {
+    let mut s = scenario();
+    s.adjustment_enabled = false;
+    let (r, _) = run_one(&s, 7, 0, false).expect("valid");
+    assert!(r.max_abs_error[0] > 200.0 || r.max_abs_error[1] > 200.0, "{:?}", r.max_abs_error);
+}
+
+#[test]
+fn turbulence_costs_accuracy() {
+    let s = scenario();
+    let mut calm = s.clone();
+    calm.wind = Wind::default();
+    let rough = run_batch(&s, 7, 10, false, &|| {}).expect("valid").summary;
+    let calm = run_batch(&calm, 7, 10, false, &|| {}).expect("valid").summary;
+    assert!(rough.rms_error.z_m > calm.rms_error.z_m, "{:?} vs {:?}", rough.rms_error, calm.rms_error);
+}
