@@ -115,8 +115,13 @@ pub struct AutoDepsSpec {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathSpec {
-    /// "paper" (default) or "segments".
+    /// "paper" (default), "segments" or "waypoints".
     pub kind: Option<String>,
+    /// Waypoints path: the points to fly through, `[x, y, z]` (m, world frame, relative to
+    /// the navigator's start), in order.
+    pub points_m: Option<Vec<[f64; 3]>>,
+    /// Waypoints path: radius of the turns at each waypoint (m).
+    pub turn_radius_m: Option<f64>,
     /// Segments path: initial speed (km/h).
     pub speed_kmh: Option<f64>,
     /// Segments path: initial course (deg, counter-clockwise from x). Default 0.
