@@ -468,6 +468,17 @@ impl StepContext<'_> {
         let me = &self.current[i];
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
         let mut own = noisy(me, &sc.noise.sigma(), &mut rng);
+        if let Some(g) = &sc.gnss_bias {
+            // First-order Gauss-Markov bias, exactly discretised.
+            let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Gnss), self.k);
+            let phi = (-dt / g.tau_s).exp();
+            let kick = g.sigma_m * (1.0 - phi * phi).sqrt();
+            let z = crate::normal::Ziggurat::get();
+            for k in 0..3 {
+                aux.gnss_bias[k] = phi * aux.gnss_bias[k] + kick * z.sample(&mut rng);
+                own[k] += aux.gnss_bias[k];
+            }
+        }
         self.faults.corrupt(i, &mut own);
         let decision = ctrl.step(self.t, &own, &scratch.observations);
         let commanded = if sc.adjustment_enabled { decision.input } else { Input::zeros() };

@@ -430,6 +430,16 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(v) = noise.actuation_error {
             s.actuation_error = probability("noise.actuation_error", v)?;
         }
+        match (noise.gnss_bias_m, noise.gnss_tau_s) {
+            (Some(sigma), tau) => {
+                s.gnss_bias = Some(crate::scenario::CorrelatedNoise {
+                    sigma_m: non_negative("noise.gnss_bias_m", sigma)?,
+                    tau_s: positive("noise.gnss_tau_s", tau.unwrap_or(60.0))?,
+                });
+            }
+            (None, Some(_)) => return Err(err("noise.gnss_tau_s", "needs noise.gnss_bias_m")),
+            (None, None) => {}
+        }
         s.noise = MeasurementNoise { ..s.noise };
         if let Some(v) = spec.sensing.as_ref().and_then(|x| x.dropout) {
             s.dropout = probability("sensing.dropout", v)?;

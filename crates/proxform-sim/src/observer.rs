@@ -45,6 +45,8 @@ pub struct UavStep {
     pub wind_now: nalgebra::Vector3<f64>,
     /// Its turbulence filters.
     pub turbulence: crate::disturbance::TurbulenceState,
+    /// The current bias of its own position fix (m).
+    pub gnss_bias: [f64; 3],
 }
 
 impl Default for UavStep {
@@ -59,6 +61,7 @@ impl Default for UavStep {
             channel_bad: false,
             wind_now: nalgebra::Vector3::zeros(),
             turbulence: crate::disturbance::TurbulenceState::default(),
+            gnss_bias: [0.0; 3],
         }
     }
 }

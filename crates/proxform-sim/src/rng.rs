@@ -24,6 +24,8 @@ pub enum Source {
     Radio = 4,
     /// Its turbulence field.
     Wind = 5,
+    /// The slowly varying bias of its own position fix.
+    Gnss = 6,
 }
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;

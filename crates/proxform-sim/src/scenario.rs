@@ -61,6 +61,16 @@ impl MeasurementNoise {
     }
 }
 
+/// Time-correlated error of each UAV's own position fix (GNSS-like): a first-order
+/// Gauss-Markov bias per axis, added to the white noise.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CorrelatedNoise {
+    /// Standard deviation of the bias (m).
+    pub sigma_m: f64,
+    /// Correlation time (s).
+    pub tau_s: f64,
+}
+
 /// Allowable formation errors, the pass criterion (METHOD §7, §9).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AllowableErrors {
@@ -103,6 +113,8 @@ pub struct Scenario {
     pub vehicle: VehicleModel,
     /// Measurement noise σn.
     pub noise: MeasurementNoise,
+    /// Correlated own-position error, if any.
+    pub gnss_bias: Option<CorrelatedNoise>,
     /// Actuation error: each applied input component is scaled by `1 + ε`, ε uniform in
     /// `[−e, e]` (dimensionless). Paper scenario: 0.1.
     pub actuation_error: f64,
@@ -285,6 +297,7 @@ impl Scenario {
             vehicle: VehicleModel::Kinematic(KinematicModel::default()),
             noise: MeasurementNoise { position_m: 0.02, velocity_mps: kmh(0.18), attitude_rad: deg(0.01) },
             actuation_error: 0.1,
+            gnss_bias: None,
             allowable: AllowableErrors { position_m: [0.5, 0.6, 0.2], attitude_rad: [deg(0.4), deg(0.3), deg(1.0)] },
             adjustment_enabled: true,
             safety_distance_m: 50.0,

@@ -273,6 +273,10 @@ pub struct NoiseSpec {
     pub attitude_deg: Option<f64>,
     /// Actuation error: relative, uniform in ±e, in [0, 1]. Default 0.1.
     pub actuation_error: Option<f64>,
+    /// GNSS-like correlated bias of each UAV's own position fix, 1σ (m). Default none.
+    pub gnss_bias_m: Option<f64>,
+    /// Correlation time of that bias (s). Default 60.
+    pub gnss_tau_s: Option<f64>,
 }
 
 /// `[sensing]`.

@@ -76,3 +76,14 @@ fn dropout_degrades_gracefully() {
     assert!(all_lost.alone_s_per_uav > 90.0, "{}", all_lost.alone_s_per_uav);
     assert!(!all_lost.pass);
 }
+
+#[test]
+fn a_correlated_position_bias_shows_in_the_formation_errors() {
+    let base = Scenario::paper();
+    let mut biased = base.clone();
+    biased.gnss_bias = Some(proxform_sim::scenario::CorrelatedNoise { sigma_m: 0.1, tau_s: 30.0 });
+    let a = run_batch(&base, 6, 20, false, &|| {}).expect("valid").summary;
+    let b = run_batch(&biased, 6, 20, false, &|| {}).expect("valid").summary;
+    // White noise averages out over a step; a bias that lasts 30 s does not.
+    assert!(b.rms_error.z_m > 2.0 * a.rms_error.z_m, "{:?} vs {:?}", b.rms_error, a.rms_error);
+}
