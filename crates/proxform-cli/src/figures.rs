@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use anyhow::{anyhow, Result};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
@@ -138,21 +139,7 @@ fn axis_figure<DB: DrawingBackend>(
         .build_cartesian_2d(0.0..tmax, lo..hi)
         .map_err(plot_err)?;
     chart.configure_mesh().x_desc("t (s)").y_desc(format!("{} ({})", axis.name, axis.unit)).draw().map_err(plot_err)?;
-    for u in 0..s.n {
-        let color = PALETTE[u % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new((0..n).map(|k| (s.t[k], s.value(u, k, axis))), color.stroke_width(2)))
-            .map_err(plot_err)?
-            .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(plot_err)?;
+    uav_lines(&mut chart, &s.t, 0..s.n, |u, k| s.value(u, k, axis), 2, SeriesLabelPosition::UpperLeft)?;
     // (b) errors with the allowable band
     let followers: Vec<usize> = (0..s.n).filter(|&u| u != nav).collect();
     let (elo, ehi) =
@@ -176,10 +163,30 @@ fn axis_figure<DB: DrawingBackend>(
             ))
             .map_err(plot_err)?;
     }
-    for &u in &followers {
+    uav_lines(
+        &mut chart,
+        &s.t,
+        followers.iter().copied(),
+        |u, k| s.error(u, k, axis),
+        1,
+        SeriesLabelPosition::LowerLeft,
+    )?;
+    root.present().map_err(plot_err)
+}
+
+/// One labelled line per UAV over time, and the legend.
+fn uav_lines<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    t: &[f64],
+    uavs: impl Iterator<Item = usize>,
+    value: impl Fn(usize, usize) -> f64,
+    width: u32,
+    legend: SeriesLabelPosition,
+) -> Result<()> {
+    for u in uavs {
         let color = PALETTE[u % PALETTE.len()];
         chart
-            .draw_series(LineSeries::new((0..n).map(|k| (s.t[k], s.error(u, k, axis))), color.stroke_width(1)))
+            .draw_series(LineSeries::new((0..t.len()).map(|k| (t[k], value(u, k))), color.stroke_width(width)))
             .map_err(plot_err)?
             .label(format!("UAV{}", u + 1))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
@@ -188,10 +195,9 @@ fn axis_figure<DB: DrawingBackend>(
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerLeft)
+        .position(legend)
         .draw()
-        .map_err(plot_err)?;
-    root.present().map_err(plot_err)
+        .map_err(plot_err)
 }
 
 fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {

@@ -16,6 +16,7 @@ use crate::disturbance::course_to_world;
 use crate::faults::{self, Fault, FaultStep};
 use crate::grid::NeighbourGrid;
 use crate::observer::{Observer, StepFrame, UavStep};
+use crate::radio::RadioModel;
 use crate::rng::{stream_key, Source, StepRng};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::sensing::{noisy, Link, NeighbourSearch, ProximitySensor, SensorScratch};
@@ -368,7 +369,42 @@ struct StepContext<'a> {
 /// Step counters of the warm-up draws, far from those of the flight.
 const WARMUP_STEP_BASE: u64 = 1 << 62;
 
-impl StepContext<'_> {
+impl<'a> StepContext<'a> {
+    /// What the links allow UAV updates this step.
+    fn link(&self, radio: &'a RadioModel, dropout: f64, radio_up: bool, channel_bad: bool, delay_s: f64) -> Link<'a> {
+        Link {
+            active: self.active,
+            dropout,
+            radio_up,
+            radio,
+            sent: self.sent.map(|s| s.0),
+            send_step: self.sent.map(|s| s.1),
+            delay_s,
+            channel_bad,
+            seed: self.seed,
+            run: self.run,
+        }
+    }
+
+    /// UAV `i`'s perception this step (into `scratch.observations`): its nearest neighbour's
+    /// distance and id.
+    fn perceive(&self, i: usize, link: &Link<'_>, radio_rng: &mut StepRng, scratch: &mut SensorScratch) -> (f64, u32) {
+        let sc = self.scenario;
+        let mut rng = StepRng::new(stream_key(self.seed, self.run, i as u64, Source::Sensing), self.k);
+        self.sensor.perceive(
+            i,
+            self.current,
+            self.search,
+            self.grid,
+            &sc.dependencies[i],
+            &sc.beacons,
+            link,
+            &mut rng,
+            radio_rng,
+            scratch,
+        )
+    }
+
     /// A warm-up update of UAV `i`: perception and decision, nothing applied.
     fn warm(&self, i: usize, ctrl: Option<&mut ProximityController>, scratch: &mut SensorScratch) {
         debug_assert!(self.warm);
@@ -378,33 +414,10 @@ impl StepContext<'_> {
         }
         let sc = self.scenario;
         let uav = i as u64;
-        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
-        let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
         let ideal = sc.radio.ideal();
-        let link = Link {
-            active: self.active,
-            dropout: 0.0,
-            radio_up: true,
-            radio: &ideal,
-            sent: self.sent.map(|s| s.0),
-            send_step: self.sent.map(|s| s.1),
-            delay_s: 0.0,
-            channel_bad: false,
-            seed: self.seed,
-            run: self.run,
-        };
-        self.sensor.perceive(
-            i,
-            self.current,
-            self.search,
-            self.grid,
-            &sc.dependencies[i],
-            &sc.beacons,
-            &link,
-            &mut rng,
-            &mut radio_rng,
-            scratch,
-        );
+        let link = self.link(&ideal, 0.0, true, false, 0.0);
+        let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
+        self.perceive(i, &link, &mut radio_rng, scratch);
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
         let own = noisy(&self.current[i], &sc.noise.sigma(), &mut rng);
         ctrl.step(self.t, &own, &scratch.observations);
@@ -428,35 +441,12 @@ impl StepContext<'_> {
             *aux = UavStep { wind_now: aux.wind_now, turbulence: aux.turbulence, ..UavStep::default() };
             return;
         }
-        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Sensing), self.k);
         let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
         let mut bad = aux.channel_bad;
         sc.radio.step_channel(&mut bad, &mut radio_rng);
         aux.channel_bad = bad;
-        let link = Link {
-            active: self.active,
-            dropout: sc.dropout,
-            radio_up: self.faults.radio_up,
-            radio: &sc.radio,
-            sent: self.sent.map(|s| s.0),
-            send_step: self.sent.map(|s| s.1),
-            delay_s: f64::from(sc.radio.delay_steps) * dt,
-            channel_bad: bad,
-            seed: self.seed,
-            run: self.run,
-        };
-        let nearest = self.sensor.perceive(
-            i,
-            self.current,
-            self.search,
-            self.grid,
-            &sc.dependencies[i],
-            &sc.beacons,
-            &link,
-            &mut rng,
-            &mut radio_rng,
-            scratch,
-        );
+        let link = self.link(&sc.radio, sc.dropout, self.faults.radio_up, bad, f64::from(sc.radio.delay_steps) * dt);
+        let nearest = self.perceive(i, &link, &mut radio_rng, scratch);
         (aux.nearest_m, aux.nearest_id) = nearest;
         aux.radio_msgs = scratch.observations.iter().filter(|o| o.source == ObservationSource::Radio).count() as u16;
         let Some(ctrl) = ctrl else {

@@ -383,22 +383,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
             Some(v) => Some(kmh(positive("initial.speed_kmh", v)?)),
             None => None,
         };
-        s.initial = slots
-            .iter()
-            .map(|slot| {
-                let mut x = nav0;
-                let w = s.formation.w(slot, &slots[s.navigator.index()], &nav0);
-                x[state::X] = w[0];
-                x[state::Y] = w[1];
-                x[state::Z] = w[2];
-                if let Some(v) = speed {
-                    let h = nav0[state::VX].hypot(nav0[state::VY]).max(1e-9);
-                    x[state::VX] = v * nav0[state::VX] / h;
-                    x[state::VY] = v * nav0[state::VY] / h;
-                }
-                x
-            })
-            .collect();
+        s.initial = crate::scenario::in_slots(&s.formation, s.navigator, &nav0);
+        if let Some(v) = speed {
+            let h = nav0[state::VX].hypot(nav0[state::VY]).max(1e-9);
+            for x in &mut s.initial {
+                x[state::VX] = v * nav0[state::VX] / h;
+                x[state::VY] = v * nav0[state::VY] / h;
+            }
+        }
         let (vmin, vmax) = s.vehicle.forward_speed_range();
         for (i, x) in s.initial.iter().enumerate() {
             let v = x[state::VX];

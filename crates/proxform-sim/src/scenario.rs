@@ -257,17 +257,8 @@ impl Scenario {
         let path = PaperPath::default();
         // Every UAV starts in its slot on the navigator's initial state: [250 km/h, 0, vz, 5°, 3°, 0°]
         // with vz the path's initial climb rate (see README, Choices).
-        let nav0 = path.state_at(0.0, [0.0; 3]);
-        let initial = slots
-            .iter()
-            .map(|s| {
-                let mut x = nav0;
-                x[state::X] = s.offset_m.x;
-                x[state::Y] = s.offset_m.y;
-                x[state::Z] = s.offset_m.z;
-                x
-            })
-            .collect();
+        let formation = Formation { slots, frame: FormationFrame::World };
+        let initial = in_slots(&formation, UavId(0), &path.state_at(0.0, [0.0; 3]));
         let table: [&[(u32, f64)]; 6] = [
             &[],
             &[(0, 0.7), (2, 0.3)],
@@ -288,7 +279,7 @@ impl Scenario {
             name: "paper".into(),
             dt_s: 0.1,
             duration_s: 100.0,
-            formation: Arc::new(Formation { slots, frame: FormationFrame::World }),
+            formation: Arc::new(formation),
             navigator: UavId(0),
             path: NavigatorPath::Paper(path),
             initial,
@@ -310,6 +301,13 @@ impl Scenario {
             neighbour_search: crate::sensing::NeighbourSearch::Grid,
         }
     }
+}
+
+/// Every UAV in its slot around the navigator's state `nav0`, with the navigator's velocity
+/// and attitude (plus its attitude offset).
+pub fn in_slots(formation: &Formation, navigator: UavId, nav0: &State9) -> Vec<State9> {
+    let nav = &formation.slots[navigator.index()];
+    formation.slots.iter().map(|slot| nav0 + formation.w(slot, nav, nav0)).collect()
 }
 
 fn positive(field: &'static str, v: f64) -> Result<(), ScenarioError> {

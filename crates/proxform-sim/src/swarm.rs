@@ -8,7 +8,6 @@
 use std::sync::Arc;
 
 use proxform_core::angle::deg;
-use proxform_core::state;
 use proxform_core::{AzimuthAreas, Formation, FormationFrame, FormationSlot, UavId};
 
 use crate::path::{NavigatorPath, PaperPath};
@@ -62,19 +61,10 @@ pub fn scenario(n: usize) -> Result<Scenario, ScenarioError> {
         roll_amplitude_rad: deg(10.0),
         ..PaperPath::default()
     };
-    let nav0 = path.state_at(0.0, [0.0; 3]);
-    s.initial = slots
-        .iter()
-        .map(|slot| {
-            let mut x = nav0;
-            x[state::X] = slot.offset_m.x;
-            x[state::Y] = slot.offset_m.y;
-            x[state::Z] = slot.offset_m.z;
-            x
-        })
-        .collect();
+    let formation = Formation { slots, frame: FormationFrame::World };
+    s.initial = crate::scenario::in_slots(&formation, UavId(0), &path.state_at(0.0, [0.0; 3]));
     s.name = "swarm".into();
-    s.formation = Arc::new(Formation { slots, frame: FormationFrame::World });
+    s.formation = Arc::new(formation);
     s.dependencies = dependencies;
     s.path = NavigatorPath::Paper(path);
     s.controller.areas = AzimuthAreas { areas: 8, sensing_range_m: 1.6 * SPACING_M };
