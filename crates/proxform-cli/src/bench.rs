@@ -132,7 +132,7 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
     };
     let scenario = proxform_sim::swarm::scenario(n as usize)?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let t: Throughput = pool.install(|| measure(&scenario, steps, search, threads > 1))?;
+    let t: Throughput = pool.install(|| measure(scenario, steps, search, threads > 1))?;
     let row = Row {
         uavs: t.uavs,
         search: search_name(search).into(),

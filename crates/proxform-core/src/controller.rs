@@ -214,8 +214,9 @@ pub struct ProximityController {
     /// squared distance (f32 is ample to rank neighbours). Working memory, allocated once.
     nearest: Box<[(u32, f32)]>,
     /// The own state this UAV expects at the next step: the model applied to its estimate
-    /// and the input it chose (None before the first step).
-    own_prediction: Option<State9>,
+    /// and the input it chose (None before the first step, and when the filter is off; boxed
+    /// so that controllers without it stay small).
+    own_prediction: Option<Box<State9>>,
 }
 
 impl ProximityController {
@@ -285,13 +286,17 @@ impl ProximityController {
         // The own-state filter: the model's prediction corrected toward the measurement.
         let gain = self.setup.params.own_filter_gain;
         let own = match self.own_prediction {
-            Some(pred) if gain < 1.0 => pred + gain * state::difference(own_measured, &pred),
+            Some(ref pred) if gain < 1.0 => **pred + gain * state::difference(own_measured, pred),
             _ => *own_measured,
         };
         let decision = self.decide(now_s, &own, observations);
         if gain < 1.0 {
             let (vehicle, dt) = (&self.setup.vehicle, self.setup.params.dt_s);
-            self.own_prediction = Some(vehicle.propagate(&own, &decision.input, dt));
+            let next = vehicle.propagate(&own, &decision.input, dt);
+            match &mut self.own_prediction {
+                Some(p) => **p = next,
+                None => self.own_prediction = Some(Box::new(next)),
+            }
         }
         decision
     }

@@ -12,7 +12,6 @@ use proxform_core::{ControllerSetup, ObservationSource, Outcome, ProximityContro
 use rand::RngExt;
 use rayon::prelude::*;
 
-use crate::disturbance::course_to_world;
 use crate::faults::{self, Fault, FaultStep};
 use crate::grid::NeighbourGrid;
 use crate::observer::{Observer, StepFrame, UavStep};
@@ -36,6 +35,8 @@ pub struct Simulation<'s> {
     controllers: Vec<Option<ProximityController>>,
     uavs: Vec<UavStep>,
     grid: NeighbourGrid,
+    /// Per-UAV environment (wind, position-fix bias, radio channel), empty when not needed.
+    env: Vec<crate::environment::UavEnv>,
     /// True states of the last `delay + 1` steps, oldest first (radio with delay only).
     history: std::collections::VecDeque<Vec<State9>>,
     active: Vec<bool>,
@@ -77,7 +78,8 @@ impl<'s> Simulation<'s> {
             current: scenario.initial.clone(),
             next: scenario.initial.clone(),
             controllers,
-            uavs: vec![UavStep { wind_now: scenario.wind.common(0.0), ..UavStep::default() }; n],
+            uavs: vec![UavStep::default(); n],
+            env: crate::environment::initial(scenario),
             grid: NeighbourGrid::new(),
             history: std::collections::VecDeque::new(),
             active: (0..n).map(|i| faults::is_active(&scenario.faults, i, 0.0)).collect(),
@@ -135,6 +137,7 @@ impl<'s> Simulation<'s> {
                 active: &self.active,
                 faults: &self.faults,
                 sent: Some((&self.current[..], WARMUP_STEP_BASE + w)),
+                env: &[],
                 warm: true,
             };
             let m = sc.controller.areas.areas;
@@ -244,6 +247,19 @@ impl<'s> Simulation<'s> {
             self.rebuild_grid(range);
         }
         let (k, t) = (self.k, self.t());
+        if !self.env.is_empty() {
+            let (seed, run, current, active) = (self.seed, self.run, &self.current, &self.active);
+            let adv = |(i, e): (usize, &mut crate::environment::UavEnv)| {
+                if active[i] {
+                    crate::environment::advance(sc, seed, run, k, t, i, &current[i], e);
+                }
+            };
+            if self.parallel {
+                self.env.par_iter_mut().enumerate().with_min_len(1024).for_each(adv);
+            } else {
+                self.env.iter_mut().enumerate().for_each(adv);
+            }
+        }
         let delay = u64::from(sc.radio.delay_steps);
         if delay > 0 {
             let mut old =
@@ -273,6 +289,7 @@ impl<'s> Simulation<'s> {
             active: &self.active,
             faults: &self.faults,
             sent,
+            env: &self.env,
             warm: false,
         };
         let m = sc.controller.areas.areas;
@@ -362,6 +379,8 @@ struct StepContext<'a> {
     faults: &'a FaultStep,
     /// True states when the radio messages arriving now were sent, and that step.
     sent: Option<(&'a [State9], u64)>,
+    /// Per-UAV environment (empty when the scenario needs none).
+    env: &'a [crate::environment::UavEnv],
     /// Warm-up step: perceive and decide, change nothing.
     warm: bool,
 }
@@ -438,13 +457,12 @@ impl<'a> StepContext<'a> {
         let uav = i as u64;
         if !self.active[i] {
             *next = self.current[i];
-            *aux = UavStep { wind_now: aux.wind_now, turbulence: aux.turbulence, ..UavStep::default() };
+            *aux = UavStep::default();
             return;
         }
+        let env = self.env.get(i);
         let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
-        let mut bad = aux.channel_bad;
-        sc.radio.step_channel(&mut bad, &mut radio_rng);
-        aux.channel_bad = bad;
+        let bad = env.is_some_and(|e| e.channel_bad);
         let link = self.link(&sc.radio, sc.dropout, self.faults.radio_up, bad, f64::from(sc.radio.delay_steps) * dt);
         let nearest = self.perceive(i, &link, &mut radio_rng, scratch);
         (aux.nearest_m, aux.nearest_id) = nearest;
@@ -458,15 +476,9 @@ impl<'a> StepContext<'a> {
         let me = &self.current[i];
         let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
         let mut own = noisy(me, &sc.noise.sigma(), &mut rng);
-        if let Some(g) = &sc.gnss_bias {
-            // First-order Gauss-Markov bias, exactly discretised.
-            let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Gnss), self.k);
-            let phi = (-dt / g.tau_s).exp();
-            let kick = g.sigma_m * (1.0 - phi * phi).sqrt();
-            let z = crate::normal::Ziggurat::get();
+        if let Some(e) = env {
             for k in 0..3 {
-                aux.gnss_bias[k] = phi * aux.gnss_bias[k] + kick * z.sample(&mut rng);
-                own[k] += aux.gnss_bias[k];
+                own[k] += e.gnss_bias[k];
             }
         }
         self.faults.corrupt(i, &mut own);
@@ -483,13 +495,8 @@ impl<'a> StepContext<'a> {
             proxform_core::state::difference(next, &sc.vehicle.propagate(me, &commanded, dt))
         } else {
             // The vehicle moves through the air; the wind carries it (crate::disturbance).
-            let w_now = aux.wind_now;
-            let mut w_next = sc.wind.common(self.t + dt);
-            if let Some(turb) = &sc.wind.turbulence {
-                let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Wind), self.k);
-                let speed = (me[3] * me[3] + me[4] * me[4] + me[5] * me[5]).sqrt();
-                w_next += course_to_world(me, &aux.turbulence.step(turb, speed, dt, &mut rng));
-            }
+            let e = env.copied().unwrap_or_default();
+            let (w_now, w_next) = (e.wind_now, e.wind_next);
             let mut air = *me;
             for k in 0..3 {
                 air[3 + k] -= w_now[k];
@@ -502,7 +509,6 @@ impl<'a> StepContext<'a> {
                 x
             };
             *next = carry(sc.vehicle.propagate(&air, &applied, dt));
-            aux.wind_now = w_next;
             proxform_core::state::difference(next, &carry(sc.vehicle.propagate(&air, &commanded, dt)))
         };
         aux.model_error = std::array::from_fn(|k| model_error[k] as f32);

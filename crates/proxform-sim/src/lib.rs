@@ -9,6 +9,7 @@ pub mod autodeps;
 pub mod batch;
 pub mod disturbance;
 pub mod engine;
+pub mod environment;
 pub mod faults;
 pub mod grid;
 pub mod load;

@@ -39,14 +39,6 @@ pub struct UavStep {
     pub radio_msgs: u16,
     /// Size of its input: the root sum of squares of each input over its per-step limit.
     pub effort: f32,
-    /// Its radio channel is in the bad state of its Gilbert-Elliott model.
-    pub channel_bad: bool,
-    /// The wind where it is now (m/s, world frame).
-    pub wind_now: nalgebra::Vector3<f64>,
-    /// Its turbulence filters.
-    pub turbulence: crate::disturbance::TurbulenceState,
-    /// The current bias of its own position fix (m).
-    pub gnss_bias: [f64; 3],
 }
 
 impl Default for UavStep {
@@ -58,10 +50,6 @@ impl Default for UavStep {
             nearest_id: u32::MAX,
             radio_msgs: 0,
             effort: 0.0,
-            channel_bad: false,
-            wind_now: nalgebra::Vector3::zeros(),
-            turbulence: crate::disturbance::TurbulenceState::default(),
-            gnss_bias: [0.0; 3],
         }
     }
 }
