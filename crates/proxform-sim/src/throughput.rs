@@ -46,7 +46,12 @@ impl Observer for Metrics<'_> {
 /// Runs `steps` steps of `scenario` (seed 1, run 0) with `search`, in parallel within the
 /// run when `parallel`, on the current rayon pool. Takes the scenario by value so that a
 /// large swarm is not held twice.
-pub fn measure(scenario: Scenario, steps: u64, search: NeighbourSearch, parallel: bool) -> Result<Throughput, ScenarioError> {
+pub fn measure(
+    scenario: Scenario,
+    steps: u64,
+    search: NeighbourSearch,
+    parallel: bool,
+) -> Result<Throughput, ScenarioError> {
     let mut sc = scenario;
     sc.neighbour_search = search;
     sc.duration_s = sc.duration_s.max((steps as f64 + 1.0) * sc.dt_s);
