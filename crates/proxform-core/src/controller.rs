@@ -46,10 +46,13 @@ pub struct ControllerParams {
     /// A neighbour track not refreshed for this long restarts (s, > 0). Default 1 s.
     pub track_timeout_s: f64,
     /// A neighbour missing from the observations is predicted from its track for at most this
-    /// long (s, ≥ 0; 0 disables coasting). Longer covers longer gaps, but a UAV that has
-    /// really gone is followed as a ghost for as long (measured on the paper experiment:
-    /// 0.1 s, one period, is best both with 30 % dropout and with a UAV removed). Default 0.1 s.
+    /// long (s, ≥ 0; 0 disables coasting). Default 0.5 s.
     pub coast_s: f64,
+    /// A coasting neighbour weighs `exp(−age / coast_decay_s)` in the means (a measured one
+    /// weighs 1), so that the centre does not jump when a neighbour drops out or comes back,
+    /// and a UAV that has really gone fades out instead of being followed as a ghost (s, > 0).
+    /// Default 0.1 s.
+    pub coast_decay_s: f64,
     /// Gain in (0, 1] of the UAV's filter of its own state: the estimate is the model's
     /// prediction from the last estimate and the input the UAV applied, corrected toward the
     /// measurement by this fraction. 1 uses the raw measurement (METHOD). Default 1.
@@ -110,7 +113,8 @@ impl Default for ControllerParams {
             input_weight: 0.01,
             predictor: PredictorKind::default(),
             track_timeout_s: 1.0,
-            coast_s: 0.1,
+            coast_s: 0.5,
+            coast_decay_s: 0.1,
             own_filter_gain: 1.0,
         }
     }
@@ -286,7 +290,15 @@ impl ProximityController {
         // The own-state filter: the model's prediction corrected toward the measurement.
         let gain = self.setup.params.own_filter_gain;
         let own = match self.own_prediction {
-            Some(ref pred) if gain < 1.0 => **pred + gain * state::difference(own_measured, pred),
+            Some(ref pred) if gain < 1.0 => {
+                // Position and velocity are filtered; attitude, measured far more finely than
+                // its tolerances, is taken as measured (filtering it would only add lag).
+                let mut own = **pred + gain * state::difference(own_measured, pred);
+                for k in state::ALPHA..=state::GAMMA {
+                    own[k] = own_measured[k];
+                }
+                own
+            }
             _ => *own_measured,
         };
         let decision = self.decide(now_s, &own, observations);
@@ -351,9 +363,10 @@ impl ProximityController {
             if d2 > r2 {
                 continue;
             }
+            // A coasting neighbour only fills an area that has no fresh observation.
             let a = &mut nearest[setup.classifier.area(sin_yaw, cos_yaw, dx, dy)];
             let d2 = d2 as f32;
-            if a.0 == EMPTY || d2 < a.1 {
+            if a.0 == EMPTY || (a.0 & TRACK != 0 && d2 < a.1) {
                 *a = (TRACK | s as u32, d2);
             }
         }
@@ -364,6 +377,7 @@ impl ProximityController {
         // outside the areas' nearest.
         let mut sum_bar = State9::zeros();
         let mut n_bar = 0u16;
+        let mut w_bar = 0.0;
         let mut sum_dep = State9::zeros();
         let mut c_sum = 0.0;
         let mut main_refs = 0u16;
@@ -372,22 +386,23 @@ impl ProximityController {
             if k == EMPTY {
                 continue;
             }
-            let (id, x_j) = if k & TRACK != 0 {
+            let (id, x_j, f) = if k & TRACK != 0 {
                 let s = (k & !TRACK) as usize;
                 match tracks.coasting(s, now_s, params.coast_s) {
-                    Some(id) => (id, tracks.state_at(s, now_s + dt)),
+                    Some(id) => (id, tracks.state_at(s, now_s + dt), freshness(params, tracks.age(s, now_s))),
                     None => continue,
                 }
             } else {
                 let o = &observations[k as usize];
-                (o.id, tracks.predict(o, now_s, dt)) // F·X_j(t) with the neighbour's track
+                (o.id, tracks.predict(o, now_s, dt), 1.0) // F·X_j(t) with the neighbour's track
             };
             let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold) else { continue };
-            sum_bar += delta;
+            sum_bar += f * delta;
+            w_bar += f;
             n_bar += 1;
             if let Some(c) = dependency.degree(id) {
-                sum_dep += c * delta;
-                c_sum += c;
+                sum_dep += (c * f) * delta;
+                c_sum += c * f;
                 main_refs += 1;
             }
         }
@@ -404,7 +419,7 @@ impl ProximityController {
                     {
                         continue;
                     }
-                    tracks.predict(o, now_s, dt)
+                    (tracks.predict(o, now_s, dt), 1.0)
                 }
                 None => {
                     // Not observed now: coast on its track, unless its area already did.
@@ -415,12 +430,13 @@ impl ProximityController {
                     if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
                         continue;
                     }
-                    tracks.state_at(s, now_s + dt)
+                    (tracks.state_at(s, now_s + dt), freshness(params, tracks.age(s, now_s)))
                 }
             };
+            let (x_j, f) = x_j;
             let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold) else { continue };
-            sum_dep += c * delta;
-            c_sum += c;
+            sum_dep += (c * f) * delta;
+            c_sum += c * f;
             main_refs += 1;
         }
         if n_bar == 0 && main_refs == 0 {
@@ -429,7 +445,7 @@ impl ProximityController {
 
         // §6 step 4: O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i, as a deviation from the course.
         let lambda = params.lambda;
-        let x_bar = if n_bar > 0 { sum_bar / f64::from(n_bar) } else { sum_dep / c_sum };
+        let x_bar = if n_bar > 0 { sum_bar / w_bar } else { sum_dep / c_sum };
         let mut centre = if main_refs > 0 { (1.0 - lambda) * x_bar + lambda * (sum_dep / c_sum) } else { x_bar };
         // Velocity part of W (paper §2.3): close the remaining position gap over τ.
         if let Some(tau) = params.closing_time_s {
@@ -459,6 +475,13 @@ impl ProximityController {
         };
         Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
     }
+}
+
+/// Weight of a neighbour known only from its track, `age` seconds after its last
+/// measurement: `exp(−age / coast_decay_s)` (measured neighbours weigh 1).
+#[inline]
+fn freshness(params: &ControllerParams, age: f64) -> f64 {
+    (-age / params.coast_decay_s).exp()
 }
 
 /// `X̂_ij − X_hold` for neighbour `id` predicted at `x_j` (eq. 10, attitudes wrapped); None

@@ -156,6 +156,11 @@ impl NeighbourTracks {
         (id != FREE && age > 1e-9 && age <= max_s.min(self.timeout_s) + 1e-9).then_some(UavId(id))
     }
 
+    /// Seconds since track slot `s` was last measured, at `now`.
+    pub fn age(&self, s: usize, now: f64) -> f64 {
+        now - self.tracks[s].t
+    }
+
     /// The state of track slot `s` extrapolated to time `t`.
     pub fn state_at(&self, s: usize, t: f64) -> State9 {
         extrapolate(&self.tracks[s], t - self.tracks[s].t)

@@ -594,6 +594,9 @@ fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, Sp
     if let Some(v) = c.coast_s {
         p.coast_s = non_negative("controller.coast_s", v)?;
     }
+    if let Some(v) = c.coast_decay_s {
+        p.coast_decay_s = positive("controller.coast_decay_s", v)?;
+    }
     if let Some(v) = c.own_filter_gain {
         let v = positive("controller.own_filter_gain", v)?;
         if v > 1.0 {

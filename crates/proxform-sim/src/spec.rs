@@ -179,8 +179,10 @@ pub struct ControllerSpec {
     pub predictor_beta: Option<f64>,
     /// Track timeout (s). Default 1.
     pub track_timeout_s: Option<f64>,
-    /// Longest a missing neighbour coasts on its track (s, ≥ 0). Default 0.1.
+    /// Longest a missing neighbour coasts on its track (s, ≥ 0). Default 0.5.
     pub coast_s: Option<f64>,
+    /// Fading time of a coasting neighbour's weight (s, > 0). Default 0.1.
+    pub coast_decay_s: Option<f64>,
     /// Gain of the own-state filter, in (0, 1]; 1 uses raw measurements. Default 1.
     pub own_filter_gain: Option<f64>,
     /// Permissible errors Δ.

@@ -87,3 +87,25 @@ fn a_correlated_position_bias_shows_in_the_formation_errors() {
     // White noise averages out over a step; a bias that lasts 30 s does not.
     assert!(b.rms_error.z_m > 2.0 * a.rms_error.z_m, "{:?} vs {:?}", b.rms_error, a.rms_error);
 }
+
+#[test]
+fn coasting_neighbours_fade_so_a_removed_uav_is_not_followed_as_a_ghost() {
+    let mut s = Scenario::paper();
+    s.faults = vec![Fault::Remove { uav: UavId(1), at_s: 40.0 }];
+    let faded = run_batch(&s, 12, 100, false, &|| {}).expect("valid").summary;
+    s.controller.coast_decay_s = 1000.0; // no fading: the ghost weighs fully for coast_s
+    let ghost = run_batch(&s, 12, 100, false, &|| {}).expect("valid").summary;
+    assert!(faded.pass_fraction >= 0.99, "{}", faded.pass_fraction);
+    assert!(ghost.pass_fraction < faded.pass_fraction - 0.05, "{} vs {}", ghost.pass_fraction, faded.pass_fraction);
+}
+
+#[test]
+fn under_30_percent_dropout_coasting_keeps_most_runs_within_the_tolerances() {
+    let mut s = Scenario::paper();
+    s.dropout = 0.3;
+    let coast = run_batch(&s, 13, 100, false, &|| {}).expect("valid").summary;
+    s.controller.coast_s = 0.0;
+    let none = run_batch(&s, 13, 100, false, &|| {}).expect("valid").summary;
+    assert!(coast.pass_fraction >= 0.6, "{}", coast.pass_fraction);
+    assert!(none.pass_fraction < coast.pass_fraction - 0.2, "{} vs {}", none.pass_fraction, coast.pass_fraction);
+}
