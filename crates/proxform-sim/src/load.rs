@@ -547,10 +547,19 @@ fn shape_of(s: &spec::ShapeSpec) -> Result<Shape, SpecError> {
         "diamond" => Shape::Diamond { uavs: uavs()?, spacing: spacing()? },
         "grid" => Shape::Grid { uavs: uavs()?, spacing: spacing()? },
         "circle" => Shape::Circle { uavs: uavs()?, radius: spacing()? },
+        "lattice" => {
+            let n = uavs()?;
+            let levels = match s.levels {
+                Some(0) => return Err(err("formation.shape.levels", "must be ≥ 1")),
+                Some(l) => l as usize,
+                None => crate::swarm::default_levels(n),
+            };
+            Shape::Lattice { uavs: n, spacing: spacing()?, levels, level_step: level()? }
+        }
         other => {
             return Err(err(
                 "formation.shape.kind",
-                format!("unknown shape \"{other}\" (expected triangle, v, echelon, line_abreast, column, diamond, grid or circle)"),
+                format!("unknown shape \"{other}\" (expected triangle, v, echelon, line_abreast, column, diamond, grid, lattice or circle)"),
             ))
         }
     })

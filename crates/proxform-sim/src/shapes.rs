@@ -77,6 +77,18 @@ pub enum Shape {
         /// Spacing (m).
         spacing: f64,
     },
+    /// A multi-level lattice behind the leader (the large-swarm layout, see
+    /// [`crate::swarm::lattice_with`]).
+    Lattice {
+        /// UAVs.
+        uavs: usize,
+        /// Spacing of rows and columns (m).
+        spacing: f64,
+        /// Levels.
+        levels: usize,
+        /// Height step between levels (m).
+        level_step: f64,
+    },
     /// Evenly on a circle whose front point is the leader.
     Circle {
         /// UAVs.
@@ -152,6 +164,9 @@ impl Shape {
                     let (r, c) = (k / cols, k % cols);
                     push(-((r + 1) as f64) * spacing, ((cols - 1) as f64 / 2.0 - c as f64) * spacing, 0.0);
                 }
+            }
+            Shape::Lattice { uavs, spacing, levels, level_step } => {
+                out = crate::swarm::lattice_with(uavs, levels, spacing, level_step);
             }
             Shape::Circle { uavs, radius } => {
                 for k in 0..uavs {

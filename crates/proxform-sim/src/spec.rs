@@ -83,7 +83,8 @@ pub struct SlotSpec {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeSpec {
-    /// "triangle", "v", "echelon", "line_abreast", "column", "diamond", "grid", "circle".
+    /// "triangle", "v", "echelon", "line_abreast", "column", "diamond", "grid", "lattice",
+    /// "circle".
     pub kind: Option<String>,
     /// Number of UAVs (all shapes but triangle, which uses `rows`).
     pub uavs: Option<u32>,
@@ -97,6 +98,8 @@ pub struct ShapeSpec {
     pub level_step_m: Option<f64>,
     /// Echelon side: "left" or "right". Default "right".
     pub side: Option<String>,
+    /// Lattice levels (≥ 1). Default: 1 below 50 UAVs, 2 below 400, then 4.
+    pub levels: Option<u32>,
 }
 
 /// `[formation.dependencies]`.

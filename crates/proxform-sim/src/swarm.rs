@@ -22,15 +22,27 @@ pub const LEVEL_M: f64 = 20.0;
 /// errors grow along the reference chains of a deep lattice (see README, Large swarms).
 pub const NAVIGATOR_DEGREE: f64 = 0.3;
 
-/// The lattice slots of an `n`-UAV swarm; slot 0 is the navigator.
-pub fn lattice(n: usize) -> Vec<FormationSlot> {
-    let levels = if n >= 400 {
+/// Levels of the built-in swarm's lattice: 1 below 50 UAVs, 2 below 400, then 4.
+pub fn default_levels(n: usize) -> usize {
+    if n >= 400 {
         4
     } else if n >= 50 {
         2
     } else {
         1
-    };
+    }
+}
+
+/// The built-in swarm's lattice slots for `n` UAVs; slot 0 is the navigator.
+pub fn lattice(n: usize) -> Vec<FormationSlot> {
+    lattice_with(n, default_levels(n), SPACING_M, -LEVEL_M)
+}
+
+/// `n` UAVs in a multi-level lattice: the navigator ahead of the front row's centre, then
+/// rows of columns `spacing` apart behind it on `levels` levels `level_step` apart (negative:
+/// lower), filled row by row with the levels innermost.
+pub fn lattice_with(n: usize, levels: usize, spacing: f64, level_step: f64) -> Vec<FormationSlot> {
+    let levels = levels.max(1);
     let followers = n.saturating_sub(1);
     let per_level = followers.div_ceil(levels);
     let cols = ((per_level as f64).sqrt().ceil() as usize).max(1);
@@ -40,8 +52,8 @@ pub fn lattice(n: usize) -> Vec<FormationSlot> {
         let level = idx % levels;
         let cell = idx / levels;
         let (row, col) = (cell / cols, cell % cols);
-        let left = (col as f64 - (cols as f64 - 1.0) / 2.0) * SPACING_M;
-        slots.push(FormationSlot::at(-((row + 1) as f64) * SPACING_M, left, -(level as f64) * LEVEL_M));
+        let left = (col as f64 - (cols as f64 - 1.0) / 2.0) * spacing;
+        slots.push(FormationSlot::at(-((row + 1) as f64) * spacing, left, level as f64 * level_step));
     }
     slots
 }

@@ -66,3 +66,17 @@ fn without_the_navigator_beacon_errors_grow_along_the_chains() {
         with.max_abs_error
     );
 }
+
+#[test]
+fn the_swarm_file_builds_the_same_lattice_at_any_size() {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/swarm.toml")).expect("file");
+    let small = text.replace("uavs = 10000", "uavs = 1500").replace("duration_s = 100.0", "duration_s = 3.0");
+    let s = proxform_sim::load::parse(&small, "swarm.toml").expect("valid");
+    assert_eq!(s.len(), 1500);
+    assert_eq!(s.formation.slots, swarm::lattice(1500), "the file's lattice is the built-in one");
+    assert!(s.dependencies.iter().skip(1).all(|d| d.degree(proxform_core::UavId(0)).is_some()));
+    let r = run(&s, 2, true);
+    assert!(r.min_separation_m >= s.safety_distance_m);
+    assert!(r.max_abs_error.iter().zip(s.allowable.as_array()).all(|(e, a)| *e < a), "{:?}", r.max_abs_error);
+}
