@@ -110,10 +110,15 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
 
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
-    let bar = if args.quiet || args.runs < 2 { ProgressBar::hidden() } else { ProgressBar::new(args.runs) };
+    // One bar tick per run, or per step for a single run (a long flight of a large swarm).
+    let (len, unit) = if args.runs > 1 { (args.runs, "runs") } else { (scenario.steps(), "steps") };
+    let show = !args.quiet && (args.runs > 1 || scenario.len() >= 1000);
+    let bar = if show { ProgressBar::new(len) } else { ProgressBar::hidden() };
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs ({per_sec}, eta {eta})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit} ({{per_sec}}, eta {{eta}})"
+        ))
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let record = !(args.no_figures && args.no_trajectories);
     let started = Instant::now();

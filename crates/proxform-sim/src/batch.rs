@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use crate::engine::Simulation;
 use crate::metrics::{RunMetrics, RunSummary};
+use crate::observer::Observer;
 use crate::scenario::{Scenario, ScenarioError};
 use crate::trajectory::Trajectory;
 
@@ -136,21 +137,44 @@ pub fn run_one(
     run: u64,
     record: bool,
 ) -> Result<(RunSummary, Option<Trajectory>), ScenarioError> {
+    run_one_ticking(scenario, seed, run, record, &|| {})
+}
+
+/// Observer that calls a function after every step (a progress bar's tick).
+struct Ticker<'a>(&'a (dyn Fn() + Sync));
+
+impl Observer for Ticker<'_> {
+    fn on_step(&mut self, _: &Scenario, frame: &crate::observer::StepFrame<'_>) {
+        if frame.k > 0 {
+            (self.0)();
+        }
+    }
+}
+
+/// [`run_one`], calling `tick` after every step.
+pub fn run_one_ticking(
+    scenario: &Scenario,
+    seed: u64,
+    run: u64,
+    record: bool,
+    tick: &(dyn Fn() + Sync),
+) -> Result<(RunSummary, Option<Trajectory>), ScenarioError> {
     let sim = Simulation::new(scenario, seed, run)?;
     let metrics = RunMetrics::new(scenario);
     if record {
-        let mut obs = (metrics, Trajectory::default());
+        let mut obs = ((metrics, Trajectory::default()), Ticker(tick));
         sim.run(&mut obs);
-        Ok((obs.0.finish(run, scenario.duration_s), Some(obs.1)))
+        Ok((obs.0 .0.finish(run, scenario.duration_s), Some(obs.0 .1)))
     } else {
-        let mut m = metrics;
-        sim.run(&mut m);
-        Ok((m.finish(run, scenario.duration_s), None))
+        let mut obs = (metrics, Ticker(tick));
+        sim.run(&mut obs);
+        Ok((obs.0.finish(run, scenario.duration_s), None))
     }
 }
 
 /// Runs `runs` flights of `scenario` with seed `seed` on the current rayon pool, calling
-/// `progress` after each finished run. The first run's trajectory is kept when `record_first`.
+/// `progress` after each finished run, or after each step when there is a single run (a long
+/// flight of a large swarm). The first run's trajectory is kept when `record_first`.
 pub fn run_batch(
     scenario: &Scenario,
     seed: u64,
@@ -159,14 +183,18 @@ pub fn run_batch(
     progress: &(dyn Fn() + Sync),
 ) -> Result<BatchResult, ScenarioError> {
     scenario.validate()?;
-    let results: Vec<(RunSummary, Option<Trajectory>)> = (0..runs)
-        .into_par_iter()
-        .map(|r| {
-            let out = run_one(scenario, seed, r, record_first && r == 0);
-            progress();
-            out
-        })
-        .collect::<Result<_, _>>()?;
+    let results: Vec<(RunSummary, Option<Trajectory>)> = if runs == 1 {
+        vec![run_one_ticking(scenario, seed, 0, record_first, progress)?]
+    } else {
+        (0..runs)
+            .into_par_iter()
+            .map(|r| {
+                let out = run_one(scenario, seed, r, record_first && r == 0);
+                progress();
+                out
+            })
+            .collect::<Result<_, _>>()?
+    };
     let mut first_trajectory = None;
     let mut summaries = Vec::with_capacity(results.len());
     for (s, t) in results {
