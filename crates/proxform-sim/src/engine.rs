@@ -20,6 +20,30 @@ use crate::rng::{stream_key, Source, StepRng};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::sensing::{noisy, Link, NeighbourSearch, ProximitySensor, SensorScratch};
 
+/// The read-only view of one step, built from the simulation's fields (a macro rather than a
+/// method, so that the controllers can be borrowed mutably beside it).
+macro_rules! step_context {
+    ($sim:ident, $k:expr, $t:expr, $sent:expr, $env:expr, $warm:expr) => {
+        StepContext {
+            scenario: $sim.scenario,
+            seed: $sim.seed,
+            run: $sim.run,
+            k: $k,
+            t: $t,
+            start: $sim.start,
+            current: &$sim.current,
+            grid: &$sim.grid,
+            sensor: &$sim.sensor,
+            search: $sim.search,
+            active: &$sim.active,
+            faults: &$sim.faults,
+            sent: $sent,
+            env: $env,
+            warm: $warm,
+        }
+    };
+}
+
 /// Swarms at least this large are stepped in parallel within the run.
 pub const PARALLEL_MIN_UAVS: usize = 1024;
 
@@ -123,23 +147,8 @@ impl<'s> Simulation<'s> {
                 .collect();
             let range = sc.controller.areas.sensing_range_m;
             self.rebuild_grid(range);
-            let ctx = StepContext {
-                scenario: self.scenario,
-                seed: self.seed,
-                run: self.run,
-                k: WARMUP_STEP_BASE + w,
-                t,
-                start: self.start,
-                current: &self.current,
-                grid: &self.grid,
-                sensor: &self.sensor,
-                search: self.search,
-                active: &self.active,
-                faults: &self.faults,
-                sent: Some((&self.current[..], WARMUP_STEP_BASE + w)),
-                env: &[],
-                warm: true,
-            };
+            let k = WARMUP_STEP_BASE + w;
+            let ctx = step_context!(self, k, t, Some((&self.current[..], k)), &[], true);
             let m = sc.controller.areas.areas;
             if self.parallel {
                 self.controllers
@@ -275,23 +284,7 @@ impl<'s> Simulation<'s> {
         } else {
             None
         };
-        let ctx = StepContext {
-            scenario: self.scenario,
-            seed: self.seed,
-            run: self.run,
-            k,
-            t,
-            start: self.start,
-            current: &self.current,
-            grid: &self.grid,
-            sensor: &self.sensor,
-            search: self.search,
-            active: &self.active,
-            faults: &self.faults,
-            sent,
-            env: &self.env,
-            warm: false,
-        };
+        let ctx = step_context!(self, k, t, sent, &self.env, false);
         let m = sc.controller.areas.areas;
         if self.parallel {
             self.controllers

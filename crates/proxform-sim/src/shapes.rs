@@ -197,19 +197,13 @@ mod tests {
     #[test]
     fn the_triangle_is_the_papers_layout() {
         let s = Shape::Triangle { rows: 3, spacing: 100.0, level_step: -10.0 }.slots();
-        let want = [
-            (0.0, 0.0, 0.0),
-            (-86.6, 50.0, -10.0),
-            (-86.6, -50.0, -10.0),
-            (-173.2, 100.0, -20.0),
-            (-173.2, 0.0, -20.0),
-            (-173.2, -100.0, -20.0),
-        ];
-        assert_eq!(s.len(), 6);
-        for (slot, w) in s.iter().zip(want) {
-            assert_relative_eq!(slot.offset_m.x, w.0, epsilon = 0.03);
-            assert_relative_eq!(slot.offset_m.y, w.1, epsilon = 1e-9);
-            assert_relative_eq!(slot.offset_m.z, w.2, epsilon = 1e-9);
+        let paper = crate::Scenario::paper();
+        assert_eq!(s.len(), paper.formation.len());
+        for (slot, want) in s.iter().zip(&paper.formation.slots) {
+            // The paper rounds 100·cos 30° to 86.6.
+            assert_relative_eq!(slot.offset_m.x, want.offset_m.x, epsilon = 0.03);
+            assert_relative_eq!(slot.offset_m.y, want.offset_m.y, epsilon = 1e-9);
+            assert_relative_eq!(slot.offset_m.z, want.offset_m.z, epsilon = 1e-9);
         }
     }
 
