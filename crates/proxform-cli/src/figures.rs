@@ -17,13 +17,19 @@ use proxform_sim::{Scenario, Trajectory};
 
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 const SIZE: (u32, u32) = (1000, 760);
-const PALETTE: [RGBColor; 6] = [
+const PALETTE: [RGBColor; 12] = [
     RGBColor(0, 0, 0),
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+    RGBColor(174, 199, 232),
 ];
 
 /// One of the six error axes: its state column, label, unit and scale to report units.
@@ -283,7 +289,57 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
     attitude_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
     attitude_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
     written.extend([png, svg]);
+    let png = dir.join("fig10c_plan.png");
+    let svg = dir.join("fig10c_plan.svg");
+    plan_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
+    plan_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
+    written.extend([png, svg]);
     Ok(written)
+}
+
+/// The tracks seen from above (x right, y up, equal scales), with each UAV's position marked
+/// every 10 s so the formation's shape can be read along the way.
+fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    let coord = |i: usize| range((0..s.n).flat_map(|u| s.rows[u].iter().map(move |r| r.0[i])));
+    let (x, y) = (coord(0), coord(1));
+    // Equal scales: widen the narrower range around its centre.
+    let aspect = f64::from(SIZE.0 - 120) / f64::from(SIZE.1 - 100);
+    let (wx, wy) = (x.1 - x.0, y.1 - y.0);
+    let (x, y) = if wx / wy > aspect {
+        let c = 0.5 * (y.0 + y.1);
+        (x, (c - 0.5 * wx / aspect, c + 0.5 * wx / aspect))
+    } else {
+        let c = 0.5 * (x.0 + x.1);
+        ((c - 0.5 * wy * aspect, c + 0.5 * wy * aspect), y)
+    };
+    let mut chart = ChartBuilder::on(root)
+        .caption("Tracks seen from above (m); dots every 10 s", ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(plot_err)?;
+    chart.configure_mesh().x_desc("x (m)").y_desc("y (m)").draw().map_err(plot_err)?;
+    let every = s.t.windows(2).next().map_or(1, |w| ((10.0 / (w[1] - w[0]).max(1e-9)).round() as usize).max(1));
+    for u in 0..s.n {
+        let color = PALETTE[u % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = s.rows[u].iter().map(|r| (r.0[0], r.0[1])).collect();
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1)))
+            .map_err(plot_err)?
+            .label(format!("UAV{}", u + 1))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        chart.draw_series(pts.iter().step_by(every).map(|&p| Circle::new(p, 3, color.filled()))).map_err(plot_err)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)
 }
 
 /// Cost per agent-update against swarm size, one curve per (search, threads) configuration.

@@ -34,9 +34,17 @@ fn run_writes_the_table_the_summary_and_the_figures() {
         assert!(summary["worst_abs_error"][key].is_number(), "worst {key}");
         assert!(summary["p99_abs_error"][key].is_number(), "p99 {key}");
     }
-    for fig in
-        ["fig4_x", "fig5_y", "fig6_z", "fig7_alpha", "fig8_beta", "fig9_gamma", "fig10a_tracks", "fig10b_attitude"]
-    {
+    for fig in [
+        "fig4_x",
+        "fig5_y",
+        "fig6_z",
+        "fig7_alpha",
+        "fig8_beta",
+        "fig9_gamma",
+        "fig10a_tracks",
+        "fig10b_attitude",
+        "fig10c_plan",
+    ] {
         for ext in ["png", "svg"] {
             let p = out.join(format!("{fig}.{ext}"));
             assert!(std::fs::metadata(&p).map(|m| m.len() > 1000).unwrap_or(false), "{}", p.display());
