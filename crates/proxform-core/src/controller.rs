@@ -498,6 +498,7 @@ fn deviation(
     // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
     let mut delta = x_j - x_hold;
     formation.add_w(slot_i, slot_j, x_j, &mut delta);
+    formation.add_turn_velocity(slot_i, slot_j, x_j, &mut delta);
     for k in state::ALPHA..=state::GAMMA {
         delta[k] = crate::angle::wrap_pi(delta[k]);
     }

@@ -119,6 +119,27 @@ impl Formation {
         x[8] += da.z;
     }
 
+    /// The velocity part of `W_ij` in a formation frame that turns: the slot of i moves
+    /// relative to j's at `ω × R_f(d_i − d_j)` (rigid rotation about the vertical), with ω the
+    /// reference's coordinated-turn rate `−g·tan γ / V` (its bank is measured far more finely
+    /// than its yaw rate could be estimated). Zero for [`FormationFrame::World`].
+    #[inline]
+    pub fn add_turn_velocity(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
+        if self.frame == FormationFrame::World {
+            return;
+        }
+        let v = (reference[state::VX].powi(2) + reference[state::VY].powi(2)).sqrt();
+        if v < 1.0 {
+            return;
+        }
+        let omega = -9.80665 * reference[state::GAMMA].tan() / v;
+        let (c, s) = self.frame.course_cos_sin(reference);
+        let d = i.offset_m - j.offset_m;
+        let (rx, ry) = (c * d.x - s * d.y, s * d.x + c * d.y);
+        x[state::VX] += -omega * ry;
+        x[state::VY] += omega * rx;
+    }
+
     /// `W_ij` (eq. 7) for slots i and j, with `R_f` from the reference state `reference`
     /// (the observed j for [`FormationFrame::Course`]).
     #[inline]
@@ -161,6 +182,27 @@ mod tests {
         assert_relative_eq!(w[0], -50.0, epsilon = 1e-9);
         assert_relative_eq!(w[1], -86.6, epsilon = 1e-9);
         assert_relative_eq!(w[2], -10.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn a_turning_frame_moves_slots_at_omega_cross_r() {
+        let lead = FormationSlot::at(0.0, 0.0, 0.0);
+        let wing = FormationSlot::at(0.0, -100.0, 0.0); // 100 m to the right
+        let f = Formation::new(vec![lead, wing], FormationFrame::Course).expect("finite");
+        let mut reference = State9::zeros();
+        reference[state::VX] = 50.0;
+        reference[state::GAMMA] = deg(-30.0); // banked left: a left (counter-clockwise) turn
+        let omega = 9.80665 * deg(30.0).tan() / 50.0;
+        let mut x = State9::zeros();
+        f.add_turn_velocity(&wing, &lead, &reference, &mut x);
+        // The outer (right) wingman must fly faster by ω·100 m.
+        assert_relative_eq!(x[state::VX], omega * 100.0, epsilon = 1e-9);
+        assert_relative_eq!(x[state::VY], 0.0, epsilon = 1e-9);
+        // A world-fixed formation does not turn.
+        let fixed = Formation::new(vec![lead, wing], FormationFrame::World).expect("finite");
+        let mut y = State9::zeros();
+        fixed.add_turn_velocity(&wing, &lead, &reference, &mut y);
+        assert_eq!(y, State9::zeros());
     }
 
     #[test]
