@@ -53,6 +53,10 @@ pub struct ControllerParams {
     /// and a UAV that has really gone fades out instead of being followed as a ghost (s, > 0).
     /// Default 0.1 s.
     pub coast_decay_s: f64,
+    /// In a course-following formation frame, add the slots' velocity in the turn (ω × r),
+    /// with ω the reference's coordinated-turn rate from its bank. Only meaningful for vehicles
+    /// that turn by banking (the fixed wing); scenario files switch it on for them. Default off.
+    pub bank_turn_feedforward: bool,
     /// Gain in (0, 1] of the UAV's filter of its own state: the estimate is the model's
     /// prediction from the last estimate and the input the UAV applied, corrected toward the
     /// measurement by this fraction. 1 uses the raw measurement (METHOD). Default 1.
@@ -115,6 +119,7 @@ impl Default for ControllerParams {
             track_timeout_s: 1.0,
             coast_s: 0.5,
             coast_decay_s: 0.1,
+            bank_turn_feedforward: false,
             own_filter_gain: 1.0,
         }
     }
@@ -396,7 +401,9 @@ impl ProximityController {
                 let o = &observations[k as usize];
                 (o.id, tracks.predict(o, now_s, dt), 1.0) // F·X_j(t) with the neighbour's track
             };
-            let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold) else { continue };
+            let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold, params.bank_turn_feedforward) else {
+                continue;
+            };
             sum_bar += f * delta;
             w_bar += f;
             n_bar += 1;
@@ -434,7 +441,9 @@ impl ProximityController {
                 }
             };
             let (x_j, f) = x_j;
-            let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold) else { continue };
+            let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold, params.bank_turn_feedforward) else {
+                continue;
+            };
             sum_dep += (c * f) * delta;
             c_sum += c * f;
             main_refs += 1;
@@ -493,12 +502,15 @@ fn deviation(
     x_j: &State9,
     slot_i: &FormationSlot,
     x_hold: &State9,
+    turn_feedforward: bool,
 ) -> Option<State9> {
     let slot_j = formation.slot(id)?;
     // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
     let mut delta = x_j - x_hold;
     formation.add_w(slot_i, slot_j, x_j, &mut delta);
-    formation.add_turn_velocity(slot_i, slot_j, x_j, &mut delta);
+    if turn_feedforward {
+        formation.add_turn_velocity(slot_i, slot_j, x_j, &mut delta);
+    }
     for k in state::ALPHA..=state::GAMMA {
         delta[k] = crate::angle::wrap_pi(delta[k]);
     }

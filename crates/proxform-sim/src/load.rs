@@ -301,6 +301,11 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         s.controller = controller(spec.controller.clone().unwrap_or_default(), s.dt_s)?;
         s.vehicle = vehicle(spec.vehicle.clone().unwrap_or_default())?;
+        s.controller.bank_turn_feedforward = spec
+            .controller
+            .as_ref()
+            .and_then(|c| c.bank_turn_feedforward)
+            .unwrap_or(matches!(s.vehicle, VehicleModel::FixedWing(_)));
 
         // Formation and dependency tables.
         let fspec = required("formation", spec.formation.clone())?;

@@ -186,6 +186,9 @@ pub struct ControllerSpec {
     pub coast_s: Option<f64>,
     /// Fading time of a coasting neighbour's weight (s, > 0). Default 0.1.
     pub coast_decay_s: Option<f64>,
+    /// Course frame: add the slots' turn velocity from the reference's bank. Default: on for
+    /// the fixed wing, off for the kinematic vehicle.
+    pub bank_turn_feedforward: Option<bool>,
     /// Gain of the own-state filter, in (0, 1]; 1 uses raw measurements. Default 1.
     pub own_filter_gain: Option<f64>,
     /// Permissible errors Δ.
