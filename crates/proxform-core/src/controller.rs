@@ -48,6 +48,9 @@ pub struct ControllerParams {
     /// A neighbour missing from the observations is predicted from its track for at most this
     /// long (s, ≥ 0; 0 disables coasting). Default 0.5 s.
     pub coast_s: f64,
+    /// A coasting neighbour's acceleration is extrapolated for at most this long after its last
+    /// measurement; beyond, it goes on at the velocity reached (s, ≥ 0). Default 0.2 s.
+    pub coast_accel_s: f64,
     /// A coasting neighbour weighs `exp(−age / coast_decay_s)` in the means (a measured one
     /// weighs 1), so that the centre does not jump when a neighbour drops out or comes back,
     /// and a UAV that has really gone fades out instead of being followed as a ghost (s, > 0).
@@ -118,6 +121,7 @@ impl Default for ControllerParams {
             predictor: PredictorKind::default(),
             track_timeout_s: 1.0,
             coast_s: 0.5,
+            coast_accel_s: 0.2,
             coast_decay_s: 0.1,
             bank_turn_feedforward: false,
             own_filter_gain: 1.0,
@@ -246,7 +250,7 @@ impl ProximityController {
         }
         let p = &setup.params;
         let m = p.areas.areas;
-        let tracks = NeighbourTracks::new(p.predictor, m + dependency.refs().len(), p.track_timeout_s);
+        let tracks = NeighbourTracks::new(p.predictor, m + dependency.refs().len(), p.track_timeout_s, p.coast_accel_s);
         Ok(Self {
             id,
             setup,

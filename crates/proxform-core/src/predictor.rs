@@ -83,6 +83,9 @@ impl Track {
 pub struct NeighbourTracks {
     kind: PredictorKind,
     timeout_s: f64,
+    /// A coasting track extrapolates its acceleration for at most this long after its last
+    /// measurement, then goes on at the velocity it has reached (s).
+    coast_accel_s: f64,
     /// Neighbour id of each track (`u32::MAX` for a free slot) and how many measurements it
     /// has absorbed (saturating at 2). Kept apart from the data so the lookup scans 8 bytes a
     /// track.
@@ -95,11 +98,19 @@ const FREE: u32 = u32::MAX;
 
 impl NeighbourTracks {
     /// Tracks for at most `capacity` neighbours; a track not updated for `timeout_s` restarts.
-    pub fn new(kind: PredictorKind, capacity: usize, timeout_s: f64) -> Self {
+    /// Coasting tracks extrapolate their acceleration for at most `coast_accel_s`.
+    pub fn new(kind: PredictorKind, capacity: usize, timeout_s: f64, coast_accel_s: f64) -> Self {
         let capacity = capacity.max(1);
         // Allocated once at full capacity: growing per neighbour fragments the heap of a large
         // swarm (measured: +40 % resident memory at 10^5 UAVs).
-        Self { kind, timeout_s, ids: Vec::with_capacity(capacity), tracks: Vec::with_capacity(capacity), capacity }
+        Self {
+            kind,
+            timeout_s,
+            coast_accel_s,
+            ids: Vec::with_capacity(capacity),
+            tracks: Vec::with_capacity(capacity),
+            capacity,
+        }
     }
 
     /// Bytes held on the heap.
@@ -161,9 +172,23 @@ impl NeighbourTracks {
         now - self.tracks[s].t
     }
 
-    /// The state of track slot `s` extrapolated to time `t`.
+    /// The state of track slot `s` extrapolated to time `t` (a coasting neighbour): its
+    /// acceleration is extrapolated for at most `coast_accel_s`, after which it goes on at the
+    /// velocity reached; attitude rates carry on.
     pub fn state_at(&self, s: usize, t: f64) -> State9 {
-        extrapolate(&self.tracks[s], t - self.tracks[s].t)
+        let tr = &self.tracks[s];
+        let h = t - tr.t;
+        let mut st = extrapolate(tr, h);
+        let ha = self.coast_accel_s;
+        if h > ha {
+            for k in 0..3 {
+                let v = f64::from(tr.va[k]);
+                let a = f64::from(tr.rate[k]);
+                st[X + k] = tr.pos[k] + h * v + a * ha * (h - 0.5 * ha);
+                st[VX + k] = v + ha * a;
+            }
+        }
+        st
     }
 
     /// Index of the track of `id`, or the slot to (re)use for it (marked free).
@@ -251,7 +276,7 @@ mod tests {
 
     #[test]
     fn constant_velocity_advances_position_only() {
-        let mut tracks = NeighbourTracks::new(PredictorKind::ConstantVelocity, 4, 1.0);
+        let mut tracks = NeighbourTracks::new(PredictorKind::ConstantVelocity, 4, 1.0, 0.2);
         let s = State9::from_column_slice(&[1.0, 2.0, 3.0, 10.0, -5.0, 1.0, 0.1, 0.2, 0.3]);
         let p = tracks.predict(&obs(1, s), 0.0, 0.1);
         assert_relative_eq!(
@@ -263,7 +288,7 @@ mod tests {
 
     #[test]
     fn alpha_beta_learns_a_steady_turn_rate() {
-        let mut tracks = NeighbourTracks::new(PredictorKind::default(), 4, 1.0);
+        let mut tracks = NeighbourTracks::new(PredictorKind::default(), 4, 1.0, 0.2);
         let rate = 0.02; // rad/s
         let dt = 0.1;
         let mut last = State9::zeros();
@@ -281,8 +306,25 @@ mod tests {
     }
 
     #[test]
+    fn a_coasting_track_stops_accelerating_after_the_cap() {
+        let mut tracks = NeighbourTracks::new(PredictorKind::AlphaBeta { alpha: 1.0, beta: 1.0 }, 4, 5.0, 0.2);
+        // A neighbour accelerating at 2 m/s² along x, seen for 1 s.
+        for k in 0..=10 {
+            let t = k as f64 * 0.1;
+            let mut s = State9::zeros();
+            s[0] = 10.0 * t + t * t;
+            s[3] = 10.0 + 2.0 * t;
+            tracks.predict(&obs(7, s), t, 0.1);
+        }
+        // Coasting 1 s past its last measurement: 0.2 s more of acceleration, then 10.4 m/s… on.
+        let x = tracks.state_at(0, 2.0);
+        assert_relative_eq!(x[3], 12.0 + 2.0 * 0.2, epsilon = 1e-4);
+        assert_relative_eq!(x[0], 11.0 + 12.0 * 1.0 + 2.0 * 0.2 * (1.0 - 0.1), epsilon = 1e-3);
+    }
+
+    #[test]
     fn tracks_are_evicted_oldest_first_without_growing() {
-        let mut tracks = NeighbourTracks::new(PredictorKind::default(), 2, 1.0);
+        let mut tracks = NeighbourTracks::new(PredictorKind::default(), 2, 1.0, 0.2);
         for (t, id) in [(0.0, 1), (0.1, 2), (0.2, 3)] {
             tracks.predict(&obs(id, State9::zeros()), t, 0.1);
         }

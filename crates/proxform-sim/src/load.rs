@@ -608,6 +608,9 @@ fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, Sp
     if let Some(v) = c.coast_s {
         p.coast_s = non_negative("controller.coast_s", v)?;
     }
+    if let Some(v) = c.coast_accel_s {
+        p.coast_accel_s = non_negative("controller.coast_accel_s", v)?;
+    }
     if let Some(v) = c.coast_decay_s {
         p.coast_decay_s = positive("controller.coast_decay_s", v)?;
     }

@@ -184,6 +184,8 @@ pub struct ControllerSpec {
     pub track_timeout_s: Option<f64>,
     /// Longest a missing neighbour coasts on its track (s, ≥ 0). Default 0.5.
     pub coast_s: Option<f64>,
+    /// How long a coasting neighbour's acceleration is extrapolated (s, ≥ 0). Default 0.2.
+    pub coast_accel_s: Option<f64>,
     /// Fading time of a coasting neighbour's weight (s, > 0). Default 0.1.
     pub coast_decay_s: Option<f64>,
     /// Course frame: add the slots' turn velocity from the reference's bank. Default: on for
