@@ -4,7 +4,7 @@
 //! left, up; m) and an attitude offset `a_i` (rad, normally zero). The formation control
 //! parameter vector of i with respect to j is `W_ij = [R_f(d_i − d_j); 0; a_i − a_j]`.
 
-use nalgebra::{Rotation3, Vector3};
+use nalgebra::Vector3;
 
 use crate::error::ConfigError;
 use crate::observation::UavId;
@@ -39,12 +39,6 @@ pub enum FormationFrame {
 }
 
 impl FormationFrame {
-    /// Formation-to-world rotation given the reference UAV's state.
-    pub fn rotation(self, reference: &State9) -> Rotation3<f64> {
-        let (c, s) = self.course_cos_sin(reference);
-        Rotation3::from_matrix_unchecked(nalgebra::Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0))
-    }
-
     /// Cosine and sine of the frame's yaw, from the reference's horizontal velocity (no
     /// trigonometric call). A reference with no horizontal speed keeps the world frame.
     #[inline]
@@ -144,10 +138,9 @@ impl Formation {
     /// (the observed j for [`FormationFrame::Course`]).
     #[inline]
     pub fn w(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9) -> State9 {
-        let (c, s) = self.frame.course_cos_sin(reference);
-        let d = i.offset_m - j.offset_m;
-        let da = i.attitude_offset_rad - j.attitude_offset_rad;
-        State9::from_column_slice(&[c * d.x - s * d.y, s * d.x + c * d.y, d.z, 0.0, 0.0, 0.0, da.x, da.y, da.z])
+        let mut w = State9::zeros();
+        self.add_w(i, j, reference, &mut w);
+        w
     }
 }
 

@@ -78,12 +78,6 @@ pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &St
     [e[0], e[1], e[2], e[6], e[7], e[8]]
 }
 
-/// Formation errors of UAV `i` relative to the navigator.
-#[inline]
-pub fn formation_error(scenario: &Scenario, states: &[State9], i: usize) -> [f64; 6] {
-    formation_error_to(scenario, states, &states[scenario.navigator.index()], i)
-}
-
 /// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
 /// over flying followers of `X_i − W_i,nav` (attitudes averaged as small differences from the
 /// first follower's).
