@@ -395,3 +395,102 @@ fn bench_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[(u64, 
         .map_err(plot_err)?;
     root.present().map_err(plot_err)
 }
+
+/// The comparison's curves: median (solid) and 95th percentile (dashed) of the largest error
+/// over its allowable error (any axis; ≤ 1 passes) against radio loss and against radio delay,
+/// one colour per method.
+pub fn compare_plots(
+    dir: &Path,
+    cmp: &proxform_sim::compare::Comparison,
+    cells: &[proxform_sim::compare::CellSummary],
+) -> Result<Vec<PathBuf>> {
+    register_embedded_font()?;
+    let mut written = Vec::new();
+    type Pick = fn(&proxform_sim::compare::Condition) -> Option<f64>;
+    let sweeps: [(&str, &str, Pick); 2] = [
+        ("error_vs_loss", "radio loss (%)", |c| c.is_loss_only().then_some(100.0 * c.radio_loss)),
+        ("error_vs_delay", "radio delay (s)", |c| c.is_delay_only().then_some(c.radio_delay_s)),
+    ];
+    for (file, x_desc, pick) in sweeps {
+        // (method, [(x, median, p95)])
+        let mut curves: Vec<(String, Vec<(f64, f64, f64)>)> = Vec::new();
+        for m in &cmp.methods {
+            let mut pts: Vec<(f64, f64, f64)> = cmp
+                .conditions
+                .iter()
+                .filter_map(|c| {
+                    let x = pick(c)?;
+                    let cell = cells.iter().find(|s| s.method == m.name && s.condition == c.name)?;
+                    Some((x, cell.error_ratio_median, cell.error_ratio_p95))
+                })
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            if pts.len() >= 2 {
+                curves.push((m.name.clone(), pts));
+            }
+        }
+        if curves.is_empty() {
+            continue;
+        }
+        let title = format!("{}: largest formation error over the allowable error", cmp.base.name);
+        let png = dir.join(format!("{file}.png"));
+        let svg = dir.join(format!("{file}.svg"));
+        sweep_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), &title, x_desc, &curves)?;
+        sweep_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), &title, x_desc, &curves)?;
+        written.extend([png, svg]);
+    }
+    Ok(written)
+}
+
+fn sweep_chart<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    x_desc: &str,
+    curves: &[(String, Vec<(f64, f64, f64)>)],
+) -> Result<()> {
+    let allowable = 1.0;
+    root.fill(&WHITE).map_err(plot_err)?;
+    let all = || curves.iter().flat_map(|c| c.1.iter());
+    let (x0, x1) = all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let ymax = all().map(|p| p.2).filter(|v| v.is_finite()).fold(allowable, f64::max) * 2.0;
+    let ymin = all().map(|p| p.1).filter(|v| v.is_finite() && *v > 0.0).fold(allowable, f64::min) * 0.5;
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1.max(x0 + 1e-9), (ymin..ymax).log_scale())
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc("largest error / allowable: median —, p95 - -")
+        .y_label_formatter(&|v| format!("{v:.3}"))
+        .draw()
+        .map_err(plot_err)?;
+    chart
+        .draw_series(DashedLineSeries::new([(x0, allowable), (x1, allowable)], 4, 4, BLACK.stroke_width(1)))
+        .map_err(plot_err)?
+        .label("allowable error (pass below)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
+    for (k, (name, pts)) in curves.iter().enumerate() {
+        let color = PALETTE[(k + 1) % PALETTE.len()];
+        let median: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1.max(ymin))).collect();
+        let p95: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.2.max(ymin))).collect();
+        chart
+            .draw_series(LineSeries::new(median.clone(), color.stroke_width(2)))
+            .map_err(plot_err)?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        chart.draw_series(median.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(plot_err)?;
+        chart.draw_series(DashedLineSeries::new(p95, 6, 4, color.stroke_width(1))).map_err(plot_err)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)
+}

@@ -1,6 +1,7 @@
 //! The `proxform` command-line tool.
 
 mod bench;
+mod compare;
 mod figures;
 mod memory;
 mod output;
@@ -22,6 +23,8 @@ struct Cli {
 enum Command {
     /// Run a scenario (by default the paper's six-UAV experiment) over one or more seeds.
     Run(run::RunArgs),
+    /// Compare formation control methods under radio loss, delay, noise and faults.
+    Compare(compare::CompareArgs),
     /// List the built-in scenarios.
     Scenarios,
     /// Write an annotated example scenario file.
@@ -35,6 +38,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Compare(args) => compare::run(&args),
         Command::Scenarios => scenarios::list(),
         Command::Init(args) => scenarios::init(&args),
     };

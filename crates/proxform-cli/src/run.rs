@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use proxform_core::PredictorKind;
+use proxform_core::{Method, PredictorKind};
 use proxform_sim::run_batch;
 
 use crate::{figures, output, report};
@@ -63,6 +63,13 @@ pub struct RunArgs {
     /// Override the neighbour predictor.
     #[arg(long, value_enum)]
     predictor: Option<Predictor>,
+    /// Formation control method of the followers (baselines with their default gains); the
+    /// radio then carries what the method needs.
+    #[arg(long, value_parser = Method::LABELS)]
+    method: Option<String>,
+    /// Horizon H of the proximity method's predictive input (1: closed form; > 1: QP).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=50))]
+    horizon: Option<u32>,
 }
 
 /// Neighbour predictors selectable from the command line.
@@ -103,6 +110,12 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         Some(Predictor::ConstantVelocity) => c.predictor = PredictorKind::ConstantVelocity,
         Some(Predictor::AlphaBeta) => c.predictor = PredictorKind::default(),
         None => {}
+    }
+    if let Some(h) = args.horizon {
+        c.horizon = h;
+    }
+    if let Some(m) = args.method.as_deref().and_then(Method::from_label) {
+        scenario.set_method(m);
     }
     scenario.validate().context("invalid scenario")?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scenario.name));

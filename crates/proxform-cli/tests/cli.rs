@@ -183,3 +183,49 @@ fn init_writes_an_example_that_runs_and_scenarios_lists_the_built_ins() {
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("paper") && out.contains("swarm"));
 }
+
+#[test]
+fn compare_writes_rows_cells_and_plots_and_refuses_bad_files() {
+    let dir = scratch("cli-compare");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = dir.join("small.toml");
+    std::fs::write(
+        &file,
+        "name = 'small'\nscenario = 'paper'\nseeds = 2\nmethods = ['proximity', 'leader_follower']\n\
+         [[condition]]\nname = 'ideal'\n[[condition]]\nname = 'loss 50%'\nradio_loss = 0.5\n\
+         [[condition]]\nname = 'delay 0.3 s'\nradio_delay_s = 0.3\n[[condition]]\nname = 'dark'\nblackout = true\n",
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let o = proxform()
+        .args(["compare", "-q", "--duration-s", "20"])
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("leader_follower") && stdout.contains("dark"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("compare.csv")).expect("compare.csv");
+    // Header + 2 methods × 4 conditions × 2 seeds.
+    assert_eq!(csv.lines().count(), 1 + 16, "{csv}");
+    assert!(csv.lines().next().is_some_and(|h| h.contains("max_error_m") && h.contains("messages_per_uav_min")));
+    let cells = std::fs::read_to_string(out.join("compare_summary.csv")).expect("compare_summary.csv");
+    assert_eq!(cells.lines().count(), 1 + 8);
+    // Under the blackout the leader-follower cell fails and the proximity cell passes.
+    let dark: Vec<&str> = cells.lines().filter(|l| l.contains(",dark,")).collect();
+    assert!(dark.iter().any(|l| l.starts_with("proximity,dark,2,1")), "{dark:?}");
+    assert!(dark.iter().any(|l| l.starts_with("leader_follower,dark,2,0")), "{dark:?}");
+    for plot in ["error_vs_loss.png", "error_vs_delay.svg"] {
+        assert!(out.join(plot).exists(), "{plot}");
+    }
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "name = 'b'\nscenario = 'paper'\nseeds = 2\nmethods = ['proximity']\n[[condition]]\nname = 'x'\nradio_loss = 2.0\n")
+        .expect("write");
+    let o = proxform().args(["compare", "-q"]).arg(&bad).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("condition[0].radio_loss") && stderr.contains("bad.toml"), "{stderr}");
+}

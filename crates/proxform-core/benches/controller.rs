@@ -15,6 +15,11 @@ fn main() {
 
 /// A UAV at the origin with `n` neighbours on a 100 m ring, one per azimuth area.
 fn setup(n: usize) -> (ProximityController, Vec<Observation>, State9) {
+    setup_with(n, ControllerParams::default())
+}
+
+/// [`setup`] with the given parameters.
+fn setup_with(n: usize, params: ControllerParams) -> (ProximityController, Vec<Observation>, State9) {
     let mut slots = vec![FormationSlot::at(0.0, 0.0, 0.0)];
     for k in 0..n {
         let a = (k as f64 + 0.5) * std::f64::consts::TAU / 8.0;
@@ -24,7 +29,7 @@ fn setup(n: usize) -> (ProximityController, Vec<Observation>, State9) {
     let deps = DependencySet::new(UavId(0), n + 1, vec![(UavId(1), 0.7)]).expect("valid");
     let ctrl = ProximityController::standalone(
         UavId(0),
-        ControllerParams::default(),
+        params,
         formation.clone(),
         deps,
         VehicleModel::Kinematic(KinematicModel::default()),
@@ -55,6 +60,20 @@ fn controller_step(bencher: divan::Bencher, neighbours: usize) {
     // Sanity: every neighbour is perceived and the step adjusts.
     let d = ctrl.step(t, &own, &obs);
     assert_eq!(usize::from(d.occupied_areas), neighbours);
+    assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }));
+    bencher.bench_local(|| {
+        t += 0.1;
+        divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
+    });
+}
+
+/// One adjusting step with 8 neighbours against the predictive horizon H: H = 1 is the
+/// closed-form step, H > 1 the Clarabel QP (METHOD §6 step 7).
+#[divan::bench(args = [1, 2, 5, 10])]
+fn controller_step_horizon(bencher: divan::Bencher, horizon: u32) {
+    let (mut ctrl, obs, own) = setup_with(8, ControllerParams { horizon, ..ControllerParams::default() });
+    let mut t = 0.0;
+    let d = ctrl.step(t, &own, &obs);
     assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }));
     bencher.bench_local(|| {
         t += 0.1;

@@ -17,6 +17,7 @@ use crate::dependency::DependencySet;
 use crate::envelope::Envelope;
 use crate::error::{positive, unit_interval, ConfigError};
 use crate::formation::{Formation, FormationSlot};
+use crate::horizon::{solve_horizon, HorizonProblem};
 use crate::observation::{Observation, ObservationSource, UavId};
 use crate::predictor::{NeighbourTracks, PredictorKind};
 use crate::state::{self, Input, State9, VX, X};
@@ -64,6 +65,10 @@ pub struct ControllerParams {
     /// prediction from the last estimate and the input the UAV applied, corrected toward the
     /// measurement by this fraction. 1 uses the raw measurement (METHOD). Default 1.
     pub own_filter_gain: f64,
+    /// Horizon H of the predictive input (updates, 1 to 50). 1 is the paper's closed-form
+    /// one-step input; H > 1 solves a quadratic program with Clarabel ([`crate::horizon`]).
+    /// Default 1.
+    pub horizon: u32,
 }
 
 impl ControllerParams {
@@ -105,9 +110,19 @@ impl ControllerParams {
                 expected: "a gain in (0, 1]",
             });
         }
+        if !(1..=MAX_HORIZON).contains(&self.horizon) {
+            return Err(ConfigError::OutOfRange {
+                field: "horizon",
+                value: f64::from(self.horizon),
+                expected: "an integer horizon from 1 to 50",
+            });
+        }
         Ok(())
     }
 }
+
+/// Longest horizon accepted (updates).
+pub const MAX_HORIZON: u32 = 50;
 
 impl Default for ControllerParams {
     fn default() -> Self {
@@ -125,6 +140,7 @@ impl Default for ControllerParams {
             coast_decay_s: 0.1,
             bank_turn_feedforward: false,
             own_filter_gain: 1.0,
+            horizon: 1,
         }
     }
 }
@@ -206,6 +222,46 @@ impl ControllerSetup {
     /// The vehicle model.
     pub fn vehicle(&self) -> &VehicleModel {
         &self.vehicle
+    }
+
+    /// METHOD §6 step 7: the input that brings the UAV at `own` toward the target whose
+    /// course-keeping deviation is `r = F·X − target`, within the vehicle's limits: the
+    /// closed-form step for H = 1, the horizon QP for H > 1 (falling back to the one-step
+    /// input if the solver fails). Every controller of proxform, the baselines included,
+    /// turns its target into an input here, so they all fly under the same limits.
+    pub fn input_toward(&self, own: &State9, r: &State9) -> Input {
+        let (vehicle, dt) = (&self.vehicle, self.params.dt_s);
+        let b = vehicle.control_matrix(own, dt);
+        let (lo, hi) = vehicle.input_bounds(own, dt);
+        if self.params.horizon > 1 {
+            let cumulative = vehicle.cumulative_input_bounds(own);
+            let rate = vehicle.input_scale(dt);
+            let neg_rate = -rate;
+            let pb = HorizonProblem {
+                horizon: self.params.horizon as usize,
+                n: vehicle.n_inputs(),
+                dt,
+                b: &b,
+                r,
+                q: &self.q,
+                w: &self.input_weights,
+                first: (&lo, &hi),
+                // Where the state limits are in the cumulative bounds, later steps are bound
+                // by the rate only; otherwise by the first step's bounds.
+                later: if cumulative.is_some() { (&neg_rate, &rate) } else { (&lo, &hi) },
+                cumulative: cumulative.as_ref().map(|(l, h)| (l, h)),
+            };
+            if let Ok(u) = solve_horizon(&pb) {
+                return u;
+            }
+        }
+        match &self.hessian {
+            Some(h) => solve(h, &b, r, &self.q, &lo, &hi),
+            None => {
+                let h = Hessian::new(&b, vehicle.n_inputs(), &self.q, &self.input_weights);
+                solve(&h, &b, r, &self.q, &lo, &hi)
+            }
+        }
     }
 }
 
@@ -476,16 +532,8 @@ impl ProximityController {
             return Decision { outcome: Outcome::Held, input: Input::zeros(), occupied_areas, main_refs };
         }
 
-        // §6 step 7: one-step predictive control, saturated by the vehicle's limits.
-        let b = vehicle.control_matrix(own, dt);
-        let (lo, hi) = vehicle.input_bounds(own, dt);
-        let input = match &setup.hessian {
-            Some(h) => solve(h, &b, &r, &setup.q, &lo, &hi),
-            None => {
-                let h = Hessian::new(&b, vehicle.n_inputs(), &setup.q, &setup.input_weights);
-                solve(&h, &b, &r, &setup.q, &lo, &hi)
-            }
-        };
+        // §6 step 7: predictive control within the vehicle's limits.
+        let input = setup.input_toward(own, &r);
         Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
     }
 }

@@ -7,12 +7,15 @@
 
 pub mod angle;
 pub mod azimuth;
+pub mod baseline;
 pub mod control;
 pub mod controller;
 pub mod dependency;
 pub mod envelope;
 pub mod error;
 pub mod formation;
+pub mod horizon;
+pub mod method;
 pub mod observation;
 pub mod predictor;
 pub mod state;
@@ -24,6 +27,7 @@ pub use dependency::DependencySet;
 pub use envelope::Envelope;
 pub use error::ConfigError;
 pub use formation::{Formation, FormationFrame, FormationSlot};
+pub use method::{FormationController, Method, RadioNeed};
 pub use observation::{Observation, ObservationSource, UavId};
 pub use predictor::PredictorKind;
 pub use state::{Input, State9};

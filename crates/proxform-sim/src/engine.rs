@@ -8,7 +8,7 @@
 //! which thread runs it: large swarms are stepped in parallel with identical results.
 
 use proxform_core::state::{self, Input, State9};
-use proxform_core::{ControllerSetup, ObservationSource, Outcome, ProximityController, UavId};
+use proxform_core::{ControllerSetup, FormationController, ObservationSource, Outcome, UavId};
 use rand::RngExt;
 use rayon::prelude::*;
 
@@ -56,7 +56,7 @@ pub struct Simulation<'s> {
     k: u64,
     current: Vec<State9>,
     next: Vec<State9>,
-    controllers: Vec<Option<ProximityController>>,
+    controllers: Vec<Option<FormationController>>,
     uavs: Vec<UavStep>,
     grid: NeighbourGrid,
     /// Per-UAV environment (wind, position-fix bias, radio channel), empty when not needed.
@@ -83,8 +83,10 @@ impl<'s> Simulation<'s> {
             controllers.push(if i == nav {
                 None
             } else {
-                Some(ProximityController::new(
+                Some(FormationController::new(
+                    &scenario.method,
                     UavId(i as u32),
+                    scenario.navigator,
                     setup.clone(),
                     scenario.formation.clone(),
                     scenario.dependencies[i].clone(),
@@ -198,7 +200,7 @@ impl<'s> Simulation<'s> {
             .controllers
             .iter()
             .flatten()
-            .map(|c| c.heap_bytes() + std::mem::size_of::<ProximityController>())
+            .map(|c| c.heap_bytes() + std::mem::size_of::<FormationController>())
             .sum();
         n * (2 * std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>()) + self.grid.heap_bytes() + controllers
     }
@@ -393,6 +395,7 @@ impl<'a> StepContext<'a> {
             send_step: self.sent.map(|s| s.1),
             delay_s,
             channel_bad,
+            onboard: self.scenario.method.uses_onboard_sensing(),
             seed: self.seed,
             run: self.run,
         }
@@ -418,7 +421,7 @@ impl<'a> StepContext<'a> {
     }
 
     /// A warm-up update of UAV `i`: perception and decision, nothing applied.
-    fn warm(&self, i: usize, ctrl: Option<&mut ProximityController>, scratch: &mut SensorScratch) {
+    fn warm(&self, i: usize, ctrl: Option<&mut FormationController>, scratch: &mut SensorScratch) {
         debug_assert!(self.warm);
         let Some(ctrl) = ctrl else { return };
         if !self.active[i] {
@@ -440,7 +443,7 @@ impl<'a> StepContext<'a> {
     fn update(
         &self,
         i: usize,
-        ctrl: Option<&mut ProximityController>,
+        ctrl: Option<&mut FormationController>,
         next: &mut State9,
         aux: &mut UavStep,
         scratch: &mut SensorScratch,

@@ -7,6 +7,7 @@
 
 pub mod autodeps;
 pub mod batch;
+pub mod compare;
 pub mod disturbance;
 pub mod engine;
 pub mod environment;

@@ -465,6 +465,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
             s.wind = wind(&w)?;
         }
         s.faults = spec.fault.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect::<Result<_, _>>()?;
+        if let Some(label) = spec.controller.as_ref().and_then(|c| c.method.as_deref()) {
+            let m = proxform_core::Method::from_label(label).ok_or_else(|| {
+                err(
+                    "controller.method",
+                    format!("unknown method '{label}' (known: {})", proxform_core::Method::LABELS.join(", ")),
+                )
+            })?;
+            s.set_method(m);
+        }
         s.validate().map_err(|e| err("scenario", e.to_string()))?;
         Ok(s)
     }
@@ -613,6 +622,12 @@ fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, Sp
     }
     if let Some(v) = c.coast_decay_s {
         p.coast_decay_s = positive("controller.coast_decay_s", v)?;
+    }
+    if let Some(v) = c.horizon {
+        if !(1..=i64::from(proxform_core::controller::MAX_HORIZON)).contains(&v) {
+            return Err(err("controller.horizon", format!("must be an integer from 1 to 50, found {v}")));
+        }
+        p.horizon = v as u32;
     }
     if let Some(v) = c.own_filter_gain {
         let v = positive("controller.own_filter_gain", v)?;

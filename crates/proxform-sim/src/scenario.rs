@@ -8,8 +8,8 @@ use std::sync::Arc;
 use proxform_core::angle::{deg, kmh};
 use proxform_core::state::{self, State9};
 use proxform_core::{
-    ConfigError, ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, UavId,
-    VehicleModel,
+    ConfigError, ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, Method,
+    RadioNeed, UavId, VehicleModel,
 };
 
 use crate::path::{NavigatorPath, PaperPath};
@@ -141,6 +141,9 @@ pub struct Scenario {
     pub radio: crate::radio::RadioModel,
     /// How the sensors find candidates: the grid, or all pairs (reference only).
     pub neighbour_search: crate::sensing::NeighbourSearch,
+    /// The followers' formation control method. Default: the proximity method. Set it with
+    /// [`Scenario::set_method`], which also makes the radio carry what the method needs.
+    pub method: Method,
 }
 
 impl Scenario {
@@ -157,6 +160,22 @@ impl Scenario {
     /// Number of update periods in the flight.
     pub fn steps(&self) -> u64 {
         (self.duration_s / self.dt_s).round() as u64
+    }
+
+    /// Switches the followers to `method` and makes the radio carry what it needs: the
+    /// navigator's broadcasts (leader-follower, flocking) or everybody's (consensus). The
+    /// radio's range, delay and losses stay as they are.
+    pub fn set_method(&mut self, method: Method) {
+        self.method = method;
+        match method.radio_need() {
+            RadioNeed::None => {}
+            RadioNeed::Navigator => {
+                if !self.radio.broadcast_all && !self.beacons.contains(&self.navigator) {
+                    self.beacons.push(self.navigator);
+                }
+            }
+            RadioNeed::All => self.radio.broadcast_all = true,
+        }
     }
 
     /// Checks the scenario's consistency.
@@ -239,6 +258,19 @@ impl Scenario {
         }
         self.controller.validate()?;
         self.vehicle.validate()?;
+        self.method.validate()?;
+        let heard = match self.method.radio_need() {
+            RadioNeed::None => true,
+            RadioNeed::Navigator => self.radio.broadcast_all || self.beacons.contains(&self.navigator),
+            RadioNeed::All => self.radio.broadcast_all,
+        };
+        if !heard {
+            return Err(ScenarioError::Value {
+                field: "method",
+                value: f64::NAN,
+                expected: "a radio that carries what the method needs (use Scenario::set_method)",
+            });
+        }
         Ok(())
     }
 
@@ -299,6 +331,7 @@ impl Scenario {
             dropout: 0.0,
             faults: Vec::new(),
             neighbour_search: crate::sensing::NeighbourSearch::Grid,
+            method: Method::Proximity,
         }
     }
 }

@@ -133,6 +133,10 @@ impl ProximitySensor {
         // Deterministic report order: areas in order, then references by id.
         scratch.refs.sort_unstable();
         scratch.observations.clear();
+        if !link.onboard {
+            scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
+            scratch.refs.clear();
+        }
         for a in 0..scratch.best_d2.len() {
             if scratch.best_d2[a] < f64::INFINITY && kept(link.dropout, rng) {
                 scratch.observations.push(self.observe(scratch.best_id[a], states, rng));
@@ -206,6 +210,9 @@ pub struct Link<'a> {
     pub delay_s: f64,
     /// The receiver's Gilbert-Elliott channel is in its bad state.
     pub channel_bad: bool,
+    /// Whether the receiver's controller uses onboard sensing (false: radio messages only;
+    /// the nearest neighbour is still found, for the separation metric).
+    pub onboard: bool,
     /// Seed and run, for the senders' own-state noise streams.
     pub seed: u64,
     /// See `seed`.

@@ -143,6 +143,16 @@ impl KinematicModel {
         (lo, hi)
     }
 
+    /// Bounds on the sum of the inputs from now on, keeping the six input-driven state
+    /// components in their box (never tighter than staying where they are).
+    #[inline]
+    pub fn cumulative_bounds(&self, x: &State9) -> (Input, Input) {
+        let (smin, smax) = self.limits.state_box();
+        let lo = Input::from_fn(|j, _| (smin[j] - x[VX + j]).min(0.0));
+        let hi = Input::from_fn(|j, _| (smax[j] - x[VX + j]).max(0.0));
+        (lo, hi)
+    }
+
     /// The plant step under input `u`.
     #[inline]
     pub fn propagate(x: &State9, u: &Input, dt: f64) -> State9 {

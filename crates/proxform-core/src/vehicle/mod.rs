@@ -87,6 +87,17 @@ impl VehicleModel {
         }
     }
 
+    /// Bounds on the running sum of the inputs over a horizon, when the vehicle's state limits
+    /// are linear in it (the kinematic model: velocities and attitudes are the summed inputs);
+    /// None when they are not, and only the per-step bounds apply.
+    #[inline]
+    pub fn cumulative_input_bounds(&self, x: &State9) -> Option<(Input, Input)> {
+        match self {
+            VehicleModel::Kinematic(m) => Some(m.cumulative_bounds(x)),
+            VehicleModel::FixedWing(_) => None,
+        }
+    }
+
     /// The plant: the true state after `dt` under the (already perturbed) input `u`.
     #[inline]
     pub fn propagate(&self, x: &State9, u: &Input, dt: f64) -> State9 {

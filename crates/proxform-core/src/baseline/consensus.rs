@@ -1,0 +1,128 @@
+//! Second-order consensus formation control with a leader, over the radio graph.
+//!
+//! After Ren and Beard ("Distributed Consensus in Multi-vehicle Cooperative Control",
+//! Springer 2008, §4.2, consensus with a reference for double integrators; also Ren,
+//! "Consensus strategies for cooperative control of vehicle formations", IET CTA 1(2), 2007):
+//!
+//! `a_i = (1/κ_i)·[Σ_j a_ij (â_j − kp((p_i − p_j) − δ_ij) − kv(v_i − v_j))
+//!                + b_i (a_L − kp((p_i − p_L) − δ_iL) − kv(v_i − v_L))]`,  `κ_i = Σ_j a_ij + b_i`,
+//!
+//! where j runs over the UAVs whose broadcasts i receives this period (`a_ij = 1`, fading while
+//! a lost message coasts), `b_i` weighs the navigator (the leader) when heard, `δ_ij` are the
+//! formation offsets `W_ij` and `â_j` each neighbour's acceleration from its α-β track. The
+//! attitude follows the same weighted agreement. A UAV that hears nobody flies on.
+
+use std::sync::Arc;
+
+use super::{act, alone, gather, mean_attitude, pd_acceleration, slot_from, Heard, PdGains};
+use crate::controller::{ControllerSetup, Decision};
+use crate::error::{positive, ConfigError};
+use crate::formation::Formation;
+use crate::observation::{Observation, ObservationSource, UavId};
+use crate::predictor::NeighbourTracks;
+use crate::state::State9;
+
+/// Gains of the consensus law.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ConsensusGains {
+    /// PD gains on the relative errors. Default critically damped at 1 rad/s.
+    pub pd: PdGains,
+    /// Weight b_i of the leader against 1 for each other neighbour (> 0). Default 1.
+    pub leader_weight: f64,
+}
+
+impl Default for ConsensusGains {
+    fn default() -> Self {
+        Self { pd: PdGains::critical(1.0), leader_weight: 5.0 }
+    }
+}
+
+impl ConsensusGains {
+    /// Checks the gains.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        self.pd.validate("consensus.kp", "consensus.kv")?;
+        positive("consensus.leader_weight", self.leader_weight)
+    }
+}
+
+/// The consensus controller of one UAV.
+#[derive(Debug, Clone)]
+pub struct Consensus {
+    id: UavId,
+    leader: UavId,
+    gains: ConsensusGains,
+    setup: Arc<ControllerSetup>,
+    formation: Arc<Formation>,
+    tracks: NeighbourTracks,
+    heard: Vec<Heard>,
+    desired: Vec<(State9, State9, f64)>,
+}
+
+impl Consensus {
+    /// The consensus controller of UAV `id`, with `leader` as the reference.
+    pub fn new(
+        id: UavId,
+        leader: UavId,
+        gains: ConsensusGains,
+        setup: Arc<ControllerSetup>,
+        formation: Arc<Formation>,
+    ) -> Result<Self, ConfigError> {
+        gains.validate()?;
+        for u in [id, leader] {
+            if formation.slot(u).is_none() {
+                return Err(ConfigError::UnknownUav { id: u, size: formation.len() });
+            }
+        }
+        let p = setup.params();
+        let n = formation.len();
+        let tracks = NeighbourTracks::new(p.predictor, n, p.track_timeout_s, p.coast_accel_s);
+        Ok(Self {
+            id,
+            leader,
+            gains,
+            setup,
+            formation,
+            tracks,
+            heard: Vec::with_capacity(n),
+            desired: Vec::with_capacity(n),
+        })
+    }
+
+    /// The setup shared with the other controllers.
+    pub fn setup(&self) -> &ControllerSetup {
+        &self.setup
+    }
+
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        self.tracks.heap_bytes()
+            + self.heard.capacity() * std::mem::size_of::<Heard>()
+            + self.desired.capacity() * std::mem::size_of::<(State9, State9, f64)>()
+    }
+
+    /// One period: agree with every UAV heard.
+    pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
+        let radio = |o: &Observation| o.source == ObservationSource::Radio;
+        gather(&self.setup, self.id, &mut self.tracks, now_s, observations, radio, &mut self.heard);
+        self.desired.clear();
+        for h in &self.heard {
+            let Some((d_now, d_next)) = slot_from(&self.formation, self.id, h) else { continue };
+            let c = if h.id == self.leader { self.gains.leader_weight } else { 1.0 } * h.weight;
+            self.desired.push((d_now, d_next, c));
+        }
+        let kappa: f64 = self.desired.iter().map(|d| d.2).sum();
+        if self.desired.is_empty() || kappa <= 0.0 {
+            return alone();
+        }
+        let dt = self.setup.params().dt_s;
+        let mut a = [0.0; 3];
+        for (d_now, d_next, c) in &self.desired {
+            let aj = pd_acceleration(own, d_now, d_next, dt, &self.gains.pd);
+            for k in 0..3 {
+                a[k] += c * aj[k] / kappa;
+            }
+        }
+        let attitude = mean_attitude(own, self.desired.iter().map(|(_, next, c)| (*next, *c)));
+        act(&self.setup, own, a, attitude.unwrap_or_else(|| std::array::from_fn(|k| own[6 + k])))
+    }
+}

@@ -1,0 +1,93 @@
+//! Leader-follower formation control: every follower tracks the navigator's broadcast state
+//! plus its formation offset.
+//!
+//! The classic scheme of Desai, Ostrowski and Kumar ("Modeling and control of formations of
+//! nonholonomic mobile robots", IEEE Trans. Robotics and Automation 17(6), 2001), here in its
+//! Cartesian "l-ψ"-free form for a point-mass-like vehicle: follower i commands
+//! `a_i = a_d − kp·(p_i − p_d) − kv·(v_i − v_d)` with `X_d = X_L + W_iL`, the leader's state
+//! predicted from its broadcasts (α-β track, delay compensated), and steers its attitude to the
+//! leader's plus the slot's attitude offset. It needs the leader's messages: without them the
+//! follower flies on.
+
+use std::sync::Arc;
+
+use super::{act, alone, gather, pd_acceleration, slot_from, Heard, PdGains};
+use crate::controller::{ControllerSetup, Decision};
+use crate::error::ConfigError;
+use crate::formation::Formation;
+use crate::observation::{Observation, UavId};
+use crate::predictor::NeighbourTracks;
+use crate::state::{State9, ALPHA};
+
+/// Gains of the leader-follower law.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LeaderFollowerGains {
+    /// PD gains toward the slot. Default critically damped at 1 rad/s: kp 1/s², kv 2/s.
+    pub pd: PdGains,
+}
+
+impl Default for LeaderFollowerGains {
+    fn default() -> Self {
+        Self { pd: PdGains::critical(1.0) }
+    }
+}
+
+impl LeaderFollowerGains {
+    /// Checks the gains.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        self.pd.validate("leader_follower.kp", "leader_follower.kv")
+    }
+}
+
+/// The leader-follower controller of one UAV.
+#[derive(Debug, Clone)]
+pub struct LeaderFollower {
+    id: UavId,
+    leader: UavId,
+    gains: LeaderFollowerGains,
+    setup: Arc<ControllerSetup>,
+    formation: Arc<Formation>,
+    tracks: NeighbourTracks,
+    heard: Vec<Heard>,
+}
+
+impl LeaderFollower {
+    /// Follower `id` of `leader`.
+    pub fn new(
+        id: UavId,
+        leader: UavId,
+        gains: LeaderFollowerGains,
+        setup: Arc<ControllerSetup>,
+        formation: Arc<Formation>,
+    ) -> Result<Self, ConfigError> {
+        gains.validate()?;
+        for u in [id, leader] {
+            if formation.slot(u).is_none() {
+                return Err(ConfigError::UnknownUav { id: u, size: formation.len() });
+            }
+        }
+        let p = setup.params();
+        let tracks = NeighbourTracks::new(p.predictor, 1, p.track_timeout_s, p.coast_accel_s);
+        Ok(Self { id, leader, gains, setup, formation, tracks, heard: Vec::with_capacity(1) })
+    }
+
+    /// The setup shared with the other controllers.
+    pub fn setup(&self) -> &ControllerSetup {
+        &self.setup
+    }
+
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        self.tracks.heap_bytes() + self.heard.capacity() * std::mem::size_of::<Heard>()
+    }
+
+    /// One period: track the leader's slot.
+    pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
+        let leader = self.leader;
+        gather(&self.setup, self.id, &mut self.tracks, now_s, observations, |o| o.id == leader, &mut self.heard);
+        let Some(h) = self.heard.first() else { return alone() };
+        let Some((d_now, d_next)) = slot_from(&self.formation, self.id, h) else { return alone() };
+        let a = pd_acceleration(own, &d_now, &d_next, self.setup.params().dt_s, &self.gains.pd);
+        act(&self.setup, own, a, std::array::from_fn(|k| d_next[ALPHA + k]))
+    }
+}

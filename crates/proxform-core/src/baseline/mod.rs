@@ -1,0 +1,144 @@
+//! Classic formation controllers, for comparison with the proximity method on equal terms.
+//!
+//! Each baseline turns what its UAV hears or sees into a commanded acceleration and an
+//! attitude target, and hands the resulting one-period target state to the same input step
+//! as the proximity controller ([`crate::ControllerSetup::input_toward`]): the same vehicle
+//! model, limits, predictor (α-β tracks of every neighbour, coasting through lost messages
+//! for `coast_s` like the proximity controller) and noise. What differs is only the control
+//! law and what it needs to perceive:
+//! - [`LeaderFollower`]: the navigator's broadcast state (radio);
+//! - [`Consensus`]: every UAV's broadcast state (radio graph), navigator as leader;
+//! - [`Flocking`]: neighbours sensed onboard, navigator as virtual leader (radio).
+//!
+//! Unlike the proximity controller, the baselines act every period (no tolerance envelope).
+
+mod consensus;
+mod flocking;
+mod leader_follower;
+
+pub use consensus::{Consensus, ConsensusGains};
+pub use flocking::{Flocking, FlockingGains};
+pub use leader_follower::{LeaderFollower, LeaderFollowerGains};
+
+use crate::controller::{ControllerSetup, Decision, Outcome};
+use crate::error::{positive, ConfigError};
+use crate::formation::Formation;
+use crate::observation::{Observation, UavId};
+use crate::predictor::NeighbourTracks;
+use crate::state::{self, Input, State9, ALPHA, VX, X};
+
+/// A neighbour as a baseline uses it: its predicted state now and one period ahead, and the
+/// weight of the estimate (1 when measured this period, fading while it coasts).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Heard {
+    pub id: UavId,
+    pub now: State9,
+    pub next: State9,
+    pub weight: f64,
+}
+
+/// Position and velocity gains of a PD law (critically damped when `kv² = 4·kp`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PdGains {
+    /// Position gain (1/s²).
+    pub kp: f64,
+    /// Velocity gain (1/s).
+    pub kv: f64,
+}
+
+impl PdGains {
+    /// Critically damped gains with natural frequency `omega` (rad/s).
+    pub fn critical(omega: f64) -> Self {
+        Self { kp: omega * omega, kv: 2.0 * omega }
+    }
+
+    pub(crate) fn validate(&self, kp: &'static str, kv: &'static str) -> Result<(), ConfigError> {
+        positive(kp, self.kp)?;
+        positive(kv, self.kv)
+    }
+}
+
+/// Feeds this period's observations accepted by `accept` to `tracks` and fills `out` with every
+/// neighbour known now: measured ones, then missing ones coasting on their tracks (weight
+/// `exp(−age / coast_decay_s)`, at most `coast_s` old), each id once.
+pub(crate) fn gather(
+    setup: &ControllerSetup,
+    me: UavId,
+    tracks: &mut NeighbourTracks,
+    now: f64,
+    observations: &[Observation],
+    accept: impl Fn(&Observation) -> bool,
+    out: &mut Vec<Heard>,
+) {
+    let p = setup.params();
+    let dt = p.dt_s;
+    out.clear();
+    for o in observations {
+        if o.id == me || !accept(o) || out.iter().any(|h| h.id == o.id) {
+            continue;
+        }
+        let now_state = tracks.predict(o, now, 0.0);
+        // The observation is already in the track: this only extrapolates it.
+        let next = tracks.predict(o, now, dt);
+        out.push(Heard { id: o.id, now: now_state, next, weight: 1.0 });
+    }
+    for s in 0..tracks.slots() {
+        let Some(id) = tracks.coasting(s, now, p.coast_s) else { continue };
+        if id == me || out.iter().any(|h| h.id == id) {
+            continue;
+        }
+        let weight = (-tracks.age(s, now) / p.coast_decay_s).exp();
+        out.push(Heard { id, now: tracks.state_at(s, now), next: tracks.state_at(s, now + dt), weight });
+    }
+}
+
+/// Where neighbour `h` says UAV `me` should be, now and one period ahead: `X_j + W_ij`.
+pub(crate) fn slot_from(formation: &Formation, me: UavId, h: &Heard) -> Option<(State9, State9)> {
+    let (si, sj) = (formation.slot(me)?, formation.slot(h.id)?);
+    Some((h.now + formation.w(si, sj, &h.now), h.next + formation.w(si, sj, &h.next)))
+}
+
+/// The PD acceleration toward a desired trajectory known now and one period ahead:
+/// `a = (v_d(t+Δt) − v_d(t))/Δt − kp·(p − p_d) − kv·(v − v_d)` (m/s²).
+pub(crate) fn pd_acceleration(own: &State9, d_now: &State9, d_next: &State9, dt: f64, g: &PdGains) -> [f64; 3] {
+    std::array::from_fn(|k| {
+        let ff = (d_next[VX + k] - d_now[VX + k]) / dt;
+        ff - g.kp * (own[X + k] - d_now[X + k]) - g.kv * (own[VX + k] - d_now[VX + k])
+    })
+}
+
+/// Turns a commanded acceleration `a` (m/s², world axes) and attitude target into the input:
+/// the target state after one period is `p + vΔt + ½aΔt²`, `v + aΔt`, `attitude`, reached as
+/// closely as the vehicle's limits allow.
+pub(crate) fn act(setup: &ControllerSetup, own: &State9, a: [f64; 3], attitude: [f64; 3]) -> Decision {
+    let dt = setup.params().dt_s;
+    let mut target = *own;
+    for k in 0..3 {
+        target[X + k] = own[X + k] + own[VX + k] * dt + 0.5 * a[k] * dt * dt;
+        target[VX + k] = own[VX + k] + a[k] * dt;
+        target[ALPHA + k] = attitude[k];
+    }
+    let hold = setup.vehicle().hold(own, dt);
+    let r = state::difference(&hold, &target);
+    let input = setup.input_toward(own, &r);
+    let normalised_sq = setup.params().envelope.normalised_sq(&r);
+    Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas: 0, main_refs: 0 }
+}
+
+/// Weighted mean attitude (wrapped around `base`) of desired states.
+pub(crate) fn mean_attitude(base: &State9, desired: impl Iterator<Item = (State9, f64)>) -> Option<[f64; 3]> {
+    let mut sum = [0.0; 3];
+    let mut w = 0.0;
+    for (d, c) in desired {
+        for k in 0..3 {
+            sum[k] += c * crate::angle::wrap_pi(d[ALPHA + k] - base[ALPHA + k]);
+        }
+        w += c;
+    }
+    (w > 0.0).then(|| std::array::from_fn(|k| base[ALPHA + k] + sum[k] / w))
+}
+
+/// Nothing heard: fly on (METHOD §8).
+pub(crate) fn alone() -> Decision {
+    Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 }
+}
