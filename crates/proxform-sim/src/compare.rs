@@ -61,6 +61,9 @@ pub enum MethodSpec {
         name: Option<String>,
         /// Horizon H of the proximity method (updates, 1 to 50).
         horizon: Option<u32>,
+        /// A baseline's gains (keys of its gains struct; omitted ones keep their defaults),
+        /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_weight = 3.0 }`.
+        gains: Option<toml::Table>,
     },
 }
 
@@ -236,14 +239,32 @@ impl Comparison {
         }
         let mut methods = Vec::new();
         for (k, m) in spec.methods.iter().enumerate() {
-            let (label, name, horizon) = match m {
-                MethodSpec::Label(l) => (l.as_str(), None, None),
-                MethodSpec::Table { method, name, horizon } => (method.as_str(), name.clone(), *horizon),
+            let (label, name, horizon, gains) = match m {
+                MethodSpec::Label(l) => (l.as_str(), None, None, None),
+                MethodSpec::Table { method, name, horizon, gains } => {
+                    (method.as_str(), name.clone(), *horizon, gains.clone())
+                }
             };
             let key = format!("methods[{k}]");
-            let method = Method::from_label(label).ok_or_else(|| {
+            let mut method = Method::from_label(label).ok_or_else(|| {
                 bad(key.clone(), format!("unknown method '{label}' (known: {})", Method::LABELS.join(", ")))
             })?;
+            if let Some(g) = gains {
+                let gkey = format!("{key}.gains");
+                let value = toml::Value::Table(g);
+                let parsed = match method {
+                    Method::Proximity => {
+                        Err("the proximity method's parameters are the scenario's [controller] keys".to_string())
+                    }
+                    Method::LeaderFollower(_) => {
+                        value.try_into().map(Method::LeaderFollower).map_err(|e| e.to_string())
+                    }
+                    Method::Consensus(_) => value.try_into().map(Method::Consensus).map_err(|e| e.to_string()),
+                    Method::Flocking(_) => value.try_into().map(Method::Flocking).map_err(|e| e.to_string()),
+                };
+                method = parsed.map_err(|msg| bad(gkey.clone(), msg.trim().to_string()))?;
+                method.validate().map_err(|e| bad(gkey, e.to_string()))?;
+            }
             let horizon = horizon.unwrap_or(1);
             if !(1..=proxform_core::controller::MAX_HORIZON).contains(&horizon) {
                 return Err(bad(format!("{key}.horizon"), format!("must be 1 to 50, found {horizon}")));
@@ -580,6 +601,18 @@ mod tests {
             (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 9\n"), "condition[0].fail_uav"),
             (format!("{head}[[condition]]\nname = 'a'\nwind = 3\n"), "wind"),
             (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
+                 methods = [{ method = 'consensus', gains = { leader_weight = -1.0 } }]\n[[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods[0].gains",
+            ),
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
+                 methods = [{ method = 'flocking', gains = { c3 = 1.0 } }]\n[[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods[0].gains",
+            ),
+            (
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = ['pid']\n[[condition]]\nname = 'a'\n".into(),
                 "methods[0]",
             ),
@@ -592,6 +625,22 @@ mod tests {
             let e = parse(&text).expect_err(key).to_string();
             assert!(e.contains(key), "{e} should name {key}");
         }
+    }
+
+    #[test]
+    fn gains_given_in_the_file_reach_the_method() {
+        let text = "name = 'x'\nscenario = 'paper'\nseeds = 1\n\
+                    methods = [{ method = 'leader_follower', name = 'lf fast', gains = { pd = { kp = 4.0 } } }]\n\
+                    [[condition]]\nname = 'a'\n";
+        let c = parse(text).expect("valid");
+        match c.methods[0].method {
+            Method::LeaderFollower(g) => {
+                assert_eq!(g.pd.kp, 4.0);
+                assert_eq!(g.pd.kv, 2.0, "omitted gains keep their defaults");
+            }
+            m => panic!("{m:?}"),
+        }
+        assert_eq!(c.methods[0].name, "lf fast");
     }
 
     #[test]

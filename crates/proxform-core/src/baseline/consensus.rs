@@ -24,6 +24,7 @@ use crate::state::State9;
 
 /// Gains of the consensus law.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ConsensusGains {
     /// PD gains on the relative errors. Default critically damped at 1 rad/s.
     pub pd: PdGains,

@@ -26,6 +26,7 @@ use crate::state::{State9, ALPHA, VX, X};
 /// Gains of the flocking law. Defaults: ε 0.1, h 0.2, a = b = 0.3 m/s², k_a 0.5/s,
 /// c₁ 1/s², c₂ 2/s.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct FlockingGains {
     /// σ-norm parameter ε (> 0).
     pub epsilon: f64,

@@ -21,6 +21,7 @@ use crate::state::{State9, ALPHA};
 
 /// Gains of the leader-follower law.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct LeaderFollowerGains {
     /// PD gains toward the slot. Default critically damped at 1 rad/s: kp 1/s², kv 2/s.
     pub pd: PdGains,

@@ -39,11 +39,19 @@ pub(crate) struct Heard {
 
 /// Position and velocity gains of a PD law (critically damped when `kv² = 4·kp`).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PdGains {
     /// Position gain (1/s²).
     pub kp: f64,
     /// Velocity gain (1/s).
     pub kv: f64,
+}
+
+impl Default for PdGains {
+    /// Critically damped at 1 rad/s: kp 1/s², kv 2/s.
+    fn default() -> Self {
+        Self::critical(1.0)
+    }
 }
 
 impl PdGains {
