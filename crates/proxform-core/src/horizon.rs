@@ -241,4 +241,34 @@ mod tests {
         // gap shrinking later and does not overshoot the velocity as much.
         assert!(u != one);
     }
+
+    #[test]
+    fn the_solver_succeeds_on_deviations_of_every_size() {
+        // The controller falls back to H = 1 when the QP fails; it should not have to.
+        let (b, _, q, w, lo, hi) = problem_data();
+        let mut x: u64 = 0x1234_5678;
+        let mut uniform = || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((x >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let (cum_lo, cum_hi) = (Input::from_element(-0.3), Input::from_element(2.0));
+        for k in 0..300 {
+            let scale = 10f64.powi(k % 6 - 3);
+            let r = State9::from_fn(|_, _| scale * uniform());
+            let pb = HorizonProblem {
+                horizon: 2 + k as usize % 9,
+                n: 6,
+                dt: 0.1,
+                b: &b,
+                r: &r,
+                q: &q,
+                w: &w,
+                first: (&lo, &hi),
+                later: (&lo, &hi),
+                cumulative: Some((&cum_lo, &cum_hi)),
+            };
+            let u = solve_horizon(&pb).unwrap_or_else(|e| panic!("case {k}: {e}"));
+            assert!((0..6).all(|a| u[a] >= lo[a] && u[a] <= hi[a]));
+        }
+    }
 }
