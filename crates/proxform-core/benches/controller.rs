@@ -1,12 +1,12 @@
-//! One controller step against the number of perceived neighbours.
+//! Controller steps: against the number of perceived neighbours, the predictive horizon, and the method.
 
 use std::sync::Arc;
 
 use proxform_core::angle::kmh;
 use proxform_core::state::State9;
 use proxform_core::{
-    ControllerParams, DependencySet, Formation, FormationFrame, FormationSlot, KinematicModel, Observation,
-    ObservationSource, ProximityController, UavId, VehicleModel,
+    ControllerParams, ControllerSetup, DependencySet, Formation, FormationController, FormationFrame, FormationSlot,
+    KinematicModel, Method, Observation, ObservationSource, ProximityController, UavId, VehicleModel,
 };
 
 fn main() {
@@ -75,6 +75,37 @@ fn controller_step_horizon(bencher: divan::Bencher, horizon: u32) {
     let mut t = 0.0;
     let d = ctrl.step(t, &own, &obs);
     assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }));
+    bencher.bench_local(|| {
+        t += 0.1;
+        divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
+    });
+}
+
+/// One step of each formation control method with 8 neighbours heard (the navigator among
+/// them, as a radio message for the baselines that need it).
+#[divan::bench(args = ["proximity", "leader_follower", "consensus", "flocking"])]
+fn method_step(bencher: divan::Bencher, label: &str) {
+    let (_, mut obs, own) = setup(8);
+    for o in &mut obs {
+        o.source = ObservationSource::Radio;
+    }
+    let formation = {
+        let mut slots = vec![FormationSlot::at(0.0, 0.0, 0.0)];
+        for k in 0..8 {
+            let a = (k as f64 + 0.5) * std::f64::consts::TAU / 8.0;
+            slots.push(FormationSlot::at(100.0 * a.cos(), 100.0 * a.sin(), 0.0));
+        }
+        Arc::new(Formation { slots, frame: FormationFrame::World })
+    };
+    let setup = ControllerSetup::new(ControllerParams::default(), VehicleModel::Kinematic(KinematicModel::default()))
+        .expect("valid");
+    let deps = DependencySet::new(UavId(0), 9, vec![(UavId(1), 0.7)]).expect("valid");
+    let method = Method::from_label(label).expect("known");
+    let mut ctrl =
+        FormationController::new(&method, UavId(0), UavId(1), setup, formation, deps).expect("valid controller");
+    let mut t = 0.0;
+    let d = ctrl.step(t, &own, &obs);
+    assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }), "{label}: {d:?}");
     bencher.bench_local(|| {
         t += 0.1;
         divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
