@@ -62,7 +62,7 @@ pub enum MethodSpec {
         /// Horizon H of the proximity method (updates, 1 to 50).
         horizon: Option<u32>,
         /// A baseline's gains (keys of its gains struct; omitted ones keep their defaults),
-        /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_weight = 3.0 }`.
+        /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_share = 0.5 }`.
         gains: Option<toml::Table>,
     },
 }
@@ -602,7 +602,7 @@ mod tests {
             (format!("{head}[[condition]]\nname = 'a'\nwind = 3\n"), "wind"),
             (
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
-                 methods = [{ method = 'consensus', gains = { leader_weight = -1.0 } }]\n[[condition]]\nname = 'a'\n"
+                 methods = [{ method = 'consensus', gains = { leader_share = -1.0 } }]\n[[condition]]\nname = 'a'\n"
                     .into(),
                 "methods[0].gains",
             ),

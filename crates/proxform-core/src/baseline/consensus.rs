@@ -8,7 +8,8 @@
 //!                + b_i (a_L − kp((p_i − p_L) − δ_iL) − kv(v_i − v_L))]`,  `κ_i = Σ_j a_ij + b_i`,
 //!
 //! where j runs over the UAVs whose broadcasts i receives this period (`a_ij = 1`, fading while
-//! a lost message coasts), `b_i` weighs the navigator (the leader) when heard, `δ_ij` are the
+//! a lost message coasts), `b_i` weighs the navigator (the leader) when heard (as much as all
+//! the others together by default, see [`ConsensusGains::leader_share`]), `δ_ij` are the
 //! formation offsets `W_ij` and `â_j` each neighbour's acceleration from its α-β track. The
 //! attitude follows the same weighted agreement. A UAV that hears nobody flies on.
 
@@ -28,13 +29,16 @@ use crate::state::State9;
 pub struct ConsensusGains {
     /// PD gains on the relative errors. Default critically damped at 1 rad/s.
     pub pd: PdGains,
-    /// Weight b_i of the leader against 1 for each other neighbour (> 0). Default 1.
-    pub leader_weight: f64,
+    /// The leader's share (> 0): its weight is the constant `b_i = leader_share · max(1, N − 2)`,
+    /// N the formation's size, against 1 for each other UAV. Default 1: the leader counts as
+    /// much as all the other followers together, whatever the formation's size (with b_i = 1
+    /// the six-UAV paper formation lags its navigator by up to 1.1 m as a whole).
+    pub leader_share: f64,
 }
 
 impl Default for ConsensusGains {
     fn default() -> Self {
-        Self { pd: PdGains::critical(1.0), leader_weight: 5.0 }
+        Self { pd: PdGains::critical(1.0), leader_share: 1.0 }
     }
 }
 
@@ -42,7 +46,7 @@ impl ConsensusGains {
     /// Checks the gains.
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.pd.validate("consensus.kp", "consensus.kv")?;
-        positive("consensus.leader_weight", self.leader_weight)
+        positive("consensus.leader_share", self.leader_share)
     }
 }
 
@@ -106,9 +110,10 @@ impl Consensus {
         let radio = |o: &Observation| o.source == ObservationSource::Radio;
         gather(&self.setup, self.id, &mut self.tracks, now_s, observations, radio, &mut self.heard);
         self.desired.clear();
+        let b = self.gains.leader_share * (self.formation.len() as f64 - 2.0).max(1.0);
         for h in &self.heard {
             let Some((d_now, d_next)) = slot_from(&self.formation, self.id, h) else { continue };
-            let c = if h.id == self.leader { self.gains.leader_weight } else { 1.0 } * h.weight;
+            let c = if h.id == self.leader { b } else { 1.0 } * h.weight;
             self.desired.push((d_now, d_next, c));
         }
         let kappa: f64 = self.desired.iter().map(|d| d.2).sum();
