@@ -408,27 +408,18 @@ pub fn effective(c: &Condition, method: &MethodEntry, base: &Scenario) -> Condit
 /// each run. Rows are in (method, condition, seed) order. Cells that [`effective`] makes equal
 /// are run once.
 pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<Vec<CompareRow>, CompareError> {
-    // Unique (method, effective condition) cells, and which one each (method, condition) uses.
-    let mut unique: Vec<(usize, Condition, Scenario)> = Vec::new();
-    let mut uses = Vec::new();
-    for (mi, m) in cmp.methods.iter().enumerate() {
-        for c in &cmp.conditions {
-            let eff = effective(c, m, &cmp.base);
-            let k = match unique.iter().position(|u| u.0 == mi && u.1 == eff) {
-                Some(k) => k,
-                None => {
-                    let sc = c.apply(&cmp.base, m).map_err(|source| CompareError::Scenario {
-                        condition: c.name.clone(),
-                        method: m.name.clone(),
-                        source,
-                    })?;
-                    unique.push((mi, eff, sc));
-                    unique.len() - 1
-                }
-            };
-            uses.push((m, c, k));
-        }
-    }
+    let (unique, uses) = plan(cmp);
+    let unique: Vec<(usize, Scenario)> = unique
+        .into_iter()
+        .map(|(mi, ci)| {
+            let (m, c) = (&cmp.methods[mi], &cmp.conditions[ci]);
+            c.apply(&cmp.base, m).map(|sc| (mi, sc)).map_err(|source| CompareError::Scenario {
+                condition: c.name.clone(),
+                method: m.name.clone(),
+                source,
+            })
+        })
+        .collect::<Result<_, _>>()?;
     let tasks: Vec<(usize, u64)> = (0..unique.len()).flat_map(|k| (0..cmp.seeds).map(move |r| (k, r))).collect();
     // One flight per work item: cells differ in cost by 100× (the horizon QP), and rayon's
     // adaptive splitting would otherwise leave a whole chunk of expensive cells to one thread.
@@ -436,7 +427,7 @@ pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<
         .par_iter()
         .with_max_len(1)
         .map(|&(k, r)| {
-            let sc = &unique[k].2;
+            let sc = &unique[k].1;
             let (s, _) = run_one(sc, cmp.seed, r, false).map_err(|source| CompareError::Scenario {
                 condition: sc.name.clone(),
                 method: cmp.methods[unique[k].0].name.clone(),
@@ -450,7 +441,8 @@ pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<
     let allowable = cmp.base.allowable.as_array();
     Ok(uses
         .iter()
-        .flat_map(|&(m, c, k)| {
+        .flat_map(|&(mi, ci, k)| {
+            let (m, c) = (&cmp.methods[mi], &cmp.conditions[ci]);
             runs[k * seeds..(k + 1) * seeds].iter().map(move |s| {
                 let e = s.max_abs_error;
                 let ratio = (0..6).map(|a| e[a] / allowable[a]).fold(0.0, f64::max);
@@ -478,18 +470,31 @@ pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<
         .collect())
 }
 
-/// Number of distinct cells [`run_comparison`] runs (after sharing, see [`effective`]).
-pub fn distinct_cells(cmp: &Comparison) -> usize {
-    let mut seen: Vec<(usize, Condition)> = Vec::new();
+/// What [`plan`] returns: the distinct cells to fly, as (method, condition) indices of a
+/// representative, and for every (method, condition) in order, the distinct cell whose runs it
+/// reports, as (method, condition, cell).
+type Plan = (Vec<(usize, usize)>, Vec<(usize, usize, usize)>);
+
+/// Which cells to fly and which runs each cell reports.
+fn plan(cmp: &Comparison) -> Plan {
+    let mut unique: Vec<(usize, usize, Condition)> = Vec::new();
+    let mut uses = Vec::new();
     for (mi, m) in cmp.methods.iter().enumerate() {
-        for c in &cmp.conditions {
+        for (ci, c) in cmp.conditions.iter().enumerate() {
             let eff = effective(c, m, &cmp.base);
-            if !seen.iter().any(|u| u.0 == mi && u.1 == eff) {
-                seen.push((mi, eff));
-            }
+            let k = unique.iter().position(|u| u.0 == mi && u.2 == eff).unwrap_or_else(|| {
+                unique.push((mi, ci, eff));
+                unique.len() - 1
+            });
+            uses.push((mi, ci, k));
         }
     }
-    seen.len()
+    (unique.into_iter().map(|(mi, ci, _)| (mi, ci)).collect(), uses)
+}
+
+/// Number of distinct cells [`run_comparison`] flies (after sharing, see [`effective`]).
+pub fn distinct_cells(cmp: &Comparison) -> usize {
+    plan(cmp).0.len()
 }
 
 /// Median and 95th percentile of one cell's runs.

@@ -118,9 +118,10 @@ impl ProximitySensor {
                 }
             }
         }
-        // Main references within range (the sensor tracks them).
+        // Main references within range (the sensor tracks them), when onboard sensing is used.
         let r2 = self.range_m * self.range_m;
-        for &(id, _) in deps.refs() {
+        let tracked = if link.onboard { deps.refs() } else { &[] };
+        for &(id, _) in tracked {
             let Some(q) = states.get(id.index()) else { continue };
             if !link.active[id.index()] {
                 continue;
@@ -134,8 +135,8 @@ impl ProximitySensor {
         scratch.refs.sort_unstable();
         scratch.observations.clear();
         if !link.onboard {
+            // Only the nearest neighbour was wanted (for the separation metric).
             scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
-            scratch.refs.clear();
         }
         for a in 0..scratch.best_d2.len() {
             if scratch.best_d2[a] < f64::INFINITY && kept(link.dropout, rng) {
