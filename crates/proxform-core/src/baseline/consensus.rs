@@ -15,12 +15,11 @@
 
 use std::sync::Arc;
 
-use super::{act, alone, gather, mean_attitude, pd_acceleration, slot_from, Heard, PdGains};
+use super::{act, alone, mean_attitude, pd_acceleration, Hearing, PdGains};
 use crate::controller::{ControllerSetup, Decision};
 use crate::error::{positive, ConfigError};
 use crate::formation::Formation;
 use crate::observation::{Observation, ObservationSource, UavId};
-use crate::predictor::NeighbourTracks;
 use crate::state::State9;
 
 /// Gains of the consensus law.
@@ -53,13 +52,9 @@ impl ConsensusGains {
 /// The consensus controller of one UAV.
 #[derive(Debug, Clone)]
 pub struct Consensus {
-    id: UavId,
-    leader: UavId,
     gains: ConsensusGains,
-    setup: Arc<ControllerSetup>,
-    formation: Arc<Formation>,
-    tracks: NeighbourTracks,
-    heard: Vec<Heard>,
+    core: Hearing,
+    /// Per UAV heard: desired state now and next, and weight (working memory).
     desired: Vec<(State9, State9, f64)>,
 }
 
@@ -73,54 +68,36 @@ impl Consensus {
         formation: Arc<Formation>,
     ) -> Result<Self, ConfigError> {
         gains.validate()?;
-        for u in [id, leader] {
-            if formation.slot(u).is_none() {
-                return Err(ConfigError::UnknownUav { id: u, size: formation.len() });
-            }
-        }
-        let p = setup.params();
-        let n = formation.len();
-        let tracks = NeighbourTracks::new(p.predictor, n, p.track_timeout_s, p.coast_accel_s);
-        Ok(Self {
-            id,
-            leader,
-            gains,
-            setup,
-            formation,
-            tracks,
-            heard: Vec::with_capacity(n),
-            desired: Vec::with_capacity(n),
-        })
+        let cap = formation.len();
+        Ok(Self { gains, core: Hearing::new(id, leader, setup, formation, cap)?, desired: Vec::with_capacity(cap) })
     }
 
     /// The setup shared with the other controllers.
     pub fn setup(&self) -> &ControllerSetup {
-        &self.setup
+        &self.core.setup
     }
 
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
-        self.tracks.heap_bytes()
-            + self.heard.capacity() * std::mem::size_of::<Heard>()
-            + self.desired.capacity() * std::mem::size_of::<(State9, State9, f64)>()
+        self.core.heap_bytes() + self.desired.capacity() * std::mem::size_of::<(State9, State9, f64)>()
     }
 
     /// One period: agree with every UAV heard.
     pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
-        let radio = |o: &Observation| o.source == ObservationSource::Radio;
-        gather(&self.setup, self.id, &mut self.tracks, now_s, observations, radio, &mut self.heard);
+        let core = &mut self.core;
+        core.hear(now_s, observations, |o| o.source == ObservationSource::Radio);
         self.desired.clear();
-        let b = self.gains.leader_share * (self.formation.len() as f64 - 2.0).max(1.0);
-        for h in &self.heard {
-            let Some((d_now, d_next)) = slot_from(&self.formation, self.id, h) else { continue };
-            let c = if h.id == self.leader { b } else { 1.0 } * h.weight;
+        let b = self.gains.leader_share * (core.formation.len() as f64 - 2.0).max(1.0);
+        for h in &core.heard {
+            let Some((d_now, d_next)) = core.slot_from(h) else { continue };
+            let c = if h.id == core.leader { b } else { 1.0 } * h.weight;
             self.desired.push((d_now, d_next, c));
         }
         let kappa: f64 = self.desired.iter().map(|d| d.2).sum();
         if self.desired.is_empty() || kappa <= 0.0 {
             return alone();
         }
-        let dt = self.setup.params().dt_s;
+        let dt = core.setup.params().dt_s;
         let mut a = [0.0; 3];
         for (d_now, d_next, c) in &self.desired {
             let aj = pd_acceleration(own, d_now, d_next, dt, &self.gains.pd);
@@ -129,6 +106,6 @@ impl Consensus {
             }
         }
         let attitude = mean_attitude(own, self.desired.iter().map(|(_, next, c)| (*next, *c)));
-        act(&self.setup, own, a, attitude.unwrap_or_else(|| std::array::from_fn(|k| own[6 + k])))
+        act(&core.setup, own, a, attitude.unwrap_or_else(|| std::array::from_fn(|k| own[6 + k])))
     }
 }

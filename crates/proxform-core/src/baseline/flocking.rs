@@ -15,12 +15,11 @@
 
 use std::sync::Arc;
 
-use super::{act, alone, gather, mean_attitude, pd_acceleration, slot_from, Heard};
+use super::{act, alone, mean_attitude, pd_acceleration, Hearing};
 use crate::controller::{ControllerSetup, Decision};
 use crate::error::{positive, ConfigError};
 use crate::formation::Formation;
 use crate::observation::{Observation, UavId};
-use crate::predictor::NeighbourTracks;
 use crate::state::{State9, ALPHA, VX, X};
 
 /// Gains of the flocking law. Defaults: ε 0.1, h 0.2, a = b = 0.3 m/s², k_a 0.5/s,
@@ -97,13 +96,8 @@ impl FlockingGains {
 /// The flocking controller of one UAV.
 #[derive(Debug, Clone)]
 pub struct Flocking {
-    id: UavId,
-    leader: UavId,
     gains: FlockingGains,
-    setup: Arc<ControllerSetup>,
-    formation: Arc<Formation>,
-    tracks: NeighbourTracks,
-    heard: Vec<Heard>,
+    core: Hearing,
 }
 
 impl Flocking {
@@ -116,40 +110,34 @@ impl Flocking {
         formation: Arc<Formation>,
     ) -> Result<Self, ConfigError> {
         gains.validate()?;
-        for u in [id, leader] {
-            if formation.slot(u).is_none() {
-                return Err(ConfigError::UnknownUav { id: u, size: formation.len() });
-            }
-        }
-        let p = setup.params();
-        let cap = p.areas.areas + 1;
-        let tracks = NeighbourTracks::new(p.predictor, cap, p.track_timeout_s, p.coast_accel_s);
-        Ok(Self { id, leader, gains, setup, formation, tracks, heard: Vec::with_capacity(cap) })
+        let cap = setup.params().areas.areas + 1;
+        Ok(Self { gains, core: Hearing::new(id, leader, setup, formation, cap)? })
     }
 
     /// The setup shared with the other controllers.
     pub fn setup(&self) -> &ControllerSetup {
-        &self.setup
+        &self.core.setup
     }
 
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
-        self.tracks.heap_bytes() + self.heard.capacity() * std::mem::size_of::<Heard>()
+        self.core.heap_bytes()
     }
 
     /// One period: α-lattice terms from the sensed neighbours, γ feedback from the leader.
     pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
         let g = self.gains;
-        let range = self.setup.params().areas.sensing_range_m;
-        gather(&self.setup, self.id, &mut self.tracks, now_s, observations, |_| true, &mut self.heard);
-        if self.heard.is_empty() {
+        let core = &mut self.core;
+        let range = core.setup.params().areas.sensing_range_m;
+        core.hear(now_s, observations, |_| true);
+        if core.heard.is_empty() {
             return alone();
         }
-        let Some(slot_i) = self.formation.slot(self.id) else { return alone() };
+        let Some(slot_i) = core.formation.slot(core.id) else { return alone() };
         let r_alpha = g.sigma_norm(range);
         let mut a = [0.0; 3];
-        for h in &self.heard {
-            let Some(slot_j) = self.formation.slot(h.id) else { continue };
+        for h in &core.heard {
+            let Some(slot_j) = core.formation.slot(h.id) else { continue };
             let q: [f64; 3] = std::array::from_fn(|k| h.now[X + k] - own[X + k]);
             let dist = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
             if dist <= 1e-9 || dist > range {
@@ -163,24 +151,22 @@ impl Flocking {
                 a[k] += push * q[k] + g.alignment_per_s * adjacency * h.weight * (h.now[VX + k] - own[VX + k]);
             }
         }
-        let leader = self.heard.iter().find(|h| h.id == self.leader).copied();
-        let slot = leader.and_then(|h| slot_from(&self.formation, self.id, &h));
+        let leader = core.heard.iter().find(|h| h.id == core.leader);
+        let slot = leader.and_then(|h| core.slot_from(h));
         let attitude = match slot {
             Some((d_now, d_next)) => {
                 let pd = super::PdGains { kp: g.c1, kv: g.c2 };
-                let f = pd_acceleration(own, &d_now, &d_next, self.setup.params().dt_s, &pd);
+                let f = pd_acceleration(own, &d_now, &d_next, core.setup.params().dt_s, &pd);
                 for k in 0..3 {
                     a[k] += f[k];
                 }
                 std::array::from_fn(|k| d_next[ALPHA + k])
             }
             None => {
-                let formation = &self.formation;
-                let desired =
-                    self.heard.iter().filter_map(|h| slot_from(formation, self.id, h).map(|d| (d.1, h.weight)));
+                let desired = core.heard.iter().filter_map(|h| core.slot_from(h).map(|d| (d.1, h.weight)));
                 mean_attitude(own, desired).unwrap_or_else(|| std::array::from_fn(|k| own[ALPHA + k]))
             }
         };
-        act(&self.setup, own, a, attitude)
+        act(&core.setup, own, a, attitude)
     }
 }

@@ -11,12 +11,11 @@
 
 use std::sync::Arc;
 
-use super::{act, alone, gather, pd_acceleration, slot_from, Heard, PdGains};
+use super::{act, alone, pd_acceleration, Hearing, PdGains};
 use crate::controller::{ControllerSetup, Decision};
 use crate::error::ConfigError;
 use crate::formation::Formation;
 use crate::observation::{Observation, UavId};
-use crate::predictor::NeighbourTracks;
 use crate::state::{State9, ALPHA};
 
 /// Gains of the leader-follower law.
@@ -43,13 +42,8 @@ impl LeaderFollowerGains {
 /// The leader-follower controller of one UAV.
 #[derive(Debug, Clone)]
 pub struct LeaderFollower {
-    id: UavId,
-    leader: UavId,
     gains: LeaderFollowerGains,
-    setup: Arc<ControllerSetup>,
-    formation: Arc<Formation>,
-    tracks: NeighbourTracks,
-    heard: Vec<Heard>,
+    core: Hearing,
 }
 
 impl LeaderFollower {
@@ -62,33 +56,28 @@ impl LeaderFollower {
         formation: Arc<Formation>,
     ) -> Result<Self, ConfigError> {
         gains.validate()?;
-        for u in [id, leader] {
-            if formation.slot(u).is_none() {
-                return Err(ConfigError::UnknownUav { id: u, size: formation.len() });
-            }
-        }
-        let p = setup.params();
-        let tracks = NeighbourTracks::new(p.predictor, 1, p.track_timeout_s, p.coast_accel_s);
-        Ok(Self { id, leader, gains, setup, formation, tracks, heard: Vec::with_capacity(1) })
+        let cap = 1;
+        Ok(Self { gains, core: Hearing::new(id, leader, setup, formation, cap)? })
     }
 
     /// The setup shared with the other controllers.
     pub fn setup(&self) -> &ControllerSetup {
-        &self.setup
+        &self.core.setup
     }
 
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
-        self.tracks.heap_bytes() + self.heard.capacity() * std::mem::size_of::<Heard>()
+        self.core.heap_bytes()
     }
 
     /// One period: track the leader's slot.
     pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
-        let leader = self.leader;
-        gather(&self.setup, self.id, &mut self.tracks, now_s, observations, |o| o.id == leader, &mut self.heard);
-        let Some(h) = self.heard.first() else { return alone() };
-        let Some((d_now, d_next)) = slot_from(&self.formation, self.id, h) else { return alone() };
-        let a = pd_acceleration(own, &d_now, &d_next, self.setup.params().dt_s, &self.gains.pd);
-        act(&self.setup, own, a, std::array::from_fn(|k| d_next[ALPHA + k]))
+        let c = &mut self.core;
+        let leader = c.leader;
+        c.hear(now_s, observations, |o| o.id == leader);
+        let Some(h) = c.heard.first() else { return alone() };
+        let Some((d_now, d_next)) = c.slot_from(h) else { return alone() };
+        let a = pd_acceleration(own, &d_now, &d_next, c.setup.params().dt_s, &self.gains.pd);
+        act(&c.setup, own, a, std::array::from_fn(|k| d_next[ALPHA + k]))
     }
 }

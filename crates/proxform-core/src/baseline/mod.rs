@@ -20,6 +20,8 @@ pub use consensus::{Consensus, ConsensusGains};
 pub use flocking::{Flocking, FlockingGains};
 pub use leader_follower::{LeaderFollower, LeaderFollowerGains};
 
+use std::sync::Arc;
+
 use crate::controller::{ControllerSetup, Decision, Outcome};
 use crate::error::{positive, ConfigError};
 use crate::formation::Formation;
@@ -66,44 +68,75 @@ impl PdGains {
     }
 }
 
-/// Feeds this period's observations accepted by `accept` to `tracks` and fills `out` with every
-/// neighbour known now: measured ones, then missing ones coasting on their tracks (weight
-/// `exp(−age / coast_decay_s)`, at most `coast_s` old), each id once.
-pub(crate) fn gather(
-    setup: &ControllerSetup,
-    me: UavId,
-    tracks: &mut NeighbourTracks,
-    now: f64,
-    observations: &[Observation],
-    accept: impl Fn(&Observation) -> bool,
-    out: &mut Vec<Heard>,
-) {
-    let p = setup.params();
-    let dt = p.dt_s;
-    out.clear();
-    for o in observations {
-        if o.id == me || !accept(o) || out.iter().any(|h| h.id == o.id) {
-            continue;
-        }
-        let now_state = tracks.predict(o, now, 0.0);
-        // The observation is already in the track: this only extrapolates it.
-        let next = tracks.predict(o, now, dt);
-        out.push(Heard { id: o.id, now: now_state, next, weight: 1.0 });
-    }
-    for s in 0..tracks.slots() {
-        let Some(id) = tracks.coasting(s, now, p.coast_s) else { continue };
-        if id == me || out.iter().any(|h| h.id == id) {
-            continue;
-        }
-        let weight = (-tracks.age(s, now) / p.coast_decay_s).exp();
-        out.push(Heard { id, now: tracks.state_at(s, now), next: tracks.state_at(s, now + dt), weight });
-    }
+/// What every baseline keeps: its UAV, the leader, the shared setup and formation, the tracks
+/// of the UAVs it hears, and those known this period (working memory, allocated once).
+#[derive(Debug, Clone)]
+pub(crate) struct Hearing {
+    pub id: UavId,
+    pub leader: UavId,
+    pub setup: Arc<ControllerSetup>,
+    pub formation: Arc<Formation>,
+    tracks: NeighbourTracks,
+    pub heard: Vec<Heard>,
 }
 
-/// Where neighbour `h` says UAV `me` should be, now and one period ahead: `X_j + W_ij`.
-pub(crate) fn slot_from(formation: &Formation, me: UavId, h: &Heard) -> Option<(State9, State9)> {
-    let (si, sj) = (formation.slot(me)?, formation.slot(h.id)?);
-    Some((h.now + formation.w(si, sj, &h.now), h.next + formation.w(si, sj, &h.next)))
+impl Hearing {
+    /// For UAV `id` following `leader`, tracking at most `capacity` UAVs.
+    pub fn new(
+        id: UavId,
+        leader: UavId,
+        setup: Arc<ControllerSetup>,
+        formation: Arc<Formation>,
+        capacity: usize,
+    ) -> Result<Self, ConfigError> {
+        for u in [id, leader] {
+            if formation.slot(u).is_none() {
+                return Err(ConfigError::UnknownUav { id: u, size: formation.len() });
+            }
+        }
+        let p = setup.params();
+        let tracks = NeighbourTracks::new(p.predictor, capacity, p.track_timeout_s, p.coast_accel_s);
+        Ok(Self { id, leader, setup, formation, tracks, heard: Vec::with_capacity(capacity) })
+    }
+
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        self.tracks.heap_bytes() + self.heard.capacity() * std::mem::size_of::<Heard>()
+    }
+
+    /// Feeds this period's observations accepted by `accept` to the tracks and fills `heard`
+    /// with every UAV known now: measured ones, then missing ones coasting on their tracks
+    /// (weight `exp(−age / coast_decay_s)`, at most `coast_s` old), each id once.
+    pub fn hear(&mut self, now: f64, observations: &[Observation], accept: impl Fn(&Observation) -> bool) {
+        let Self { id: me, setup, tracks, heard, .. } = self;
+        let p = setup.params();
+        let dt = p.dt_s;
+        heard.clear();
+        for o in observations {
+            if o.id == *me || !accept(o) || heard.iter().any(|h| h.id == o.id) {
+                continue;
+            }
+            let now_state = tracks.predict(o, now, 0.0);
+            // The observation is already in the track: this only extrapolates it.
+            let next = tracks.predict(o, now, dt);
+            heard.push(Heard { id: o.id, now: now_state, next, weight: 1.0 });
+        }
+        for s in 0..tracks.slots() {
+            let Some(id) = tracks.coasting(s, now, p.coast_s) else { continue };
+            if id == *me || heard.iter().any(|h| h.id == id) {
+                continue;
+            }
+            let weight = (-tracks.age(s, now) / p.coast_decay_s).exp();
+            heard.push(Heard { id, now: tracks.state_at(s, now), next: tracks.state_at(s, now + dt), weight });
+        }
+    }
+
+    /// Where `h` says this UAV should be, now and one period ahead: `X_j + W_ij`.
+    pub fn slot_from(&self, h: &Heard) -> Option<(State9, State9)> {
+        let f = &self.formation;
+        let (si, sj) = (f.slot(self.id)?, f.slot(h.id)?);
+        Some((h.now + f.w(si, sj, &h.now), h.next + f.w(si, sj, &h.next)))
+    }
 }
 
 /// The PD acceleration toward a desired trajectory known now and one period ahead:
