@@ -389,6 +389,7 @@ impl<'a> StepContext<'a> {
         Link {
             active: self.active,
             dropout,
+            reference_dropout: self.scenario.reference_dropout.unwrap_or(dropout),
             radio_up,
             radio,
             sent: self.sent.map(|s| s.0),

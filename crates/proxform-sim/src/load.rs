@@ -441,6 +441,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(v) = spec.sensing.as_ref().and_then(|x| x.dropout) {
             s.dropout = probability("sensing.dropout", v)?;
         }
+        if let Some(v) = spec.sensing.as_ref().and_then(|x| x.reference_dropout) {
+            s.reference_dropout = Some(probability("sensing.reference_dropout", v)?);
+        }
         if let Some(r) = spec.radio.clone() {
             if let Some(b) = &r.beacons {
                 s.beacons = b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?;

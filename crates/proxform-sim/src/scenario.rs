@@ -130,6 +130,10 @@ pub struct Scenario {
     pub warmup_s: f64,
     /// Probability that an onboard observation is lost, per observation and step.
     pub dropout: f64,
+    /// The same for observations of the UAV's own main references (the UAVs of its
+    /// dependency table), when they differ: a UAV may track its references with a more
+    /// reliable sensor than the one that scans its areas. `None`: [`Self::dropout`].
+    pub reference_dropout: Option<f64>,
     /// Scheduled faults.
     pub faults: Vec<crate::faults::Fault>,
     /// UAVs whose state every UAV hears over the radio each period (ideal link, the
@@ -241,6 +245,13 @@ impl Scenario {
                 expected: "a probability in [0, 1]",
             });
         }
+        if let Some(p) = self.reference_dropout.filter(|p| !(0.0..=1.0).contains(p)) {
+            return Err(ScenarioError::Value {
+                field: "reference_dropout",
+                value: p,
+                expected: "a probability in [0, 1]",
+            });
+        }
         for f in &self.faults {
             if let Some(u) = f.uav() {
                 if u.index() >= n {
@@ -329,6 +340,7 @@ impl Scenario {
             wind: crate::disturbance::Wind::default(),
             warmup_s: 1.0,
             dropout: 0.0,
+            reference_dropout: None,
             faults: Vec::new(),
             neighbour_search: crate::sensing::NeighbourSearch::Grid,
             method: Method::Proximity,

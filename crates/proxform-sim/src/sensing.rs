@@ -138,8 +138,16 @@ impl ProximitySensor {
             // Only the nearest neighbour was wanted (for the separation metric).
             scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
         }
+        // Observations of main references are lost with their own probability.
+        let loss = |j: u32| {
+            if link.reference_dropout != link.dropout && deps.refs().iter().any(|r| r.0 .0 == j) {
+                link.reference_dropout
+            } else {
+                link.dropout
+            }
+        };
         for a in 0..scratch.best_d2.len() {
-            if scratch.best_d2[a] < f64::INFINITY && kept(link.dropout, rng) {
+            if scratch.best_d2[a] < f64::INFINITY && kept(loss(scratch.best_id[a]), rng) {
                 scratch.observations.push(self.observe(scratch.best_id[a], states, rng));
             }
         }
@@ -147,7 +155,7 @@ impl ProximitySensor {
             let j = scratch.refs[k];
             let picked =
                 (0..scratch.best_d2.len()).any(|a| scratch.best_d2[a] < f64::INFINITY && scratch.best_id[a] == j);
-            if !picked && kept(link.dropout, rng) {
+            if !picked && kept(link.reference_dropout, rng) {
                 scratch.observations.push(self.observe(j, states, rng));
             }
         }
@@ -199,6 +207,9 @@ pub struct Link<'a> {
     pub active: &'a [bool],
     /// Probability that an onboard observation is lost.
     pub dropout: f64,
+    /// Probability that an onboard observation of one of the receiver's main references is
+    /// lost.
+    pub reference_dropout: f64,
     /// False during a radio blackout.
     pub radio_up: bool,
     /// The radio model.

@@ -301,6 +301,9 @@ pub struct SensingSpec {
     /// Probability that an onboard observation is lost, per observation and step, in [0, 1].
     /// Default 0.
     pub dropout: Option<f64>,
+    /// Probability that an observation of one of the UAV's main references is lost, per
+    /// observation and step, in [0, 1]. Default: `dropout`.
+    pub reference_dropout: Option<f64>,
 }
 
 /// `[radio]`.

@@ -117,3 +117,24 @@ fn under_30_percent_dropout_coasting_keeps_most_runs_within_the_tolerances() {
     let unfaded = run_batch(&s, 13, 100, false, &|| {}).expect("valid").summary;
     assert!(unfaded.pass_fraction < coast.pass_fraction - 0.1, "{} vs {}", unfaded.pass_fraction, coast.pass_fraction);
 }
+
+#[test]
+fn under_30_percent_dropout_the_losses_that_matter_are_those_of_the_main_references() {
+    let mut s = Scenario::paper();
+    s.dropout = 0.3;
+    // The references tracked by a sensor that loses them one step in ten.
+    s.reference_dropout = Some(0.1);
+    let tracked = run_batch(&s, 17, 100, false, &|| {}).expect("valid").summary;
+    assert!(tracked.pass_fraction >= 0.99, "{}", tracked.pass_fraction);
+    // Only the references lost: as bad as losing everything.
+    s.dropout = 0.0;
+    s.reference_dropout = Some(0.3);
+    let refs_lost = run_batch(&s, 17, 100, false, &|| {}).expect("valid").summary;
+    assert!(refs_lost.pass_fraction < 0.95, "{}", refs_lost.pass_fraction);
+    // And the method is what holds it: without adjustment nothing passes.
+    s.dropout = 0.3;
+    s.reference_dropout = Some(0.1);
+    s.adjustment_enabled = false;
+    let off = run_batch(&s, 17, 20, false, &|| {}).expect("valid").summary;
+    assert_eq!(off.pass_fraction, 0.0);
+}
