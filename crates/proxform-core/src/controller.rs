@@ -78,6 +78,17 @@ impl ControllerParams {
         State9::from_column_slice(&[0.5, 0.6, 0.2, kmh(5.0), kmh(2.0), kmh(2.0), deg(0.4), deg(0.2), deg(0.5)])
     }
 
+    /// Permissible errors Δ for a fixed wing (SI units): 2 m on each axis, 2 m/s (7.2 km/h) on
+    /// each velocity component, 5° of pitch, 10° of yaw and of roll. A fixed wing corrects its
+    /// position only by pitching, turning and banking away from its neighbours' attitude, so
+    /// the paper's tenths of a degree, made for a vehicle that moves sideways without
+    /// turning, would forbid every correction (measured: the V of `scenarios/fixed-wing-v.toml`
+    /// with the paper's Δ has pairs within 1 m).
+    pub fn fixed_wing_thresholds() -> State9 {
+        use crate::angle::{deg, kmh};
+        State9::from_column_slice(&[2.0, 2.0, 2.0, kmh(7.2), kmh(7.2), kmh(7.2), deg(5.0), deg(10.0), deg(10.0)])
+    }
+
     /// Checks every parameter, naming the first one out of its domain.
     pub fn validate(&self) -> Result<(), ConfigError> {
         positive("dt_s", self.dt_s)?;
@@ -559,9 +570,10 @@ fn deviation(
     let slot_j = formation.slot(id)?;
     // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
     let mut delta = x_j - x_hold;
-    formation.add_w(slot_i, slot_j, x_j, &mut delta);
     if turn_feedforward {
-        formation.add_turn_velocity(slot_i, slot_j, x_j, &mut delta);
+        formation.add_w_turning(slot_i, slot_j, x_j, &mut delta);
+    } else {
+        formation.add_w(slot_i, slot_j, x_j, &mut delta);
     }
     for k in state::ALPHA..=state::GAMMA {
         delta[k] = crate::angle::wrap_pi(delta[k]);

@@ -10,6 +10,9 @@ use crate::error::ConfigError;
 use crate::observation::UavId;
 use crate::state::{self, State9};
 
+/// Standard gravity (m/s²).
+const G: f64 = 9.80665;
+
 /// One UAV's place in the formation.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FormationSlot {
@@ -113,25 +116,49 @@ impl Formation {
         x[8] += da.z;
     }
 
-    /// The velocity part of `W_ij` in a formation frame that turns: the slot of i moves
-    /// relative to j's at `ω × R_f(d_i − d_j)` (rigid rotation about the vertical), with ω the
-    /// reference's coordinated-turn rate `−g·tan γ / V` (its bank is measured far more finely
-    /// than its yaw rate could be estimated). Zero for [`FormationFrame::World`].
+    /// `W_ij` in a formation that turns as one rigid body about the vertical, for vehicles
+    /// whose velocity follows their attitude (the fixed wing): adds to `x` the position,
+    /// velocity and attitude parts. The turn rate ω is the reference's coordinated-turn rate
+    /// `−g·tan γ / V` (its bank is measured far more finely than its yaw rate could be
+    /// estimated). In such a turn j does not fly along the formation's course: its velocity is
+    /// the course velocity plus `ω × d_j` (d_j from the formation's origin), so the course is
+    /// j's heading turned back by the angle that adds. Relative to j, i's slot is at
+    /// `R_f(d_i − d_j)` and moves at `ω × R_f(d_i − d_j)`; i heads along its own velocity and
+    /// banks for the same ω at its own speed. In a [`FormationFrame::World`] frame, or behind
+    /// a reference slower than 1 m/s, this is [`Self::add_w`].
     #[inline]
-    pub fn add_turn_velocity(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
-        if self.frame == FormationFrame::World {
+    pub fn add_w_turning(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
+        let (vx, vy) = (reference[state::VX], reference[state::VY]);
+        let v = vx.hypot(vy);
+        if self.frame == FormationFrame::World || v < 1.0 {
+            self.add_w(i, j, reference, x);
             return;
         }
-        let v = (reference[state::VX].powi(2) + reference[state::VY].powi(2)).sqrt();
-        if v < 1.0 {
-            return;
-        }
-        let omega = -9.80665 * reference[state::GAMMA].tan() / v;
-        let (c, s) = self.frame.course_cos_sin(reference);
+        let omega = -G * reference[state::GAMMA].tan() / v;
+        // j's velocity in the formation frame is (√(v² − a²), a), a = ω·d_j,forward.
+        let a = omega * j.offset_m.x;
+        let (cphi, sphi) = if a.abs() < v { ((v * v - a * a).sqrt() / v, a / v) } else { (1.0, 0.0) };
+        let (cpsi, spsi) = (vx / v, vy / v);
+        let (c, s) = (cpsi * cphi + spsi * sphi, spsi * cphi - cpsi * sphi);
         let d = i.offset_m - j.offset_m;
         let (rx, ry) = (c * d.x - s * d.y, s * d.x + c * d.y);
-        x[state::VX] += -omega * ry;
-        x[state::VY] += omega * rx;
+        x[state::X] += rx;
+        x[state::Y] += ry;
+        x[state::Z] += d.z;
+        let (dvx, dvy) = (-omega * ry, omega * rx);
+        x[state::VX] += dvx;
+        x[state::VY] += dvy;
+        let da = i.attitude_offset_rad - j.attitude_offset_rad;
+        x[state::ALPHA] += da.x;
+        x[state::BETA] += da.y;
+        x[state::GAMMA] += da.z;
+        // i's heading relative to j's, and the bank for ω at i's speed.
+        let (wx, wy) = (vx + dvx, vy + dvy);
+        let w = wx.hypot(wy);
+        if w >= 1.0 {
+            x[state::BETA] += (vx * wy - vy * wx).atan2(vx * wx + vy * wy);
+            x[state::GAMMA] += (-omega * w / G).atan() - reference[state::GAMMA];
+        }
     }
 
     /// `W_ij` (eq. 7) for slots i and j, with `R_f` from the reference state `reference`
@@ -177,25 +204,52 @@ mod tests {
         assert_relative_eq!(w[2], -10.0, epsilon = 1e-9);
     }
 
-    #[test]
-    fn a_turning_frame_moves_slots_at_omega_cross_r() {
-        let lead = FormationSlot::at(0.0, 0.0, 0.0);
-        let wing = FormationSlot::at(0.0, -100.0, 0.0); // 100 m to the right
-        let f = Formation::new(vec![lead, wing], FormationFrame::Course).expect("finite");
-        let mut reference = State9::zeros();
-        reference[state::VX] = 50.0;
-        reference[state::GAMMA] = deg(-30.0); // banked left: a left (counter-clockwise) turn
-        let omega = 9.80665 * deg(30.0).tan() / 50.0;
+    /// The state of the slot at `d` (forward, left, up from the formation's origin) in a
+    /// steady level coordinated turn at rate `omega` (rad/s, counter-clockwise > 0), with the
+    /// formation's course `psi` and the origin at `(0, 0, 0)` flying at `v_f`.
+    fn in_turn(d: Vector3<f64>, psi: f64, omega: f64, v_f: f64) -> State9 {
+        let (s, c) = psi.sin_cos();
         let mut x = State9::zeros();
-        f.add_turn_velocity(&wing, &lead, &reference, &mut x);
-        // The outer (right) wingman must fly faster by ω·100 m.
-        assert_relative_eq!(x[state::VX], omega * 100.0, epsilon = 1e-9);
-        assert_relative_eq!(x[state::VY], 0.0, epsilon = 1e-9);
-        // A world-fixed formation does not turn.
-        let fixed = Formation::new(vec![lead, wing], FormationFrame::World).expect("finite");
-        let mut y = State9::zeros();
-        fixed.add_turn_velocity(&wing, &lead, &reference, &mut y);
-        assert_eq!(y, State9::zeros());
+        x[0] = c * d.x - s * d.y;
+        x[1] = s * d.x + c * d.y;
+        x[2] = d.z;
+        // Velocity: the course velocity plus ω × r.
+        x[3] = v_f * c - omega * x[1];
+        x[4] = v_f * s + omega * x[0];
+        let speed = x[3].hypot(x[4]);
+        x[state::BETA] = x[4].atan2(x[3]);
+        x[state::GAMMA] = (-omega * speed / G).atan();
+        x
+    }
+
+    #[test]
+    fn a_turning_formation_gives_every_slot_its_state_in_the_turn() {
+        let lead = FormationSlot::at(0.0, 0.0, 0.0);
+        let left = FormationSlot::at(-80.0, 60.0, -5.0);
+        let right = FormationSlot::at(-160.0, -120.0, 0.0);
+        let f = Formation::new(vec![lead, left, right], FormationFrame::Course).expect("finite");
+        let (psi, v_f) = (deg(40.0), 55.0);
+        for omega in [0.1, -0.08, 0.0] {
+            let truth: Vec<State9> = f.slots.iter().map(|s| in_turn(s.offset_m, psi, omega, v_f)).collect();
+            for (i, si) in f.slots.iter().enumerate() {
+                for (j, sj) in f.slots.iter().enumerate() {
+                    // From j's true state, W gives i's true state: position, velocity, heading
+                    // and bank, although j itself does not fly along the course.
+                    let mut x = truth[j];
+                    f.add_w_turning(si, sj, &truth[j], &mut x);
+                    for k in 0..9 {
+                        assert_relative_eq!(x[k], truth[i][k], epsilon = 1e-9);
+                    }
+                }
+            }
+        }
+        // A world-fixed formation does not turn: W is the plain offset.
+        let fixed = Formation::new(f.slots.clone(), FormationFrame::World).expect("finite");
+        let reference = in_turn(right.offset_m, psi, 0.1, v_f);
+        let (mut x, mut y) = (State9::zeros(), State9::zeros());
+        fixed.add_w_turning(&left, &right, &reference, &mut x);
+        fixed.add_w(&left, &right, &reference, &mut y);
+        assert_eq!(x, y);
     }
 
     #[test]

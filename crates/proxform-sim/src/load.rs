@@ -299,13 +299,11 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(v) = spec.warmup_s {
             s.warmup_s = non_negative("warmup_s", v)?;
         }
-        s.controller = controller(spec.controller.clone().unwrap_or_default(), s.dt_s)?;
         s.vehicle = vehicle(spec.vehicle.clone().unwrap_or_default())?;
-        s.controller.bank_turn_feedforward = spec
-            .controller
-            .as_ref()
-            .and_then(|c| c.bank_turn_feedforward)
-            .unwrap_or(matches!(s.vehicle, VehicleModel::FixedWing(_)));
+        let fixed_wing = matches!(s.vehicle, VehicleModel::FixedWing(_));
+        s.controller = controller(spec.controller.clone().unwrap_or_default(), s.dt_s, fixed_wing)?;
+        s.controller.bank_turn_feedforward =
+            spec.controller.as_ref().and_then(|c| c.bank_turn_feedforward).unwrap_or(fixed_wing);
 
         // Formation and dependency tables.
         let fspec = required("formation", spec.formation.clone())?;
@@ -582,8 +580,12 @@ fn shape_of(s: &spec::ShapeSpec) -> Result<Shape, SpecError> {
     })
 }
 
-fn controller(c: spec::ControllerSpec, dt_s: f64) -> Result<ControllerParams, SpecError> {
+/// The controller's parameters; unset permissible errors take the vehicle's defaults.
+fn controller(c: spec::ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<ControllerParams, SpecError> {
     let mut p = ControllerParams { dt_s, ..ControllerParams::default() };
+    if fixed_wing {
+        p.envelope.thresholds = ControllerParams::fixed_wing_thresholds();
+    }
     if let Some(m) = c.areas {
         if !(1..=MAX_AREAS).contains(&m) {
             return Err(err("controller.areas", format!("m must be between 1 and {MAX_AREAS}, found {m}")));
