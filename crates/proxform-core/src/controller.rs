@@ -65,6 +65,14 @@ pub struct ControllerParams {
     /// prediction from the last estimate and the input the UAV applied, corrected toward the
     /// measurement by this fraction. 1 uses the raw measurement (METHOD). Default 1.
     pub own_filter_gain: f64,
+    /// Separation keeping (m, ≥ 0; beyond the paper, METHOD §8): a neighbour predicted closer
+    /// than this, and closer than [`SEPARATION_SLOT_FRACTION`] of the distance between the two
+    /// slots, pushes the envelope centre's position away from it by the shortfall, which the
+    /// velocity part of W then closes over τ. The slot condition keeps a formation whose
+    /// slots are closer than this from being pushed apart. 0 switches it off; `None` leaves
+    /// the choice to the caller (the simulator uses twice the scenario's safety distance) and
+    /// is off for a controller on its own. Default `None`.
+    pub separation_m: Option<f64>,
     /// Horizon H of the predictive input (updates, 1 to 50). 1 is the paper's closed-form
     /// one-step input; H > 1 solves a quadratic program with Clarabel ([`crate::horizon`]).
     /// Default 1.
@@ -121,6 +129,15 @@ impl ControllerParams {
                 expected: "a gain in (0, 1]",
             });
         }
+        if let Some(d) = self.separation_m {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(ConfigError::OutOfRange {
+                    field: "separation_m",
+                    value: d,
+                    expected: "a finite distance ≥ 0 m",
+                });
+            }
+        }
         if !(1..=MAX_HORIZON).contains(&self.horizon) {
             return Err(ConfigError::OutOfRange {
                 field: "horizon",
@@ -131,6 +148,10 @@ impl ControllerParams {
         Ok(())
     }
 }
+
+/// Separation keeping engages only for a neighbour closer than this fraction of the distance
+/// between its slot and the UAV's own (see [`ControllerParams::separation_m`]).
+pub const SEPARATION_SLOT_FRACTION: f64 = 0.8;
 
 /// Longest horizon accepted (updates).
 pub const MAX_HORIZON: u32 = 50;
@@ -151,6 +172,7 @@ impl Default for ControllerParams {
             coast_decay_s: 0.1,
             bank_turn_feedforward: false,
             own_filter_gain: 1.0,
+            separation_m: None,
             horizon: 1,
         }
     }
@@ -457,6 +479,8 @@ impl ProximityController {
         let mut sum_dep = State9::zeros();
         let mut c_sum = 0.0;
         let mut main_refs = 0u16;
+        let separation = params.separation_m.unwrap_or(0.0);
+        let mut push = [0.0f64; 3];
         for a in 0..nearest.len() {
             let k = nearest[a].0;
             if k == EMPTY {
@@ -472,6 +496,9 @@ impl ProximityController {
                 let o = &observations[k as usize];
                 (o.id, tracks.predict(o, now_s, dt), 1.0) // F·X_j(t) with the neighbour's track
             };
+            if separation > 0.0 {
+                keep_apart(formation, id, &x_j, &slot_i, &x_hold, separation, &mut push);
+            }
             let Some(delta) = deviation(formation, id, &x_j, &slot_i, &x_hold, params.bank_turn_feedforward) else {
                 continue;
             };
@@ -527,6 +554,10 @@ impl ProximityController {
         let lambda = params.lambda;
         let x_bar = if n_bar > 0 { sum_bar / w_bar } else { sum_dep / c_sum };
         let mut centre = if main_refs > 0 { (1.0 - lambda) * x_bar + lambda * (sum_dep / c_sum) } else { x_bar };
+        // Separation keeping (beyond the paper): away from neighbours that come too close.
+        for k in X..VX {
+            centre[k] += push[k];
+        }
         // Velocity part of W (paper §2.3): close the remaining position gap over τ.
         if let Some(tau) = params.closing_time_s {
             for k in X..VX {
@@ -579,6 +610,34 @@ fn deviation(
         delta[k] = crate::angle::wrap_pi(delta[k]);
     }
     Some(delta)
+}
+
+/// Adds to `push` how far the UAV, at `x_hold` next step, must move away from neighbour `id`
+/// predicted at `x_j` to be `separation` m from it, when it is closer than that and closer than
+/// [`SEPARATION_SLOT_FRACTION`] of their slots' distance.
+#[inline]
+fn keep_apart(
+    formation: &Formation,
+    id: UavId,
+    x_j: &State9,
+    slot_i: &FormationSlot,
+    x_hold: &State9,
+    separation: f64,
+    push: &mut [f64; 3],
+) {
+    let p = [x_hold[X] - x_j[X], x_hold[X + 1] - x_j[X + 1], x_hold[X + 2] - x_j[X + 2]];
+    let d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+    if d2 >= separation * separation {
+        return;
+    }
+    let Some(slot_j) = formation.slot(id) else { return };
+    let limit = separation.min(SEPARATION_SLOT_FRACTION * (slot_j.offset_m - slot_i.offset_m).norm());
+    let d = d2.sqrt();
+    if d < limit && d > 1e-9 {
+        for k in 0..3 {
+            push[k] += (limit - d) * p[k] / d;
+        }
+    }
 }
 
 fn alone() -> Decision {

@@ -189,3 +189,54 @@ fn rejects_invalid_parameters_by_name() {
     .expect_err("not in formation");
     assert!(err.to_string().contains("UAV10"), "{err}");
 }
+
+#[test]
+fn a_neighbour_too_close_pushes_the_uav_away_unless_the_slots_are_that_close() {
+    let s = everyone_in_slot();
+    // UAV4 (id 3), whose slot is 100 m from UAV2's, has drifted to 12 m behind UAV2 (id 1).
+    let mut intruder = s[1];
+    intruder[state::X] -= 12.0;
+    let obs = [observe(0, s[0]), observe(2, s[2]), observe(3, intruder)];
+    let step = |separation_m: Option<f64>| {
+        // λ = 1: only the main references, in their slots, place the centre.
+        let mut c = controller(ControllerParams { separation_m, lambda: 1.0, ..params() });
+        c.step(0.0, &s[1], &obs)
+    };
+    // Off (None or 0): UAV2 is in its slot as its references see it and holds.
+    assert_eq!(step(None).outcome, Outcome::Held);
+    assert_eq!(step(Some(0.0)).outcome, Outcome::Held);
+    // On at 30 m: it speeds up, away from the intruder behind it.
+    let d = step(Some(30.0));
+    assert!(matches!(d.outcome, Outcome::Adjusted { .. }), "{:?}", d.outcome);
+    assert!(d.input[0] > 0.1, "Δvx = {}", d.input[0]);
+    // A formation whose slots are 12.5 m apart is not pushed apart at 12 m: 80 % of 12.5 m is
+    // 10 m, and the intruder is further than that.
+    let close = Arc::new(Formation {
+        slots: vec![
+            FormationSlot::at(0.0, 0.0, 0.0),
+            FormationSlot::at(-86.6, 50.0, -10.0),
+            FormationSlot::at(-86.6, -50.0, -10.0),
+            FormationSlot::at(-99.1, 50.0, -10.0),
+        ],
+        frame: FormationFrame::World,
+    });
+    let deps = DependencySet::new(UavId(1), 4, vec![(UavId(0), 0.7), (UavId(2), 0.3)]).expect("valid table");
+    let p = ControllerParams { separation_m: Some(30.0), lambda: 1.0, ..params() };
+    let mut c =
+        ProximityController::standalone(UavId(1), p, close, deps, VehicleModel::Kinematic(KinematicModel::default()))
+            .expect("valid");
+    assert_eq!(c.step(0.0, &s[1], &obs).outcome, Outcome::Held);
+}
+
+#[test]
+fn a_negative_separation_is_refused() {
+    let p = ControllerParams { separation_m: Some(-1.0), ..params() };
+    let err = ProximityController::standalone(
+        UavId(1),
+        p,
+        formation(),
+        DependencySet::new(UavId(1), 4, vec![]).expect("empty"),
+        VehicleModel::Kinematic(KinematicModel::default()),
+    );
+    assert!(err.is_err());
+}

@@ -77,7 +77,7 @@ impl<'s> Simulation<'s> {
         scenario.validate()?;
         let n = scenario.len();
         let nav = scenario.navigator.index();
-        let setup = ControllerSetup::new(scenario.controller.clone(), scenario.vehicle.clone())?;
+        let setup = ControllerSetup::new(controller_params(scenario), scenario.vehicle.clone())?;
         let mut controllers = Vec::with_capacity(n);
         for i in 0..n {
             controllers.push(if i == nav {
@@ -357,6 +357,17 @@ impl<'s> Simulation<'s> {
         }
     }
 }
+
+/// The controllers' parameters: the scenario's, with separation keeping at twice the safety
+/// distance unless the scenario sets it.
+pub fn controller_params(scenario: &Scenario) -> proxform_core::ControllerParams {
+    let mut p = scenario.controller.clone();
+    p.separation_m = Some(p.separation_m.unwrap_or(SEPARATION_PER_SAFETY * scenario.safety_distance_m));
+    p
+}
+
+/// Default separation-keeping distance, in safety distances.
+pub const SEPARATION_PER_SAFETY: f64 = 2.0;
 
 /// Read-only view of one step, shared by the threads that update the UAVs.
 struct StepContext<'a> {

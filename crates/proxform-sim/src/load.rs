@@ -634,6 +634,9 @@ fn controller(c: spec::ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<Co
         }
         p.horizon = v as u32;
     }
+    if let Some(v) = c.separation_m {
+        p.separation_m = Some(non_negative("controller.separation_m", v)?);
+    }
     if let Some(v) = c.own_filter_gain {
         let v = positive("controller.own_filter_gain", v)?;
         if v > 1.0 {

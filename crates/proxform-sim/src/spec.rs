@@ -193,6 +193,8 @@ pub struct ControllerSpec {
     pub bank_turn_feedforward: Option<bool>,
     /// Gain of the own-state filter, in (0, 1]; 1 uses raw measurements. Default 1.
     pub own_filter_gain: Option<f64>,
+    /// Separation keeping distance (m, ≥ 0; 0 off). Default twice `safety_distance_m`.
+    pub separation_m: Option<f64>,
     /// Horizon H of the predictive input (1 to 50). Default 1.
     pub horizon: Option<i64>,
     /// Formation control method: "proximity" (default), "leader_follower", "consensus" or

@@ -63,6 +63,23 @@ fn a_v_written_without_thresholds_gets_the_fixed_wing_defaults_and_keeps_its_dis
 }
 
 #[test]
+fn separation_keeping_holds_a_wide_v_apart_where_formation_keeping_alone_does_not() {
+    // A V of half-angle 45°: through the turn its inner arm must slow to 42 m/s, and in one run
+    // in a hundred or two its tail catches up with the UAV ahead (run 198 of seed 1).
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/fixed-wing-v.toml"))
+        .expect("file")
+        .replace("angle_deg = 30.0", "angle_deg = 45.0");
+    let wide = proxform_sim::load::parse(&text, "wide-v.toml").expect("valid");
+    assert_eq!(wide.controller.separation_m, None, "by default twice the safety distance, 30 m");
+    let mut off = wide.clone();
+    off.controller.separation_m = Some(0.0);
+    let (with, _) = run_one(&wide, 1, 198, false).expect("valid");
+    let (without, _) = run_one(&off, 1, 198, false).expect("valid");
+    assert!(without.min_separation_m < 10.0, "{}", without.min_separation_m);
+    assert!(with.min_separation_m > 15.0, "{}", with.min_separation_m);
+}
+
+#[test]
 fn without_adjustment_the_v_falls_apart() {
     let mut s = scenario();
     s.adjustment_enabled = false;
