@@ -395,13 +395,33 @@ impl TryFrom<ScenarioSpec> for Scenario {
             }
         }
         let (vmin, vmax) = s.vehicle.forward_speed_range();
+        let kinematic = matches!(s.vehicle, VehicleModel::Kinematic(_));
         for (i, x) in s.initial.iter().enumerate() {
-            let v = x[state::VX];
+            let v = s.vehicle.forward_speed(x);
             if v < vmin - 1e-9 || v > vmax + 1e-9 {
+                // Blame the key that set the speed: the initial speed, the path's, or the
+                // vehicle's bound for the paper's fixed-speed path.
+                let path_speed = spec.path.as_ref().is_some_and(|p| p.speed_kmh.is_some());
+                let key = match (speed.is_some(), path_speed, kinematic, v < vmin) {
+                    (true, ..) => "initial.speed_kmh",
+                    (false, true, ..) => "path.speed_kmh",
+                    (false, false, true, true) => "vehicle.vx_min_kmh",
+                    (false, false, true, false) => "vehicle.vx_max_kmh",
+                    (false, false, false, true) => "vehicle.stall_speed_kmh",
+                    (false, false, false, false) => "vehicle.max_speed_kmh",
+                };
+                let what = if kinematic { "vx" } else { "airspeed" };
+                let along_x = x[state::VY].abs() <= 1e-9 * x[state::VX].abs().max(1.0);
+                let hint = if kinematic && !along_x {
+                    " (the kinematic vehicle's limits are on vx, the world x component of its velocity: \
+                     its paths start along x)"
+                } else {
+                    ""
+                };
                 return Err(err(
-                    if speed.is_some() { "initial.speed_kmh" } else { "vehicle.vx_min_kmh" },
+                    key,
                     format!(
-                        "UAV {} starts at {:.1} km/h, outside the vehicle's {:.1}-{:.1} km/h",
+                        "UAV {} starts at {what} {:.1} km/h, outside the vehicle's {:.1}-{:.1} km/h{hint}",
                         i + 1,
                         v * 3.6,
                         vmin * 3.6,

@@ -60,6 +60,11 @@ fn a_v_written_without_thresholds_gets_the_fixed_wing_defaults_and_keeps_its_dis
     let r = run_batch(&s, 3, 20, false, &|| {}).expect("valid");
     assert!(r.summary.min_separation_m >= 15.0, "{}", r.summary.min_separation_m);
     assert!(r.summary.rms_error.x_m < 5.0 && r.summary.rms_error.y_m < 5.0, "{:?}", r.summary.rms_error);
+    // A fixed wing's speed limits are on its airspeed: it may start on any course.
+    let north = text.replace("speed_kmh = 180.0", "speed_kmh = 180.0\n        course_deg = 90.0");
+    let s = proxform_sim::load::parse(&north, "north.toml").expect("a fixed wing may fly north");
+    let (r, _) = run_one(&s, 3, 0, false).expect("valid");
+    assert!(r.min_separation_m >= 15.0, "{}", r.min_separation_m);
 }
 
 #[test]

@@ -42,6 +42,17 @@ impl VehicleModel {
         }
     }
 
+    /// The speed of state `x` that [`Self::forward_speed_range`] bounds (m/s): the world-frame
+    /// vx for the kinematic vehicle (its limits are per axis), the airspeed for the fixed wing.
+    pub fn forward_speed(&self, x: &State9) -> f64 {
+        match self {
+            VehicleModel::Kinematic(_) => x[crate::state::VX],
+            VehicleModel::FixedWing(_) => {
+                (x[crate::state::VX].powi(2) + x[crate::state::VY].powi(2) + x[crate::state::VZ].powi(2)).sqrt()
+            }
+        }
+    }
+
     /// Number of inputs n_u.
     #[inline]
     pub fn n_inputs(&self) -> usize {
