@@ -937,6 +937,10 @@ fn waypoint_segments(points: &[[f64; 3]], v: f64, r: f64, transition_s: f64) -> 
     let mut all = vec![[0.0f64; 3]];
     for (k, p) in points.iter().enumerate() {
         vec3(&format!("path.points_m[{}]", k + 1), *p)?;
+        // A list that starts with the start itself, [0, 0, 0], names it twice.
+        if k == 0 && *p == [0.0; 3] && points.len() > 1 {
+            continue;
+        }
         all.push(*p);
     }
     let legs: Vec<(f64, f64, f64)> = all
@@ -1053,5 +1057,11 @@ mod waypoint_tests {
         assert!((end[state::BETA] - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
         assert!((end[0] - 2000.0).abs() < 15.0, "x {}", end[0]);
         assert!(waypoint_segments(&[[100.0, 0.0, 0.0], [100.0, 100.0, 0.0]], v, 300.0, 2.0).is_err(), "legs too short");
+        // The start may be listed as the first point.
+        let with_start = [[0.0, 0.0, 0.0], [2000.0, 0.0, 0.0], [2000.0, 2000.0, 100.0]];
+        assert_eq!(
+            waypoint_segments(&with_start, v, 300.0, 2.0).expect("valid").0,
+            waypoint_segments(&with_start[1..], v, 300.0, 2.0).expect("valid").0
+        );
     }
 }
