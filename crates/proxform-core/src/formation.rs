@@ -9,9 +9,7 @@ use nalgebra::Vector3;
 use crate::error::ConfigError;
 use crate::observation::UavId;
 use crate::state::{self, State9};
-
-/// Standard gravity (m/s²).
-const G: f64 = 9.80665;
+use crate::vehicle::G;
 
 /// One UAV's place in the formation.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -9,6 +9,7 @@ use std::f64::consts::{PI, TAU};
 
 use proxform_core::angle::{deg, kmh};
 use proxform_core::state::{self, State9};
+use proxform_core::vehicle::G;
 
 /// A cosine ramp from `from` to `to` over `[t0, t1]` (s).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -183,8 +184,6 @@ fn blend(tau: f64, t: f64) -> f64 {
     }
 }
 
-/// Gravity (m/s²).
-const G: f64 = 9.80665;
 /// Integration step of the segment path's positions (s).
 const PATH_STEP_S: f64 = 0.01;
 

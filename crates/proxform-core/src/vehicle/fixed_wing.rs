@@ -17,8 +17,7 @@ use crate::control::ControlMatrix;
 use crate::error::{positive, ConfigError};
 use crate::state::{Input, State9, ALPHA, BETA, GAMMA, VX, VY, VZ, X};
 
-/// Standard gravity (m/s²).
-const G: f64 = 9.80665;
+use super::G;
 
 /// Parameters of the fixed-wing model. Defaults: a small fixed-wing UAV.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

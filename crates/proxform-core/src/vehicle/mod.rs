@@ -14,6 +14,9 @@ use crate::control::ControlMatrix;
 use crate::error::ConfigError;
 use crate::state::{Input, State9};
 
+/// Standard gravity (m/s²).
+pub const G: f64 = 9.80665;
+
 /// The vehicle models proxform knows. An enum rather than a trait object: the controller's
 /// inner loop stays monomorphic and the models stay plain data.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
