@@ -38,6 +38,7 @@ macro_rules! step_context {
             active: &$sim.active,
             faults: &$sim.faults,
             sent: $sent,
+            broadcasts: &$sim.broadcasts,
             env: $env,
             warm: $warm,
         }
@@ -61,6 +62,9 @@ pub struct Simulation<'s> {
     grid: NeighbourGrid,
     /// Per-UAV environment (wind, position-fix bias, radio channel), empty when not needed.
     env: Vec<crate::environment::UavEnv>,
+    /// The radio messages arriving this step (sender, state sent), computed once for all
+    /// receivers.
+    broadcasts: Vec<(u32, State9)>,
     /// True states of the last `delay + 1` steps, oldest first (radio with delay only).
     history: std::collections::VecDeque<Vec<State9>>,
     active: Vec<bool>,
@@ -107,6 +111,7 @@ impl<'s> Simulation<'s> {
             uavs: vec![UavStep::default(); n],
             env: crate::environment::initial(scenario),
             grid: NeighbourGrid::new(),
+            broadcasts: Vec::new(),
             history: std::collections::VecDeque::new(),
             active: (0..n).map(|i| faults::is_active(&scenario.faults, i, 0.0)).collect(),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
@@ -150,6 +155,7 @@ impl<'s> Simulation<'s> {
             let range = sc.controller.areas.sensing_range_m;
             self.rebuild_grid(range);
             let k = WARMUP_STEP_BASE + w;
+            fill_broadcasts(sc, self.seed, self.run, Some((&self.current[..], k)), self.parallel, &mut self.broadcasts);
             let ctx = step_context!(self, k, t, Some((&self.current[..], k)), &[], true);
             let m = sc.controller.areas.areas;
             if self.parallel {
@@ -286,6 +292,7 @@ impl<'s> Simulation<'s> {
         } else {
             None
         };
+        fill_broadcasts(sc, self.seed, self.run, sent, self.parallel, &mut self.broadcasts);
         let ctx = step_context!(self, k, t, sent, &self.env, false);
         let m = sc.controller.areas.areas;
         if self.parallel {
@@ -358,6 +365,31 @@ impl<'s> Simulation<'s> {
     }
 }
 
+/// The radio messages arriving now (none before the first arrives, or without broadcasters).
+fn fill_broadcasts(
+    sc: &Scenario,
+    seed: u64,
+    run: u64,
+    sent: Option<(&[State9], u64)>,
+    parallel: bool,
+    out: &mut Vec<(u32, State9)>,
+) {
+    match sent {
+        Some((states, send_k)) => crate::sensing::broadcasts(
+            &sc.radio,
+            &sc.beacons,
+            states,
+            &sc.noise.sigma(),
+            seed,
+            run,
+            send_k,
+            parallel,
+            out,
+        ),
+        None => out.clear(),
+    }
+}
+
 /// The controllers' parameters: the scenario's, with separation keeping at twice the safety
 /// distance unless the scenario sets it.
 pub fn controller_params(scenario: &Scenario) -> proxform_core::ControllerParams {
@@ -385,6 +417,8 @@ struct StepContext<'a> {
     faults: &'a FaultStep,
     /// True states when the radio messages arriving now were sent, and that step.
     sent: Option<(&'a [State9], u64)>,
+    /// The radio messages arriving now.
+    broadcasts: &'a [(u32, State9)],
     /// Per-UAV environment (empty when the scenario needs none).
     env: &'a [crate::environment::UavEnv],
     /// Warm-up step: perceive and decide, change nothing.
@@ -404,12 +438,10 @@ impl<'a> StepContext<'a> {
             radio_up,
             radio,
             sent: self.sent.map(|s| s.0),
-            send_step: self.sent.map(|s| s.1),
+            broadcasts: self.broadcasts,
             delay_s,
             channel_bad,
             onboard: self.scenario.method.uses_onboard_sensing(),
-            seed: self.seed,
-            run: self.run,
         }
     }
 
@@ -424,7 +456,6 @@ impl<'a> StepContext<'a> {
             self.search,
             self.grid,
             &sc.dependencies[i],
-            &sc.beacons,
             link,
             &mut rng,
             radio_rng,

@@ -75,7 +75,6 @@ impl ProximitySensor {
         search: NeighbourSearch,
         grid: &NeighbourGrid,
         deps: &DependencySet,
-        beacons: &[UavId],
         link: &Link<'_>,
         rng: &mut StepRng,
         radio_rng: &mut StepRng,
@@ -160,14 +159,12 @@ impl ProximitySensor {
             }
         }
         // Messages heard over the radio (crate::radio), unless the sender is perceived onboard.
-        if let (true, Some(sent), Some(send_k)) = (link.radio_up, link.sent, link.send_step) {
+        if let (true, Some(sent)) = (link.radio_up, link.sent) {
             let radio = link.radio;
             let r2 = radio.range_m * radio.range_m;
             let n = states.len();
-            let all = if radio.broadcast_all { n } else { 0 };
-            let senders =
-                beacons.iter().map(|b| b.index()).chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)));
-            for j in senders {
+            for &(j, ref state) in link.broadcasts {
+                let j = j as usize;
                 if j == i || j >= n || !link.active[j] || scratch.observations.iter().any(|o| o.id.index() == j) {
                     continue;
                 }
@@ -176,11 +173,9 @@ impl ProximitySensor {
                 if d2 > r2 || !radio.delivered(link.channel_bad, radio_rng) {
                     continue;
                 }
-                // The sender's own measured state when it sent: its own-state noise stream.
-                let mut own_rng = StepRng::new(stream_key(link.seed, link.run, j as u64, Source::OwnState), send_k);
                 scratch.observations.push(Observation {
                     id: UavId(j as u32),
-                    state: noisy(q, &self.sigma, &mut own_rng),
+                    state: *state,
                     age_s: link.delay_s,
                     source: ObservationSource::Radio,
                 });
@@ -216,8 +211,9 @@ pub struct Link<'a> {
     pub radio: &'a RadioModel,
     /// True states when the messages arriving now were sent (None before the first arrive).
     pub sent: Option<&'a [State9]>,
-    /// Step at which they were sent.
-    pub send_step: Option<u64>,
+    /// The messages arriving now, in the order they are heard: each sender and the state it
+    /// sent (its own measured state then, see [`broadcasts`]).
+    pub broadcasts: &'a [(u32, State9)],
     /// Age of a radio message on arrival (s).
     pub delay_s: f64,
     /// The receiver's Gilbert-Elliott channel is in its bad state.
@@ -225,10 +221,46 @@ pub struct Link<'a> {
     /// Whether the receiver's controller uses onboard sensing (false: radio messages only;
     /// the nearest neighbour is still found, for the separation metric).
     pub onboard: bool,
-    /// Seed and run, for the senders' own-state noise streams.
-    pub seed: u64,
-    /// See `seed`.
-    pub run: u64,
+}
+
+/// Fills `out` with the messages sent at step `send_k` from the true states `sent`: the
+/// beacons first, then, when every UAV broadcasts, the others by id; each carries its
+/// sender's own measured state, drawn from the sender's own-state noise stream. Computed once
+/// per step for all receivers.
+#[allow(clippy::too_many_arguments)]
+pub fn broadcasts(
+    radio: &RadioModel,
+    beacons: &[UavId],
+    sent: &[State9],
+    sigma: &State9,
+    seed: u64,
+    run: u64,
+    send_k: u64,
+    parallel: bool,
+    out: &mut Vec<(u32, State9)>,
+) {
+    let n = sent.len();
+    let all = if radio.broadcast_all { n } else { 0 };
+    out.clear();
+    out.extend(
+        beacons
+            .iter()
+            .map(|b| b.index())
+            .chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)))
+            .filter(|&j| j < n)
+            .map(|j| (j as u32, State9::zeros())),
+    );
+    let fill = |m: &mut (u32, State9)| {
+        let j = m.0 as usize;
+        let mut own_rng = StepRng::new(stream_key(seed, run, j as u64, Source::OwnState), send_k);
+        m.1 = noisy(&sent[j], sigma, &mut own_rng);
+    };
+    if parallel {
+        use rayon::prelude::*;
+        out.par_iter_mut().with_min_len(1024).for_each(fill);
+    } else {
+        out.iter_mut().for_each(fill);
+    }
 }
 
 /// Draws whether an observation survives a dropout of probability `p`.
