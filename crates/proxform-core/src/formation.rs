@@ -104,14 +104,7 @@ impl Formation {
     #[inline]
     pub fn add_w(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
         let (c, s) = self.frame.course_cos_sin(reference);
-        let d = i.offset_m - j.offset_m;
-        x[0] += c * d.x - s * d.y;
-        x[1] += s * d.x + c * d.y;
-        x[2] += d.z;
-        let da = i.attitude_offset_rad - j.attitude_offset_rad;
-        x[6] += da.x;
-        x[7] += da.y;
-        x[8] += da.z;
+        add_w_rotated(i, j, c, s, x);
     }
 
     /// `W_ij` in a formation that turns as one rigid body about the vertical, for vehicles
@@ -138,18 +131,12 @@ impl Formation {
         let (cphi, sphi) = if a.abs() < v { ((v * v - a * a).sqrt() / v, a / v) } else { (1.0, 0.0) };
         let (cpsi, spsi) = (vx / v, vy / v);
         let (c, s) = (cpsi * cphi + spsi * sphi, spsi * cphi - cpsi * sphi);
+        add_w_rotated(i, j, c, s, x);
         let d = i.offset_m - j.offset_m;
         let (rx, ry) = (c * d.x - s * d.y, s * d.x + c * d.y);
-        x[state::X] += rx;
-        x[state::Y] += ry;
-        x[state::Z] += d.z;
         let (dvx, dvy) = (-omega * ry, omega * rx);
         x[state::VX] += dvx;
         x[state::VY] += dvy;
-        let da = i.attitude_offset_rad - j.attitude_offset_rad;
-        x[state::ALPHA] += da.x;
-        x[state::BETA] += da.y;
-        x[state::GAMMA] += da.z;
         // i's heading relative to j's, and the bank for ω at i's speed.
         let (wx, wy) = (vx + dvx, vy + dvy);
         let w = wx.hypot(wy);
@@ -167,6 +154,20 @@ impl Formation {
         self.add_w(i, j, reference, &mut w);
         w
     }
+}
+
+/// Adds the position and attitude rows of `W_ij` to `x`, with `R_f` the yaw rotation of
+/// cosine `c` and sine `s`.
+#[inline]
+fn add_w_rotated(i: &FormationSlot, j: &FormationSlot, c: f64, s: f64, x: &mut State9) {
+    let d = i.offset_m - j.offset_m;
+    x[state::X] += c * d.x - s * d.y;
+    x[state::Y] += s * d.x + c * d.y;
+    x[state::Z] += d.z;
+    let da = i.attitude_offset_rad - j.attitude_offset_rad;
+    x[state::ALPHA] += da.x;
+    x[state::BETA] += da.y;
+    x[state::GAMMA] += da.z;
 }
 
 #[cfg(test)]
