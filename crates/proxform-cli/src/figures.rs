@@ -1,7 +1,10 @@
 //! Figures mirroring the paper's Figures 4-10, as PNG and SVG.
 //!
-//! Figures 4-9: for one parameter (x, y, z, α, β, γ), (a) the six UAVs' values over time and
-//! (b) the followers' errors relative to the navigator with the allowable band. Figure 10:
+//! Figures 4-9: for one parameter (x, y, z, α, β, γ), (a) the recorded UAVs' values over time
+//! and (b) the followers' errors relative to the navigator with the allowable band. Each UAV is
+//! drawn over the steps it flew (a removed UAV's line stops, a joining one's starts); a large
+//! swarm shows the UAVs its trajectory recorded (the first ones), without a legend beyond a
+//! dozen. Figure 10:
 //! (a) the 3-D tracks, (b) the attitude overview. The PNG text uses DejaVu Sans, embedded in
 //! the binary so no system font library is needed.
 
@@ -67,47 +70,72 @@ fn register_embedded_font() -> Result<()> {
 
 /// Per-UAV time series extracted from a trajectory.
 struct Series {
+    /// UAVs recorded (the first `n` of the scenario).
     n: usize,
-    /// `t[k]`.
-    t: Vec<f64>,
-    /// `rows[uav][k]` = (state, error).
-    rows: Vec<Vec<([f64; 9], [f64; 6])>>,
+    /// UAVs in the scenario.
+    total: usize,
+    /// Time span of the trajectory (s).
+    t0: f64,
+    t1: f64,
+    /// Time step of the trajectory (s).
+    dt: f64,
+    /// `rows[uav]` = (t, state, error) at each step the UAV flew.
+    rows: Vec<Vec<Sample>>,
 }
 
+/// One recorded step of one UAV: time, state and formation error.
+type Sample = (f64, [f64; 9], [f64; 6]);
+
 impl Series {
-    fn new(traj: &Trajectory, n: usize) -> Self {
+    fn new(traj: &Trajectory, total: usize) -> Self {
+        let n = traj.rows.iter().map(|r| r.uav as usize + 1).max().unwrap_or(0).min(total);
         let mut rows = vec![Vec::new(); n];
-        let mut t = Vec::new();
+        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
         for r in &traj.rows {
             let u = r.uav as usize;
-            if u == 0 {
-                t.push(r.t);
-            }
             if u < n {
                 let mut s = [0.0; 9];
                 s.copy_from_slice(r.state.as_slice());
-                rows[u].push((s, r.error));
+                rows[u].push((r.t, s, r.error));
+                t0 = t0.min(r.t);
+                t1 = t1.max(r.t);
             }
         }
-        Self { n, t, rows }
+        if t0 > t1 {
+            (t0, t1) = (0.0, 1.0);
+        }
+        let dt = rows.iter().find(|r| r.len() >= 2).map_or(1.0, |r| (r[1].0 - r[0].0).max(1e-9));
+        Self { n, total, t0, t1, dt, rows }
     }
 
-    fn value(&self, uav: usize, k: usize, axis: &Axis) -> f64 {
-        let v = self.rows[uav][k].0[axis.state];
-        if axis.degrees {
-            v.to_degrees()
+    fn value(sample: &Sample, axis: &Axis) -> f64 {
+        to_report(sample.1[axis.state], axis)
+    }
+
+    fn error(sample: &Sample, axis: &Axis) -> f64 {
+        to_report(sample.2[axis.error], axis)
+    }
+
+    /// "the 6 UAVs", or "the first 64 of 10000 UAVs" for a sampled swarm.
+    fn which(&self) -> String {
+        if self.n < self.total {
+            format!("the first {} of {} UAVs", self.n, self.total)
         } else {
-            v
+            format!("the {} UAVs", self.n)
         }
     }
 
-    fn error(&self, uav: usize, k: usize, axis: &Axis) -> f64 {
-        let v = self.rows[uav][k].1[axis.error];
-        if axis.degrees {
-            v.to_degrees()
-        } else {
-            v
-        }
+    /// Legends are drawn for a dozen UAVs at most.
+    fn legend(&self) -> bool {
+        self.n <= PALETTE.len()
+    }
+}
+
+fn to_report(v: f64, axis: &Axis) -> f64 {
+    if axis.degrees {
+        v.to_degrees()
+    } else {
+        v
     }
 }
 
@@ -133,69 +161,69 @@ fn axis_figure<DB: DrawingBackend>(
 ) -> Result<()> {
     root.fill(&WHITE).map_err(plot_err)?;
     let (top, bottom) = root.split_vertically(SIZE.1 / 2);
-    let tmax = s.t.last().copied().unwrap_or(1.0);
-    let n = s.t.len();
+    let (t0, t1) = (s.t0, s.t1);
     // (a) values
-    let (lo, hi) = range((0..s.n).flat_map(|u| (0..n).map(move |k| (u, k))).map(|(u, k)| s.value(u, k, axis)));
+    let (lo, hi) = range(s.rows.iter().flatten().map(|r| Series::value(r, axis)));
     let mut chart = ChartBuilder::on(&top)
-        .caption(format!("(a) {} of the six UAVs", axis.name), ("sans-serif", 22))
+        .caption(format!("(a) {} of {}", axis.name, s.which()), ("sans-serif", 22))
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(70)
-        .build_cartesian_2d(0.0..tmax, lo..hi)
+        .build_cartesian_2d(t0..t1, lo..hi)
         .map_err(plot_err)?;
     chart.configure_mesh().x_desc("t (s)").y_desc(format!("{} ({})", axis.name, axis.unit)).draw().map_err(plot_err)?;
-    uav_lines(&mut chart, &s.t, 0..s.n, |u, k| s.value(u, k, axis), 2, SeriesLabelPosition::UpperLeft)?;
+    uav_lines(&mut chart, s, 0..s.n, |r| Series::value(r, axis), 2, SeriesLabelPosition::UpperLeft)?;
     // (b) errors with the allowable band
     let followers: Vec<usize> = (0..s.n).filter(|&u| u != nav).collect();
-    let (elo, ehi) =
-        range(followers.iter().flat_map(|&u| (0..n).map(move |k| (u, k))).map(|(u, k)| s.error(u, k, axis)));
+    let (elo, ehi) = range(followers.iter().flat_map(|&u| s.rows[u].iter()).map(|r| Series::error(r, axis)));
     let bound = allowable * 1.15;
     let mut chart = ChartBuilder::on(&bottom)
-        .caption(format!("(b) {} error relative to UAV1, allowable ±{allowable}", axis.name), ("sans-serif", 22))
+        .caption(
+            format!("(b) {} error relative to UAV{}, allowable ±{allowable}", axis.name, nav + 1),
+            ("sans-serif", 22),
+        )
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(70)
-        .build_cartesian_2d(0.0..tmax, elo.min(-bound)..ehi.max(bound))
+        .build_cartesian_2d(t0..t1, elo.min(-bound)..ehi.max(bound))
         .map_err(plot_err)?;
     chart.configure_mesh().x_desc("t (s)").y_desc(format!("error ({})", axis.unit)).draw().map_err(plot_err)?;
     for sign in [-1.0, 1.0] {
         chart
             .draw_series(DashedLineSeries::new(
-                [(0.0, sign * allowable), (tmax, sign * allowable)],
+                [(t0, sign * allowable), (t1, sign * allowable)],
                 8,
                 5,
                 RED.stroke_width(2),
             ))
             .map_err(plot_err)?;
     }
-    uav_lines(
-        &mut chart,
-        &s.t,
-        followers.iter().copied(),
-        |u, k| s.error(u, k, axis),
-        1,
-        SeriesLabelPosition::LowerLeft,
-    )?;
+    uav_lines(&mut chart, s, followers.iter().copied(), |r| Series::error(r, axis), 1, SeriesLabelPosition::LowerLeft)?;
     root.present().map_err(plot_err)
 }
 
-/// One labelled line per UAV over time, and the legend.
+/// One line per UAV over the steps it flew, and the legend (for a dozen UAVs at most).
 fn uav_lines<'a, DB: DrawingBackend + 'a>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
-    t: &[f64],
+    s: &Series,
     uavs: impl Iterator<Item = usize>,
-    value: impl Fn(usize, usize) -> f64,
+    value: impl Fn(&Sample) -> f64,
     width: u32,
     legend: SeriesLabelPosition,
 ) -> Result<()> {
     for u in uavs {
         let color = PALETTE[u % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new((0..t.len()).map(|k| (t[k], value(u, k))), color.stroke_width(width)))
-            .map_err(plot_err)?
-            .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        let drawn = chart
+            .draw_series(LineSeries::new(s.rows[u].iter().map(|r| (r.0, value(r))), color.stroke_width(width)))
+            .map_err(plot_err)?;
+        if s.legend() {
+            drawn
+                .label(format!("UAV{}", u + 1))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        }
+    }
+    if !s.legend() {
+        return Ok(());
     }
     chart
         .configure_series_labels()
@@ -208,8 +236,7 @@ fn uav_lines<'a, DB: DrawingBackend + 'a>(
 
 fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
     root.fill(&WHITE).map_err(plot_err)?;
-    let n = s.t.len();
-    let coord = |i: usize| range((0..s.n).flat_map(|u| s.rows[u].iter().map(move |r| r.0[i])));
+    let coord = |i: usize| range(s.rows.iter().flatten().map(|r| r.1[i]));
     let (x, y, z) = (coord(0), coord(1), coord(2));
     let mut chart = ChartBuilder::on(root)
         .caption("Formation tracks (x, y, z in m)", ("sans-serif", 24))
@@ -225,38 +252,46 @@ fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) 
     chart.configure_axes().draw().map_err(plot_err)?;
     for u in 0..s.n {
         let color = PALETTE[u % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(
-                (0..n).map(|k| (s.rows[u][k].0[0], s.rows[u][k].0[2], s.rows[u][k].0[1])),
-                color.stroke_width(2),
-            ))
-            .map_err(plot_err)?
-            .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        let drawn = chart
+            .draw_series(LineSeries::new(s.rows[u].iter().map(|r| (r.1[0], r.1[2], r.1[1])), color.stroke_width(2)))
+            .map_err(plot_err)?;
+        if s.legend() {
+            drawn
+                .label(format!("UAV{}", u + 1))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        }
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(plot_err)?;
+    if s.legend() {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(plot_err)?;
+    }
     root.present().map_err(plot_err)
 }
 
 fn attitude_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
     root.fill(&WHITE).map_err(plot_err)?;
     let panels = root.split_evenly((3, 1));
-    let n = s.t.len();
-    let tmax = s.t.last().copied().unwrap_or(1.0);
     for (panel, axis) in panels.iter().zip(&AXES[3..]) {
-        let (lo, hi) = range((0..s.n).flat_map(|u| (0..n).map(move |k| (u, k))).map(|(u, k)| s.value(u, k, axis)));
+        let (lo, hi) = range(s.rows.iter().flatten().map(|r| Series::value(r, axis)));
         let mut chart = ChartBuilder::on(panel)
-            .caption(format!("{} of the six UAVs", axis.name), ("sans-serif", 18))
+            .caption(format!("{} of {}", axis.name, s.which()), ("sans-serif", 18))
             .margin(8)
             .x_label_area_size(30)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..tmax, lo..hi)
+            .build_cartesian_2d(s.t0..s.t1, lo..hi)
             .map_err(plot_err)?;
         chart.configure_mesh().x_desc("t (s)").y_desc("deg").draw().map_err(plot_err)?;
         for u in 0..s.n {
             let color = PALETTE[u % PALETTE.len()];
             chart
-                .draw_series(LineSeries::new((0..n).map(|k| (s.t[k], s.value(u, k, axis))), color.stroke_width(1)))
+                .draw_series(LineSeries::new(
+                    s.rows[u].iter().map(|r| (r.0, Series::value(r, axis))),
+                    color.stroke_width(1),
+                ))
                 .map_err(plot_err)?;
         }
     }
@@ -301,7 +336,7 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
 /// every 10 s so the formation's shape can be read along the way.
 fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
     root.fill(&WHITE).map_err(plot_err)?;
-    let coord = |i: usize| range((0..s.n).flat_map(|u| s.rows[u].iter().map(move |r| r.0[i])));
+    let coord = |i: usize| range(s.rows.iter().flatten().map(|r| r.1[i]));
     let (x, y) = (coord(0), coord(1));
     // Equal scales: widen the narrower range around its centre.
     let aspect = f64::from(SIZE.0 - 120) / f64::from(SIZE.1 - 100);
@@ -321,24 +356,29 @@ fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) ->
         .build_cartesian_2d(x.0..x.1, y.0..y.1)
         .map_err(plot_err)?;
     chart.configure_mesh().x_desc("x (m)").y_desc("y (m)").draw().map_err(plot_err)?;
-    let every = s.t.windows(2).next().map_or(1, |w| ((10.0 / (w[1] - w[0]).max(1e-9)).round() as usize).max(1));
+    let every = ((10.0 / s.dt).round() as usize).max(1);
     for u in 0..s.n {
         let color = PALETTE[u % PALETTE.len()];
-        let pts: Vec<(f64, f64)> = s.rows[u].iter().map(|r| (r.0[0], r.0[1])).collect();
-        chart
-            .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1)))
-            .map_err(plot_err)?
-            .label(format!("UAV{}", u + 1))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
-        chart.draw_series(pts.iter().step_by(every).map(|&p| Circle::new(p, 3, color.filled()))).map_err(plot_err)?;
+        let pts: Vec<(f64, f64)> = s.rows[u].iter().map(|r| (r.1[0], r.1[1])).collect();
+        let drawn = chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1))).map_err(plot_err)?;
+        if s.legend() {
+            drawn
+                .label(format!("UAV{}", u + 1))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        }
+        // Dots at the same instants for every UAV (multiples of 10 s from the start).
+        let dots = s.rows[u].iter().filter(|r| ((r.0 - s.t0) / s.dt).round() as usize % every == 0);
+        chart.draw_series(dots.map(|r| Circle::new((r.1[0], r.1[1]), 3, color.filled()))).map_err(plot_err)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(plot_err)?;
+    if s.legend() {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(plot_err)?;
+    }
     root.present().map_err(plot_err)
 }
 

@@ -117,6 +117,29 @@ fn swarm_runs_at_any_size_and_keeps_files_small() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--uavs applies to --scenario swarm"));
 }
 
+/// Figures are drawn from whatever the trajectory holds: a swarm's sample of UAVs, and UAVs
+/// that stop flying part-way (a removal).
+#[test]
+fn figures_show_a_sampled_swarm_and_a_removed_uav() {
+    let removal = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper-remove-uav2.toml");
+    let removal = removal.to_string_lossy();
+    let cases: [(&str, &[&str]); 2] = [
+        ("cli-fig-swarm", &["run", "--scenario", "swarm", "--uavs", "200", "--duration-s", "3"]),
+        ("cli-fig-removal", &["run", &removal, "--runs", "1", "--duration-s", "45"]),
+    ];
+    for (name, args) in cases {
+        let out = scratch(name);
+        let o = proxform().args(args).args(["-q", "--out"]).arg(&out).output().expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        assert!(matches!(o.status.code(), Some(0 | 1)), "{name}: {stderr}");
+        for f in ["fig4_x.png", "fig9_gamma.svg", "fig10a_tracks.png", "fig10c_plan.svg"] {
+            let len = std::fs::metadata(out.join(f)).map(|m| m.len()).unwrap_or(0);
+            assert!(len > 1000, "{name}: {f} has {len} bytes");
+        }
+    }
+}
+
 #[test]
 fn bench_measures_in_child_processes() {
     let out = scratch("cli-bench");

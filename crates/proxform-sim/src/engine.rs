@@ -529,9 +529,16 @@ impl<'a> StepContext<'a> {
         } else {
             commanded
         };
+        // The model error is zero when the input was applied as commanded: the plant is then
+        // propagated once.
+        let exact = applied == commanded;
         let model_error = if sc.wind.is_calm() {
             *next = sc.vehicle.propagate(me, &applied, dt);
-            proxform_core::state::difference(next, &sc.vehicle.propagate(me, &commanded, dt))
+            if exact {
+                State9::zeros()
+            } else {
+                proxform_core::state::difference(next, &sc.vehicle.propagate(me, &commanded, dt))
+            }
         } else {
             // The vehicle moves through the air; the wind carries it (crate::disturbance).
             let e = env.copied().unwrap_or_default();
@@ -548,7 +555,11 @@ impl<'a> StepContext<'a> {
                 x
             };
             *next = carry(sc.vehicle.propagate(&air, &applied, dt));
-            proxform_core::state::difference(next, &carry(sc.vehicle.propagate(&air, &commanded, dt)))
+            if exact {
+                State9::zeros()
+            } else {
+                proxform_core::state::difference(next, &carry(sc.vehicle.propagate(&air, &commanded, dt)))
+            }
         };
         aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
         aux.outcome = Some(decision.outcome);
