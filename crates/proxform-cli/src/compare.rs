@@ -53,7 +53,16 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
             crate::scenarios::load_file(&dir.join(s)).map_err(|e| format!("{e:#}"))
         }
     };
-    let mut cmp = Comparison::parse(&text, &name, resolve)?;
+    let parsed = Comparison::parse(&text, &name, resolve);
+    if parsed.is_err() && crate::scenarios::kind_of(&text) == Some(crate::scenarios::FileKind::Scenario) {
+        return parsed.with_context(|| {
+            format!(
+                "{name} is a scenario file: run it with `proxform run {name}`, or name it in a comparison file \
+                 (scenario = \"{name}\")"
+            )
+        });
+    }
+    let mut cmp = parsed?;
     if let Some(s) = args.seeds {
         cmp.seeds = s;
     }

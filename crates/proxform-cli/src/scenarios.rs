@@ -32,7 +32,40 @@ pub fn built_in(name: &str, uavs: Option<u64>) -> Result<Scenario> {
 pub fn load_file(path: &Path) -> Result<Scenario> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read scenario file {}", path.display()))?;
-    Ok(proxform_sim::load::parse(&text, &path.display().to_string())?)
+    let parsed = proxform_sim::load::parse(&text, &path.display().to_string());
+    if parsed.is_err() && kind_of(&text) == Some(FileKind::Comparison) {
+        return parsed.with_context(|| {
+            format!("{} is a comparison file: run it with `proxform compare {}`", path.display(), path.display())
+        });
+    }
+    Ok(parsed?)
+}
+
+/// What a TOML file of proxform describes, judged by its tables and top-level keys.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileKind {
+    /// A scenario (`proxform run FILE`).
+    Scenario,
+    /// A comparison (`proxform compare FILE`).
+    Comparison,
+}
+
+/// The kind of file `text` looks like, if it looks like one: used to point a user who gave a
+/// file to the wrong command at the right one.
+pub fn kind_of(text: &str) -> Option<FileKind> {
+    let mut top_level = true;
+    for line in text.lines().map(str::trim) {
+        if line.starts_with("[[condition]]")
+            || (top_level && (line.starts_with("methods") || line.starts_with("seeds")))
+        {
+            return Some(FileKind::Comparison);
+        }
+        if ["[formation", "[path", "[allowable", "[vehicle", "[controller"].iter().any(|t| line.starts_with(t)) {
+            return Some(FileKind::Scenario);
+        }
+        top_level &= !line.starts_with('[');
+    }
+    None
 }
 
 /// Prints the built-in scenarios.
@@ -76,6 +109,14 @@ mod tests {
     fn the_built_in_files_are_valid_scenarios() {
         let s = proxform_sim::load::parse(FIXED_WING_V, "fixed-wing-v.toml").expect("loads");
         assert_eq!(s.len(), 12);
+    }
+
+    #[test]
+    fn scenario_and_comparison_files_are_told_apart() {
+        assert_eq!(kind_of(EXAMPLE), Some(FileKind::Scenario));
+        assert_eq!(kind_of(FIXED_WING_V), Some(FileKind::Scenario));
+        assert_eq!(kind_of(proxform_sim::compare::BUILT_IN), Some(FileKind::Comparison));
+        assert_eq!(kind_of("name = \"x\"\n"), None);
     }
 
     #[test]
