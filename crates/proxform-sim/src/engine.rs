@@ -141,17 +141,14 @@ impl<'s> Simulation<'s> {
         }
         let nav = sc.navigator.index();
         let f = &sc.formation;
-        let real = std::mem::take(&mut self.current);
+        // The ideal states are written into `next` (unused until the first step), in place.
+        std::mem::swap(&mut self.current, &mut self.next);
         for w in 0..steps {
             let t = -((steps - w) as f64) * sc.dt_s;
             let nav_state = sc.path.state_at(t, self.start);
-            self.current = real
-                .iter()
-                .enumerate()
-                .map(
-                    |(i, _)| if i == nav { nav_state } else { nav_state + f.w(&f.slots[i], &f.slots[nav], &nav_state) },
-                )
-                .collect();
+            for (i, s) in self.current.iter_mut().enumerate() {
+                *s = if i == nav { nav_state } else { nav_state + f.w(&f.slots[i], &f.slots[nav], &nav_state) };
+            }
             let range = sc.controller.areas.sensing_range_m;
             self.rebuild_grid(range);
             let k = WARMUP_STEP_BASE + w;
@@ -171,7 +168,7 @@ impl<'s> Simulation<'s> {
                 }
             }
         }
-        self.current = real;
+        std::mem::swap(&mut self.current, &mut self.next);
         for c in self.controllers.iter_mut().flatten() {
             c.forget_own_prediction();
         }
