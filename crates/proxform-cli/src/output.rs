@@ -1,17 +1,69 @@
-//! Output files: `summary.json` and `trajectories.csv`. Units: SI and radians in the CSV's
-//! state columns, errors in m and degrees (the report units).
+//! Output files: `summary.json`, `runs.csv` and `trajectories.csv`. Units: SI and radians in
+//! the trajectories' state columns, errors in m and degrees (the report units).
 
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use proxform_sim::{Summary, Trajectory};
+use proxform_sim::{RunSummary, Summary, Trajectory};
 
 /// Writes the batch summary as pretty JSON.
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
     let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     serde_json::to_writer_pretty(BufWriter::new(f), summary).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes one row per run: the figures a paper tabulates or plots across seeds.
+pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
+    let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut w = csv::Writer::from_writer(BufWriter::new(f));
+    const AXES: [&str; 6] = ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"];
+    let mut header: Vec<String> = ["seed", "run", "pass"].iter().map(|s| s.to_string()).collect();
+    header.extend(AXES.iter().map(|a| format!("max_err_{a}")));
+    header.extend(AXES.iter().map(|a| format!("rms_err_{a}")));
+    header.extend(
+        [
+            "min_separation_m",
+            "close_pairs",
+            "adjustments_per_uav_minute",
+            "held_fraction",
+            "within_allowable_fraction",
+            "control_effort",
+            "radio_msgs_per_uav_s",
+            "order_mean",
+            "order_min",
+            "connectivity_min",
+            "alone_s_per_uav",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
+    );
+    w.write_record(&header)?;
+    // Errors in the report's units: metres, and degrees for the attitudes.
+    let report =
+        |e: &[f64; 6]| e.iter().enumerate().map(|(k, v)| if k < 3 { *v } else { v.to_degrees() }).collect::<Vec<_>>();
+    for r in runs {
+        let minutes = r.followers as f64 * r.duration_s / 60.0;
+        let mut rec = vec![seed.to_string(), r.run.to_string(), u8::from(r.pass).to_string()];
+        rec.extend(report(&r.max_abs_error).iter().chain(&report(&r.rms_error)).map(|v| format!("{v:.6}")));
+        rec.extend([
+            format!("{:.3}", r.min_separation_m),
+            r.close_pairs.to_string(),
+            format!("{:.3}", if minutes > 0.0 { r.adjustments as f64 / minutes } else { 0.0 }),
+            format!("{:.6}", r.held_fraction),
+            format!("{:.6}", r.within_allowable_fraction),
+            format!("{:.6}", r.control_effort),
+            format!("{:.3}", r.radio_msgs_per_uav_s),
+            format!("{:.6}", r.order_mean),
+            format!("{:.6}", r.order_min),
+            format!("{:.6}", r.connectivity_min),
+            format!("{:.3}", r.alone_s_per_uav),
+        ]);
+        w.write_record(&rec)?;
+    }
+    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
 }
 
 /// Writes one row per UAV per step.

@@ -141,7 +141,8 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
 
     // Files first: a reader that closes the report early still gets them.
     output::write_summary(&out.join("summary.json"), &result.summary)?;
-    let mut written = vec![out.join("summary.json")];
+    output::write_runs(&out.join("runs.csv"), args.seed, &result.runs)?;
+    let mut written = vec![out.join("summary.json"), out.join("runs.csv")];
     if let Some(traj) = &result.first_trajectory {
         if !args.no_trajectories {
             let p = out.join("trajectories.csv");

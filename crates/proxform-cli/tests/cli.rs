@@ -34,6 +34,22 @@ fn run_writes_the_table_the_summary_and_the_figures() {
         assert!(summary["worst_abs_error"][key].is_number(), "worst {key}");
         assert!(summary["p99_abs_error"][key].is_number(), "p99 {key}");
     }
+    // One row per run; the worst of the runs is the summary's worst.
+    let runs = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
+    let mut lines = runs.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4);
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    assert!(rows.iter().enumerate().all(|(r, row)| row[col("seed")] == "3" && row[col("run")] == r.to_string()));
+    for key in ["x_m", "gamma_deg"] {
+        let worst = rows
+            .iter()
+            .map(|row| row[col(&format!("max_err_{key}"))].parse::<f64>().expect("number"))
+            .fold(0.0, f64::max);
+        let want = summary["worst_abs_error"][key].as_f64().expect("number");
+        assert!((worst - want).abs() < 1e-5, "{key}: runs.csv {worst}, summary {want}");
+    }
     for fig in [
         "fig4_x",
         "fig5_y",
