@@ -61,6 +61,83 @@ impl std::fmt::Display for LoadError {
 /// A slot's `depends_on` table as written: UAV number → degree.
 type ExplicitRefs = BTreeMap<String, f64>;
 
+/// Refuses a navigator path that the followers' vehicle cannot fly: its velocity or attitude
+/// leaves the vehicle's limits at some instant (the followers would be held at the limit and
+/// fall behind, silently). Checked every update period, at most 200 000 instants.
+fn within_vehicle(s: &Scenario) -> Result<(), SpecError> {
+    let steps = (s.duration_s / s.dt_s).ceil().max(1.0);
+    let samples = steps.min(200_000.0) as u64;
+    let (vmin, vmax) = s.vehicle.forward_speed_range();
+    let tol = 1e-6;
+    for k in 0..=samples {
+        let t = s.duration_s * k as f64 / samples as f64;
+        let x = s.path.state_at(t, [0.0; 3]);
+        let v = s.vehicle.forward_speed(&x);
+        let mut out: Option<(&str, String, f64, f64)> = None;
+        match &s.vehicle {
+            VehicleModel::Kinematic(m) => {
+                let l = &m.limits;
+                if x[state::VX] < l.vx_min_mps - tol || x[state::VX] > l.vx_max_mps + tol {
+                    let key = if x[state::VX] < l.vx_min_mps { "vx_min_kmh" } else { "vx_max_kmh" };
+                    out = Some((
+                        key,
+                        "vx".into(),
+                        x[state::VX] * 3.6,
+                        if x[state::VX] < l.vx_min_mps { l.vx_min_mps } else { l.vx_max_mps } * 3.6,
+                    ));
+                } else if x[state::VY].abs() > l.vy_max_mps + tol {
+                    out = Some(("vy_max_kmh", "|vy|".into(), x[state::VY].abs() * 3.6, l.vy_max_mps * 3.6));
+                } else if x[state::VZ].abs() > l.vz_max_mps + tol {
+                    out = Some(("vz_max_kmh", "|vz|".into(), x[state::VZ].abs() * 3.6, l.vz_max_mps * 3.6));
+                } else {
+                    for (a, name) in ["pitch", "yaw", "roll"].iter().enumerate() {
+                        let angle = proxform_core::angle::wrap_pi(x[state::ALPHA + a]).abs();
+                        if angle > l.attitude_max_rad[a] + tol {
+                            out = Some((
+                                ["attitude_max_deg[1]", "attitude_max_deg[2]", "attitude_max_deg[3]"][a],
+                                format!("|{name}|"),
+                                angle.to_degrees(),
+                                l.attitude_max_rad[a].to_degrees(),
+                            ));
+                            break;
+                        }
+                    }
+                }
+            }
+            VehicleModel::FixedWing(m) => {
+                if v < vmin - tol || v > vmax + tol {
+                    let key = if v < vmin { "stall_speed_kmh" } else { "max_speed_kmh" };
+                    out = Some((key, "airspeed".into(), v * 3.6, if v < vmin { vmin } else { vmax } * 3.6));
+                } else if x[state::GAMMA].abs() > m.bank_max_rad + tol {
+                    out = Some((
+                        "bank_max_deg",
+                        "|bank|".into(),
+                        x[state::GAMMA].abs().to_degrees(),
+                        m.bank_max_rad.to_degrees(),
+                    ));
+                }
+            }
+        }
+        if let Some((key, what, found, limit)) = out {
+            let unit = if key.contains("_deg") { "°" } else { " km/h" };
+            let hint = if matches!(s.vehicle, VehicleModel::Kinematic(_)) {
+                " (the kinematic vehicle's limits are on the world axes and on its attitude: a path that \
+                 turns far from +x leaves them; turn less, raise the limits, or fly model = \"fixed_wing\")"
+            } else {
+                ""
+            };
+            return Err(err(
+                "path",
+                format!(
+                    "the navigator reaches {what} {found:.1}{unit} at t = {t:.1} s, beyond vehicle.{key} = \
+                     {limit:.1}{unit}: the followers fly the same vehicle and could not keep their slots{hint}"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn err(key: impl Into<String>, message: impl Into<String>) -> SpecError {
     SpecError { key: key.into(), message: message.into() }
 }
@@ -430,6 +507,8 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ));
             }
         }
+
+        within_vehicle(&s)?;
 
         // Noise, sensing, radio, pass criterion, faults.
         let noise = spec.noise.clone().unwrap_or_default();
