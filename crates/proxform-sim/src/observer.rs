@@ -68,13 +68,22 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 }
 
 /// Formation errors of UAV `i` relative to the reference `nav_state` (METHOD §7):
-/// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped).
+/// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped). W is the one
+/// the controllers use: for a formation that turns by banking (the controller's
+/// `bank_turn_feedforward`, the fixed wing) the slot's heading and bank in the turn are part of
+/// it, so a wing UAV flying along its own velocity in a coordinated turn is not counted as a
+/// yaw error.
 #[inline]
 pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &State9, i: usize) -> [f64; 6] {
     let nav = scenario.navigator.index();
     let f = &scenario.formation;
-    let w = f.w(&f.slots[i], &f.slots[nav], nav_state);
-    let e = proxform_core::state::difference(&states[i], &(nav_state + w));
+    let mut slot = *nav_state;
+    if scenario.controller.bank_turn_feedforward {
+        f.add_w_turning(&f.slots[i], &f.slots[nav], nav_state, &mut slot);
+    } else {
+        f.add_w(&f.slots[i], &f.slots[nav], nav_state, &mut slot);
+    }
+    let e = proxform_core::state::difference(&states[i], &slot);
     [e[0], e[1], e[2], e[6], e[7], e[8]]
 }
 
