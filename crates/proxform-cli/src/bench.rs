@@ -3,11 +3,13 @@
 //!
 //! Every measurement runs in a child process so that its peak memory is its own.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::{Command, ExitCode};
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
 use proxform_sim::sensing::NeighbourSearch;
 use proxform_sim::throughput::{measure, Throughput};
 
@@ -81,30 +83,42 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     );
     let exe = std::env::current_exe().context("cannot find the proxform executable")?;
     let mut rows = Vec::new();
+    // A spinner on stderr while a child measures (a 10^6-UAV row takes a minute or two).
+    let spinner = if std::io::stderr().is_terminal() { ProgressBar::new_spinner() } else { ProgressBar::hidden() };
+    spinner.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     for (n, threads, search) in plan {
         // Enough steps for about three million updates (all-pairs: N² work), at least 5.
         let work = if search == NeighbourSearch::AllPairs { (n * n / 200).max(n) } else { n };
         let steps = (3_000_000 / work).clamp(5, 200);
+        spinner.set_message(format!("measuring {n} UAVs, {}, {threads} thread(s), {steps} steps", search_name(search)));
         let output = Command::new(&exe)
             .args(["bench", "--one", &n.to_string(), &steps.to_string(), &threads.to_string(), search_name(search)])
             .output()
             .context("cannot start a measurement process")?;
+        spinner.set_message("");
         if !output.status.success() {
             bail!("measurement of {n} UAVs failed: {}", String::from_utf8_lossy(&output.stderr));
         }
         let row: Row = serde_json::from_slice(&output.stdout).context("unreadable measurement")?;
-        println!(
-            "{:>9} {:>10} {:>8} {:>6} {:>16.3e} {:>12.0} {:>10}",
-            row.uavs,
-            row.search,
-            row.threads,
-            row.steps,
-            row.updates_per_s,
-            row.ns_per_update,
-            mib(row.peak_rss_bytes)
-        );
+        spinner.suspend(|| {
+            println!(
+                "{:>9} {:>10} {:>8} {:>6} {:>16.3e} {:>12.0} {:>10}",
+                row.uavs,
+                row.search,
+                row.threads,
+                row.steps,
+                row.updates_per_s,
+                row.ns_per_update,
+                mib(row.peak_rss_bytes)
+            )
+        });
         rows.push(row);
     }
+    spinner.finish_and_clear();
     let mut w = csv::Writer::from_path(out.join("bench.csv"))?;
     for r in &rows {
         w.serialize(r)?;
