@@ -16,7 +16,7 @@ use crate::faults::{self, Fault, FaultStep};
 use crate::grid::NeighbourGrid;
 use crate::observer::{Observer, StepFrame, UavStep};
 use crate::radio::RadioModel;
-use crate::rng::{stream_key, Source, StepRng};
+use crate::rng::{source_key, stream_key, uav_key, Source, StepRng};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::sensing::{noisy, Link, NeighbourSearch, ProximitySensor, SensorScratch};
 
@@ -26,9 +26,8 @@ macro_rules! step_context {
     ($sim:ident, $k:expr, $t:expr, $sent:expr, $env:expr, $warm:expr) => {
         StepContext {
             scenario: $sim.scenario,
-            seed: $sim.seed,
-            run: $sim.run,
-            k: $k,
+            run_key: crate::rng::run_key($sim.seed, $sim.run),
+            step_part: crate::rng::step_part($k),
             t: $t,
             start: $sim.start,
             current: &$sim.current,
@@ -401,9 +400,10 @@ pub const SEPARATION_PER_SAFETY: f64 = 2.0;
 /// Read-only view of one step, shared by the threads that update the UAVs.
 struct StepContext<'a> {
     scenario: &'a Scenario,
-    seed: u64,
-    run: u64,
-    k: u64,
+    /// The (seed, run) part of the run's stream keys ([`crate::rng::run_key`]).
+    run_key: u64,
+    /// The step's part of its generators ([`crate::rng::step_part`]).
+    step_part: u64,
     t: f64,
     start: [f64; 3],
     current: &'a [State9],
@@ -426,6 +426,14 @@ struct StepContext<'a> {
 const WARMUP_STEP_BASE: u64 = 1 << 62;
 
 impl<'a> StepContext<'a> {
+    /// The generator of stream `source` of the UAV of `uav_key` at this step: the same as
+    /// `StepRng::new(stream_key(seed, run, uav, source), k)`, with the run's and the step's
+    /// parts of the key mixed once.
+    #[inline]
+    fn rng(&self, uav_key: u64, source: Source) -> StepRng {
+        StepRng::at(source_key(uav_key, source), self.step_part)
+    }
+
     /// What the links allow UAV updates this step.
     fn link(&self, radio: &'a RadioModel, dropout: f64, radio_up: bool, channel_bad: bool, delay_s: f64) -> Link<'a> {
         Link {
@@ -444,9 +452,16 @@ impl<'a> StepContext<'a> {
 
     /// UAV `i`'s perception this step (into `scratch.observations`): its nearest neighbour's
     /// distance and id.
-    fn perceive(&self, i: usize, link: &Link<'_>, radio_rng: &mut StepRng, scratch: &mut SensorScratch) -> (f64, u32) {
+    fn perceive(
+        &self,
+        i: usize,
+        uav_key: u64,
+        link: &Link<'_>,
+        radio_rng: &mut StepRng,
+        scratch: &mut SensorScratch,
+    ) -> (f64, u32) {
         let sc = self.scenario;
-        let mut rng = StepRng::new(stream_key(self.seed, self.run, i as u64, Source::Sensing), self.k);
+        let mut rng = self.rng(uav_key, Source::Sensing);
         self.sensor.perceive(
             i,
             self.current,
@@ -468,12 +483,12 @@ impl<'a> StepContext<'a> {
             return;
         }
         let sc = self.scenario;
-        let uav = i as u64;
+        let uk = uav_key(self.run_key, i as u64);
         let ideal = sc.radio.ideal();
         let link = self.link(&ideal, 0.0, true, false, 0.0);
-        let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
-        self.perceive(i, &link, &mut radio_rng, scratch);
-        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
+        let mut radio_rng = self.rng(uk, Source::Radio);
+        self.perceive(i, uk, &link, &mut radio_rng, scratch);
+        let mut rng = self.rng(uk, Source::OwnState);
         let own = noisy(&self.current[i], &sc.noise.sigma(), &mut rng);
         ctrl.step(self.t, &own, &scratch.observations);
     }
@@ -490,17 +505,17 @@ impl<'a> StepContext<'a> {
     ) {
         let sc = self.scenario;
         let dt = sc.dt_s;
-        let uav = i as u64;
+        let uk = uav_key(self.run_key, i as u64);
         if !self.active[i] {
             *next = self.current[i];
             *aux = UavStep::default();
             return;
         }
         let env = self.env.get(i);
-        let mut radio_rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Radio), self.k);
+        let mut radio_rng = self.rng(uk, Source::Radio);
         let bad = env.is_some_and(|e| e.channel_bad);
         let link = self.link(&sc.radio, sc.dropout, self.faults.radio_up, bad, f64::from(sc.radio.delay_steps) * dt);
-        let nearest = self.perceive(i, &link, &mut radio_rng, scratch);
+        let nearest = self.perceive(i, uk, &link, &mut radio_rng, scratch);
         (aux.nearest_m, aux.nearest_id) = nearest;
         aux.radio_msgs = scratch.observations.iter().filter(|o| o.source == ObservationSource::Radio).count() as u16;
         let Some(ctrl) = ctrl else {
@@ -510,7 +525,7 @@ impl<'a> StepContext<'a> {
             return;
         };
         let me = &self.current[i];
-        let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::OwnState), self.k);
+        let mut rng = self.rng(uk, Source::OwnState);
         let mut own = noisy(me, &sc.noise.sigma(), &mut rng);
         if let Some(e) = env {
             for k in 0..3 {
@@ -521,7 +536,7 @@ impl<'a> StepContext<'a> {
         let decision = ctrl.step(self.t, &own, &scratch.observations);
         let commanded = if sc.adjustment_enabled { decision.input } else { Input::zeros() };
         let applied = if matches!(decision.outcome, Outcome::Adjusted { .. }) && sc.actuation_error > 0.0 {
-            let mut rng = StepRng::new(stream_key(self.seed, self.run, uav, Source::Actuation), self.k);
+            let mut rng = self.rng(uk, Source::Actuation);
             commanded.map(|u| u * (1.0 + sc.actuation_error * rng.random_range(-1.0..=1.0)))
         } else {
             commanded

@@ -40,10 +40,32 @@ fn mix(mut z: u64) -> u64 {
 /// The key of one stream.
 #[inline]
 pub fn stream_key(seed: u64, run: u64, uav: u64, source: Source) -> u64 {
-    let mut k = mix(seed ^ GOLDEN);
-    k = mix(k ^ run.wrapping_mul(GOLDEN));
-    k = mix(k ^ uav.wrapping_mul(0xD1B5_4A32_D192_ED03));
-    mix(k ^ (source as u64).wrapping_mul(0x8CB9_2BA7_2F3D_8DD7))
+    source_key(uav_key(run_key(seed, run), uav), source)
+}
+
+/// The (seed, run) part of every stream key of a run: the first half of [`stream_key`],
+/// computed once per run.
+#[inline]
+pub fn run_key(seed: u64, run: u64) -> u64 {
+    mix(mix(seed ^ GOLDEN) ^ run.wrapping_mul(GOLDEN))
+}
+
+/// The part of the keys of UAV `uav`'s streams in the run of `run_key`.
+#[inline]
+pub fn uav_key(run_key: u64, uav: u64) -> u64 {
+    mix(run_key ^ uav.wrapping_mul(0xD1B5_4A32_D192_ED03))
+}
+
+/// The key of stream `source` of the UAV of `uav_key`: equal to [`stream_key`].
+#[inline]
+pub fn source_key(uav_key: u64, source: Source) -> u64 {
+    mix(uav_key ^ (source as u64).wrapping_mul(0x8CB9_2BA7_2F3D_8DD7))
+}
+
+/// The step's part of every generator of step `step`.
+#[inline]
+pub fn step_part(step: u64) -> u64 {
+    mix(step.wrapping_add(GOLDEN))
 }
 
 /// SplitMix64 generator for one stream at one step.
@@ -56,7 +78,14 @@ impl StepRng {
     /// The generator of stream `key` at step `step`.
     #[inline]
     pub fn new(key: u64, step: u64) -> Self {
-        Self { state: mix(key ^ mix(step.wrapping_add(GOLDEN))) }
+        Self::at(key, step_part(step))
+    }
+
+    /// The generator of stream `key` at the step whose [`step_part`] is `part` (computed once
+    /// per step for every stream).
+    #[inline]
+    pub fn at(key: u64, part: u64) -> Self {
+        Self { state: mix(key ^ part) }
     }
 
     /// The next 64 random bits.
@@ -112,6 +141,19 @@ mod tests {
         let z: f64 = StepRng::new(a, 4).sample(StandardNormal);
         assert_eq!(x.to_bits(), y.to_bits());
         assert_ne!(x.to_bits(), z.to_bits());
+    }
+
+    #[test]
+    fn precomputed_key_parts_give_the_same_streams() {
+        for (seed, run, uav, step) in [(1u64, 0u64, 0u64, 0u64), (7, 3, 123_456, 99), (u64::MAX, u64::MAX, 5, 1 << 62)]
+        {
+            for source in [Source::OwnState, Source::Sensing, Source::Radio] {
+                let key = source_key(uav_key(run_key(seed, run), uav), source);
+                assert_eq!(key, stream_key(seed, run, uav, source));
+                let (mut a, mut b) = (StepRng::new(key, step), StepRng::at(key, step_part(step)));
+                assert_eq!(a.next_u64(), b.next_u64());
+            }
+        }
     }
 
     #[test]
