@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use anyhow::{anyhow, Result};
+use plotters::chart::SeriesAnno;
 use plotters::coord::types::RangedCoordf64;
-use plotters::coord::Shift;
+use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use proxform_sim::{Scenario, Trajectory};
@@ -217,19 +218,31 @@ fn uav_lines<'a, DB: DrawingBackend + 'a>(
             .draw_series(LineSeries::new(s.rows[u].iter().map(|r| (r.0, value(r))), color.stroke_width(width)))
             .map_err(plot_err)?;
         if s.legend() {
-            drawn
-                .label(format!("UAV{}", u + 1))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            label_uav(drawn, u, color);
         }
     }
     if !s.legend() {
         return Ok(());
     }
+    legend_box(chart, legend)
+}
+
+/// Names UAV `u`'s line in the legend.
+fn label_uav<DB: DrawingBackend>(line: &mut SeriesAnno<'_, DB>, u: usize, color: RGBColor) {
+    line.label(format!("UAV{}", u + 1))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+}
+
+/// Draws the legend of the labelled series at `position`.
+fn legend_box<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<()> {
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
-        .position(legend)
+        .position(position)
         .draw()
         .map_err(plot_err)
 }
@@ -256,18 +269,11 @@ fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) 
             .draw_series(LineSeries::new(s.rows[u].iter().map(|r| (r.1[0], r.1[2], r.1[1])), color.stroke_width(2)))
             .map_err(plot_err)?;
         if s.legend() {
-            drawn
-                .label(format!("UAV{}", u + 1))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            label_uav(drawn, u, color);
         }
     }
     if s.legend() {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_err)?;
+        legend_box(&mut chart, SeriesLabelPosition::MiddleRight)?;
     }
     root.present().map_err(plot_err)
 }
@@ -362,22 +368,14 @@ fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) ->
         let pts: Vec<(f64, f64)> = s.rows[u].iter().map(|r| (r.1[0], r.1[1])).collect();
         let drawn = chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(1))).map_err(plot_err)?;
         if s.legend() {
-            drawn
-                .label(format!("UAV{}", u + 1))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            label_uav(drawn, u, color);
         }
         // Dots at the same instants for every UAV (multiples of 10 s from the start).
         let dots = s.rows[u].iter().filter(|r| ((r.0 - s.t0) / s.dt).round() as usize % every == 0);
         chart.draw_series(dots.map(|r| Circle::new((r.1[0], r.1[1]), 3, color.filled()))).map_err(plot_err)?;
     }
     if s.legend() {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(plot_err)?;
+        legend_box(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     root.present().map_err(plot_err)
 }
@@ -426,13 +424,7 @@ fn bench_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[(u64, 
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(plot_err)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(plot_err)?;
+    legend_box(&mut chart, SeriesLabelPosition::UpperLeft)?;
     root.present().map_err(plot_err)
 }
 
@@ -525,12 +517,6 @@ fn sweep_chart<DB: DrawingBackend>(
         chart.draw_series(median.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(plot_err)?;
         chart.draw_series(DashedLineSeries::new(p95, 6, 4, color.stroke_width(1))).map_err(plot_err)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(plot_err)?;
+    legend_box(&mut chart, SeriesLabelPosition::UpperLeft)?;
     root.present().map_err(plot_err)
 }

@@ -6,7 +6,7 @@ use std::io::BufWriter;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use proxform_sim::{RunSummary, Summary, Trajectory};
+use proxform_sim::{AxisErrors, RunSummary, Summary, Trajectory};
 
 /// Writes the batch summary as pretty JSON.
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
@@ -41,16 +41,14 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     );
     w.write_record(&header)?;
     // Errors in the report's units: metres, and degrees for the attitudes.
-    let report =
-        |e: &[f64; 6]| e.iter().enumerate().map(|(k, v)| if k < 3 { *v } else { v.to_degrees() }).collect::<Vec<_>>();
     for r in runs {
-        let minutes = r.followers as f64 * r.duration_s / 60.0;
         let mut rec = vec![seed.to_string(), r.run.to_string(), u8::from(r.pass).to_string()];
-        rec.extend(report(&r.max_abs_error).iter().chain(&report(&r.rms_error)).map(|v| format!("{v:.6}")));
+        let (max, rms) = (AxisErrors::from_si(r.max_abs_error).as_array(), AxisErrors::from_si(r.rms_error).as_array());
+        rec.extend(max.iter().chain(&rms).map(|v| format!("{v:.6}")));
         rec.extend([
             format!("{:.3}", r.min_separation_m),
             r.close_pairs.to_string(),
-            format!("{:.3}", if minutes > 0.0 { r.adjustments as f64 / minutes } else { 0.0 }),
+            format!("{:.3}", r.adjustments_per_uav_minute()),
             format!("{:.6}", r.held_fraction),
             format!("{:.6}", r.within_allowable_fraction),
             format!("{:.6}", r.control_effort),

@@ -242,8 +242,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
             per_uav_adj[f] += u.adjustments as f64 / n;
         }
     }
-    let minutes = scenario.duration_s / 60.0;
-    let adj_rate = runs.iter().map(|r| r.adjustments as f64 / (r.followers.max(1) as f64 * minutes)).sum::<f64>() / n;
+    let adj_rate = runs.iter().map(RunSummary::adjustments_per_uav_minute).sum::<f64>() / n;
     // eq. 17: σ = sqrt(σm² + σn²), σm measured as the RMS actuation-error effect per step.
     let sigma_n = scenario.noise.sigma();
     let mut model = [0.0f64; 9];

@@ -67,12 +67,10 @@ type ExplicitRefs = BTreeMap<String, f64>;
 fn within_vehicle(s: &Scenario) -> Result<(), SpecError> {
     let steps = (s.duration_s / s.dt_s).ceil().max(1.0);
     let samples = steps.min(200_000.0) as u64;
-    let (vmin, vmax) = s.vehicle.forward_speed_range();
     let tol = 1e-6;
     for k in 0..=samples {
         let t = s.duration_s * k as f64 / samples as f64;
         let x = s.path.state_at(t, [0.0; 3]);
-        let v = s.vehicle.forward_speed(&x);
         let mut out: Option<(&str, String, f64, f64)> = None;
         match &s.vehicle {
             VehicleModel::Kinematic(m) => {
@@ -105,6 +103,7 @@ fn within_vehicle(s: &Scenario) -> Result<(), SpecError> {
                 }
             }
             VehicleModel::FixedWing(m) => {
+                let (v, vmin, vmax) = (s.vehicle.forward_speed(&x), m.stall_speed_mps, m.max_speed_mps);
                 if v < vmin - tol || v > vmax + tol {
                     let key = if v < vmin { "stall_speed_kmh" } else { "max_speed_kmh" };
                     out = Some((key, "airspeed".into(), v * 3.6, if v < vmin { vmin } else { vmax } * 3.6));

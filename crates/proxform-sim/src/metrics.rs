@@ -75,6 +75,13 @@ pub struct RunSummary {
     pub alone_s_per_uav: f64,
 }
 
+impl RunSummary {
+    /// Adjustments per follower per minute of flight.
+    pub fn adjustments_per_uav_minute(&self) -> f64 {
+        self.adjustments as f64 / (self.followers.max(1) as f64 * (self.duration_s / 60.0))
+    }
+}
+
 #[derive(Debug, Clone, Default)]
 struct Acc {
     max_abs: [f64; 6],
