@@ -10,8 +10,9 @@ use std::process::{Command, ExitCode};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use proxform_sim::sensing::NeighbourSearch;
-use proxform_sim::throughput::{measure, Throughput};
+use proxform_scenario::{builtin, Scenario};
+use proxform_sim::batch::throughput::{measure, Throughput};
+use proxform_sim::world::options::NeighbourSearch;
 
 use crate::memory::{mib, peak_rss_bytes};
 
@@ -144,9 +145,13 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
         "all-pairs" => NeighbourSearch::AllPairs,
         other => bail!("unknown search '{other}'"),
     };
-    let scenario = proxform_sim::swarm::scenario(n as usize)?;
+    // A flight long enough for the steps measured.
+    let mut spec = builtin::swarm_spec(n as usize);
+    let dt = spec.dt_s.unwrap_or(proxform_scenario::defaults::DT_S);
+    spec.duration_s = Some(proxform_scenario::defaults::DURATION_S.max((steps as f64 + 1.0) * dt));
+    let scenario = Scenario::try_from(spec)?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let t: Throughput = pool.install(|| measure(scenario, steps, search, threads > 1))?;
+    let t: Throughput = pool.install(|| measure(&scenario, steps, search, threads > 1));
     let row = Row {
         uavs: t.uavs,
         search: search_name(search).into(),

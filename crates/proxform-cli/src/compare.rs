@@ -8,7 +8,11 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use proxform_sim::compare::{run_comparison, summarise, CellSummary, Comparison, BUILT_IN};
+use proxform_scenario::comparison::{Comparison, BUILT_IN};
+use proxform_scenario::{Scenario, ScenarioSpec};
+use proxform_sim::compare::{flights, run_comparison, summarise, CellSummary};
+
+use crate::scenarios::Source;
 
 /// Arguments of `proxform compare`.
 #[derive(Debug, Args)]
@@ -46,12 +50,20 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
         ),
         None => (BUILT_IN.to_string(), "compare-paper (built-in)".to_string(), PathBuf::new()),
     };
-    let resolve = |s: &str| {
-        if crate::scenarios::NAMES.contains(&s) {
-            crate::scenarios::built_in(s, None).map_err(|e| format!("{e:#}"))
+    // The base scenario's spec, checked where it was read (a file's errors name the file),
+    // with the command line's duration written in before the comparison checks its cells.
+    let resolve = |s: &str| -> Result<ScenarioSpec, String> {
+        let (mut spec, source) = if crate::scenarios::NAMES.contains(&s) {
+            (crate::scenarios::built_in_spec(s, None).map_err(|e| format!("{e:#}"))?, Source::BuiltIn)
         } else {
-            crate::scenarios::load_file(&dir.join(s)).map_err(|e| format!("{e:#}"))
+            crate::scenarios::load_spec(&dir.join(s)).map_err(|e| format!("{e:#}"))?
+        };
+        crate::scenarios::check(spec.clone(), &source).map_err(|e| format!("{e:#}"))?;
+        if let Some(d) = args.duration_s {
+            spec.duration_s = Some(d);
+            Scenario::try_from(spec.clone()).map_err(|e| format!("--duration-s: {}", e.message))?;
         }
+        Ok(spec)
     };
     let parsed = Comparison::parse(&text, &name, resolve);
     if parsed.is_err() && crate::scenarios::kind_of(&text) == Some(crate::scenarios::FileKind::Scenario) {
@@ -66,10 +78,6 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
     if let Some(s) = args.seeds {
         cmp.seeds = s;
     }
-    if let Some(d) = args.duration_s {
-        cmp.base.duration_s = d;
-        cmp.base.validate().context("invalid --duration-s")?;
-    }
     Ok(cmp)
 }
 
@@ -80,7 +88,7 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
-    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(cmp.flights()) };
+    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(flights(&cmp)) };
     bar.set_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs ({per_sec}, eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -125,13 +133,13 @@ fn print(
         "proxform compare: '{}' on scenario '{}' ({} UAVs): {} methods × {} conditions × {} seeds = {} runs \
          ({} flown: a method without radio shares its runs across radio conditions), {:.1} s on {} thread(s)\n",
         cmp.name,
-        cmp.base.name,
+        cmp.base.name(),
         cmp.base.len(),
         cmp.methods.len(),
         cmp.conditions.len(),
         cmp.seeds,
         cmp.runs(),
-        cmp.flights(),
+        flights(cmp),
         elapsed.as_secs_f64(),
         threads
     )?;

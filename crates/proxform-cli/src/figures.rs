@@ -17,7 +17,11 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
-use proxform_sim::{Scenario, Trajectory};
+use proxform_scenario::Scenario;
+use proxform_sim::Trajectory;
+
+/// One method's curve: its name and (x, median, p95) points.
+type Curve = (String, Vec<(f64, f64, f64)>);
 
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 const SIZE: (u32, u32) = (1000, 760);
@@ -308,8 +312,8 @@ fn attitude_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series
 pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<Vec<PathBuf>> {
     register_embedded_font()?;
     let s = Series::new(traj, scenario.len());
-    let nav = scenario.navigator.index();
-    let allow = scenario.allowable.as_array();
+    let nav = scenario.navigator().index();
+    let allow = scenario.allowable().as_array();
     let mut written = Vec::new();
     for axis in &AXES {
         let a = if axis.degrees { allow[axis.error].to_degrees() } else { allow[axis.error] };
@@ -433,19 +437,19 @@ fn bench_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[(u64, 
 /// one colour per method.
 pub fn compare_plots(
     dir: &Path,
-    cmp: &proxform_sim::compare::Comparison,
+    cmp: &proxform_scenario::comparison::Comparison,
     cells: &[proxform_sim::compare::CellSummary],
 ) -> Result<Vec<PathBuf>> {
     register_embedded_font()?;
     let mut written = Vec::new();
-    type Pick = fn(&proxform_sim::compare::Condition) -> Option<f64>;
+    type Pick = fn(&proxform_scenario::comparison::Condition) -> Option<f64>;
     let sweeps: [(&str, &str, Pick); 2] = [
         ("error_vs_loss", "radio loss (%)", |c| c.is_loss_only().then_some(100.0 * c.radio_loss)),
         ("error_vs_delay", "radio delay (s)", |c| c.is_delay_only().then_some(c.radio_delay_s)),
     ];
     for (file, x_desc, pick) in sweeps {
         // (method, [(x, median, p95)])
-        let mut curves: Vec<(String, Vec<(f64, f64, f64)>)> = Vec::new();
+        let mut curves: Vec<Curve> = Vec::new();
         for m in &cmp.methods {
             let mut pts: Vec<(f64, f64, f64)> = cmp
                 .conditions
@@ -464,7 +468,7 @@ pub fn compare_plots(
         if curves.is_empty() {
             continue;
         }
-        let title = format!("{}: largest formation error over the allowable error", cmp.base.name);
+        let title = format!("{}: largest formation error over the allowable error", cmp.base.name());
         let png = dir.join(format!("{file}.png"));
         let svg = dir.join(format!("{file}.svg"));
         sweep_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), &title, x_desc, &curves)?;
@@ -478,7 +482,7 @@ fn sweep_chart<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     x_desc: &str,
-    curves: &[(String, Vec<(f64, f64, f64)>)],
+    curves: &[Curve],
 ) -> Result<()> {
     let allowable = 1.0;
     root.fill(&WHITE).map_err(plot_err)?;

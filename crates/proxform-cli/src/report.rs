@@ -3,7 +3,8 @@
 use std::io::{self, Write};
 use std::time::Duration;
 
-use proxform_sim::{BatchResult, Scenario};
+use proxform_scenario::Scenario;
+use proxform_sim::BatchResult;
 
 const AXES: [&str; 6] = ["x m", "y m", "z m", "α °", "β °", "γ °"];
 
@@ -50,7 +51,7 @@ pub fn print(
     }
     if s.uavs as usize - 1 > shown {
         writeln!(out, "… {} more followers", s.uavs as usize - 1 - shown)?;
-        let per_run = s.adjustments_per_uav_minute * scenario.duration_s / 60.0;
+        let per_run = s.adjustments_per_uav_minute * scenario.duration_s() / 60.0;
         uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, &allow)?;
     }
     writeln!(out)?;

@@ -8,8 +8,10 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use proxform_core::{Method, PredictorKind};
-use proxform_sim::run_batch;
+use proxform_core::controller::MAX_HORIZON;
+use proxform_core::Method;
+use proxform_scenario::ScenarioSpec;
+use proxform_sim::{run_batch, RunOptions};
 
 use crate::{figures, output, report};
 
@@ -68,8 +70,11 @@ pub struct RunArgs {
     #[arg(long, value_parser = Method::LABELS)]
     method: Option<String>,
     /// Horizon H of the proximity method's predictive input (1: closed form; > 1: QP).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=50))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_HORIZON)))]
     horizon: Option<u32>,
+    /// Print the scenario as it runs, every default filled in (TOML), and exit.
+    #[arg(long)]
+    print_scenario: bool,
 }
 
 /// Neighbour predictors selectable from the command line.
@@ -81,44 +86,75 @@ enum Predictor {
     ConstantVelocity,
 }
 
+impl RunArgs {
+    /// Writes the command line's overrides into the spec, so that every check applies to
+    /// them; returns which key each flag set, to name the flag in an error.
+    fn apply_overrides(&self, spec: &mut ScenarioSpec) -> Vec<(&'static str, &'static str)> {
+        let mut set = Vec::new();
+        let c = &mut spec.controller;
+        if let Some(d) = self.duration_s {
+            spec.duration_s = Some(d);
+            set.push(("duration_s", "--duration-s"));
+        }
+        if let Some(l) = self.lambda {
+            c.lambda = Some(l);
+            set.push(("controller.lambda", "--lambda"));
+        }
+        if let Some(r) = self.rho {
+            c.rho = Some(r);
+            set.push(("controller.rho", "--rho"));
+        }
+        if let Some(t) = self.closing_time_s {
+            c.closing_time_s = Some(t);
+            set.push(("controller.closing_time_s", "--closing-time-s"));
+        }
+        if let Some(p) = self.predictor {
+            c.predictor = Some(
+                match p {
+                    Predictor::AlphaBeta => "alpha_beta",
+                    Predictor::ConstantVelocity => "constant_velocity",
+                }
+                .into(),
+            );
+            (c.predictor_alpha, c.predictor_beta) = (None, None);
+        }
+        if let Some(h) = self.horizon {
+            c.horizon = Some(i64::from(h));
+            set.push(("controller.horizon", "--horizon"));
+        }
+        if let Some(m) = &self.method {
+            c.method = Some(m.clone());
+            c.gains = None;
+        }
+        set
+    }
+}
+
 /// Runs the command; the exit code is 0 when every run passed, 1 otherwise.
 pub fn run(args: &RunArgs) -> Result<ExitCode> {
-    let mut scenario = match &args.file {
+    let (mut spec, source) = match &args.file {
         Some(path) => {
             if args.uavs.is_some() {
                 bail!("--uavs applies to --scenario swarm only, not to a scenario file");
             }
-            crate::scenarios::load_file(path)?
+            crate::scenarios::load_spec(path)?
         }
-        None => crate::scenarios::built_in(&args.scenario, args.uavs)?,
+        None => (crate::scenarios::built_in_spec(&args.scenario, args.uavs)?, crate::scenarios::Source::BuiltIn),
     };
-    if let Some(d) = args.duration_s {
-        scenario.duration_s = d;
+    let overridden = args.apply_overrides(&mut spec);
+    let scenario = match proxform_scenario::Scenario::try_from(spec.clone()) {
+        Ok(s) => s,
+        Err(e) => match overridden.iter().find(|(key, _)| e.key == *key) {
+            Some((_, flag)) => bail!("{flag}: {}", e.message),
+            None => crate::scenarios::check(spec, &source)?,
+        },
+    };
+    if args.print_scenario {
+        print!("{}", proxform_scenario::resolved::to_toml(&scenario).context("cannot write the scenario as TOML")?);
+        return Ok(ExitCode::SUCCESS);
     }
-    scenario.adjustment_enabled = !args.no_adjust;
-    let c = &mut scenario.controller;
-    if let Some(l) = args.lambda {
-        c.lambda = l;
-    }
-    if let Some(r) = args.rho {
-        c.envelope.rho = r;
-    }
-    if let Some(t) = args.closing_time_s {
-        c.closing_time_s = (t != 0.0).then_some(t);
-    }
-    match args.predictor {
-        Some(Predictor::ConstantVelocity) => c.predictor = PredictorKind::ConstantVelocity,
-        Some(Predictor::AlphaBeta) => c.predictor = PredictorKind::default(),
-        None => {}
-    }
-    if let Some(h) = args.horizon {
-        c.horizon = h;
-    }
-    if let Some(m) = args.method.as_deref().and_then(Method::from_label) {
-        scenario.set_method(m);
-    }
-    scenario.validate().context("invalid scenario")?;
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scenario.name));
+    let options = RunOptions { adjustment_enabled: !args.no_adjust, ..RunOptions::default() };
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(scenario.name()));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
 
     let pool =
@@ -135,7 +171,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     );
     let record = !(args.no_figures && args.no_trajectories);
     let started = Instant::now();
-    let result = pool.install(|| run_batch(&scenario, args.seed, args.runs, record, &|| bar.inc(1)))?;
+    let result = pool.install(|| run_batch(&scenario, options, args.seed, args.runs, record, &|| bar.inc(1)));
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 

@@ -5,40 +5,49 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use proxform_sim::Scenario;
+use proxform_scenario::builtin::{self, EXAMPLE};
+use proxform_scenario::{load, Scenario, ScenarioSpec};
 
-/// Names of the built-in scenarios.
-pub const NAMES: [&str; 3] = ["paper", "swarm", "fixed-wing-v"];
+pub use builtin::NAMES;
 
-/// The built-in fixed-wing scenario (also scenarios/fixed-wing-v.toml).
-const FIXED_WING_V: &str = include_str!("../../../scenarios/fixed-wing-v.toml");
-
-/// The annotated example written by `proxform init`.
-const EXAMPLE: &str = include_str!("../../../scenarios/example.toml");
-
-/// A built-in scenario by name; `uavs` sizes the swarm.
-pub fn built_in(name: &str, uavs: Option<u64>) -> Result<Scenario> {
-    Ok(match (name, uavs) {
-        ("paper", None) => Scenario::paper(),
-        ("paper", Some(_)) => bail!("--uavs applies to --scenario swarm only; the paper experiment has 6 UAVs"),
-        ("swarm", n) => proxform_sim::swarm::scenario(n.unwrap_or(1000) as usize).context("invalid swarm")?,
-        ("fixed-wing-v", None) => proxform_sim::load::parse(FIXED_WING_V, "fixed-wing-v.toml")?,
-        ("fixed-wing-v", Some(_)) => bail!("--uavs applies to --scenario swarm only"),
-        (other, _) => bail!("unknown scenario '{other}' (see `proxform scenarios`)"),
-    })
+/// Where a spec came from: a file's text (to locate errors in it) or a built-in.
+#[derive(Debug, Clone)]
+pub enum Source {
+    /// A file: its name and text.
+    File {
+        /// The file's name, as given.
+        name: String,
+        /// Its text.
+        text: String,
+    },
+    /// A built-in scenario.
+    BuiltIn,
 }
 
-/// Reads and checks a scenario file; errors name the file, line and key.
-pub fn load_file(path: &Path) -> Result<Scenario> {
+/// A built-in scenario's spec by name; `uavs` sizes the swarm.
+pub fn built_in_spec(name: &str, uavs: Option<u64>) -> Result<ScenarioSpec> {
+    builtin::spec_by_name(name, uavs.map(|n| n as usize)).map_err(anyhow::Error::msg)
+}
+
+/// Reads a scenario file into its spec; errors name the file and line.
+pub fn load_spec(path: &Path) -> Result<(ScenarioSpec, Source)> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read scenario file {}", path.display()))?;
-    let parsed = proxform_sim::load::parse(&text, &path.display().to_string());
-    if parsed.is_err() && kind_of(&text) == Some(FileKind::Comparison) {
-        return parsed.with_context(|| {
-            format!("{} is a comparison file: run it with `proxform compare {}`", path.display(), path.display())
-        });
+    let name = path.display().to_string();
+    match load::parse_spec(&text, &name) {
+        Ok(spec) => Ok((spec, Source::File { name, text })),
+        Err(e) if kind_of(&text) == Some(FileKind::Comparison) => Err(anyhow::Error::new(e)
+            .context(format!("{name} is a comparison file: run it with `proxform compare {name}`"))),
+        Err(e) => Err(e.into()),
     }
-    Ok(parsed?)
+}
+
+/// Converts a spec into a checked scenario; errors name the file, line and key.
+pub fn check(spec: ScenarioSpec, source: &Source) -> Result<Scenario> {
+    match source {
+        Source::File { name, text } => Ok(load::check(spec, text, name)?),
+        Source::BuiltIn => Scenario::try_from(spec).context("invalid scenario"),
+    }
 }
 
 /// What a TOML file of proxform describes, judged by its tables and top-level keys.
@@ -106,22 +115,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_built_in_files_are_valid_scenarios() {
-        let s = proxform_sim::load::parse(FIXED_WING_V, "fixed-wing-v.toml").expect("loads");
-        assert_eq!(s.len(), 12);
-    }
-
-    #[test]
     fn scenario_and_comparison_files_are_told_apart() {
         assert_eq!(kind_of(EXAMPLE), Some(FileKind::Scenario));
-        assert_eq!(kind_of(FIXED_WING_V), Some(FileKind::Scenario));
-        assert_eq!(kind_of(proxform_sim::compare::BUILT_IN), Some(FileKind::Comparison));
+        assert_eq!(kind_of(builtin::FIXED_WING_V), Some(FileKind::Scenario));
+        assert_eq!(kind_of(builtin::COMPARE_PAPER), Some(FileKind::Comparison));
         assert_eq!(kind_of("name = \"x\"\n"), None);
-    }
-
-    #[test]
-    fn the_example_is_a_valid_scenario() {
-        let s = proxform_sim::load::parse(EXAMPLE, "example.toml").expect("the example loads");
-        assert!(s.len() >= 2);
     }
 }

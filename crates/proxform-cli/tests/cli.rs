@@ -191,7 +191,7 @@ fn scenario_files_run_and_bad_ones_are_located() {
         (std::fs::read(a.join("trajectories.csv")).expect("a"), std::fs::read(b.join("trajectories.csv")).expect("b"));
     assert!(ta == tb, "scenarios/paper.toml differs from the built-in experiment");
     // A bad file: exit code 2, file:line: key: message on stderr.
-    let bad = root.join("crates/proxform-sim/tests/bad/lambda_range.toml");
+    let bad = root.join("crates/proxform-scenario/tests/bad/lambda_range.toml");
     let o = proxform().arg("run").arg(&bad).output().expect("runs");
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);

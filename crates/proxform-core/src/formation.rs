@@ -146,6 +146,18 @@ impl Formation {
         }
     }
 
+    /// Adds `W_ij` to `x`: [`Self::add_w_turning`] when `turning` (the controllers'
+    /// `bank_turn_feedforward`), else [`Self::add_w`]. The controllers and the error metric
+    /// choose here, so they use the same W.
+    #[inline]
+    pub fn add_w_with(&self, turning: bool, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
+        if turning {
+            self.add_w_turning(i, j, reference, x);
+        } else {
+            self.add_w(i, j, reference, x);
+        }
+    }
+
     /// `W_ij` (eq. 7) for slots i and j, with `R_f` from the reference state `reference`
     /// (the observed j for [`FormationFrame::Course`]).
     #[inline]

@@ -1,10 +1,12 @@
 //! proxform-core: the per-UAV side of proximity formation maintenance.
 //!
-//! This crate owns the 9-parameter behaviour state, the vehicle models, azimuth-area sensing
-//! and the proximity formation controller of METHOD.md §2-§7. It does no I/O, reads no clock,
-//! starts no threads and owns no random number generator: everything it needs arrives as
-//! arguments, so the same controller runs in the simulator or behind a network transport.
+//! This crate owns the 9-parameter behaviour state, the vehicle models, azimuth-area sensing,
+//! the proximity formation controller of METHOD.md §2-§7, the baselines, and the [`Agent`]
+//! that owns what one UAV owns and steps it. It does no I/O, reads no clock, starts no threads
+//! and owns no random number generator: everything it needs arrives as arguments, so the same
+//! agent runs in the simulator, behind a network transport, or from Python.
 
+pub mod agent;
 pub mod angle;
 pub mod azimuth;
 pub mod baseline;
@@ -14,6 +16,7 @@ pub mod dependency;
 pub mod envelope;
 pub mod error;
 pub mod formation;
+pub mod grid;
 pub mod horizon;
 pub mod method;
 pub mod observation;
@@ -21,6 +24,7 @@ pub mod predictor;
 pub mod state;
 pub mod vehicle;
 
+pub use agent::{Agent, AgentSetup};
 pub use azimuth::AzimuthAreas;
 pub use controller::{ControllerParams, ControllerSetup, Decision, Outcome, ProximityController};
 pub use dependency::DependencySet;

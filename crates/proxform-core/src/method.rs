@@ -15,7 +15,6 @@ use crate::error::ConfigError;
 use crate::formation::Formation;
 use crate::observation::{Observation, UavId};
 use crate::state::State9;
-use crate::vehicle::VehicleModel;
 
 /// A formation control method and its gains.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -140,13 +139,13 @@ impl FormationController {
         }
     }
 
-    /// The vehicle model.
-    pub fn vehicle(&self) -> &VehicleModel {
+    /// The shared setup: parameters, vehicle model.
+    pub fn setup(&self) -> &ControllerSetup {
         match self {
-            Self::Proximity(c) => c.vehicle(),
-            Self::LeaderFollower(c) => c.setup().vehicle(),
-            Self::Consensus(c) => c.setup().vehicle(),
-            Self::Flocking(c) => c.setup().vehicle(),
+            Self::Proximity(c) => c.setup(),
+            Self::LeaderFollower(c) => c.setup(),
+            Self::Consensus(c) => c.setup(),
+            Self::Flocking(c) => c.setup(),
         }
     }
 
@@ -157,13 +156,6 @@ impl FormationController {
             Self::LeaderFollower(c) => c.heap_bytes() + std::mem::size_of::<LeaderFollower>(),
             Self::Consensus(c) => c.heap_bytes() + std::mem::size_of::<Consensus>(),
             Self::Flocking(c) => c.heap_bytes() + std::mem::size_of::<Flocking>(),
-        }
-    }
-
-    /// Forgets any prediction of the UAV's own state (after inputs that were not applied).
-    pub fn forget_own_prediction(&mut self) {
-        if let Self::Proximity(c) = self {
-            c.forget_own_prediction();
         }
     }
 }

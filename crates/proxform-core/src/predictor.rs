@@ -31,11 +31,14 @@ pub enum PredictorKind {
 
 impl Default for PredictorKind {
     fn default() -> Self {
-        PredictorKind::AlphaBeta { alpha: 0.8, beta: 0.8 * 0.8 / 1.2 }
+        Self::DEFAULT
     }
 }
 
 impl PredictorKind {
+    /// α-β with α = 0.8 and the Benedict-Bordner β = α²/(2 − α).
+    pub const DEFAULT: Self = PredictorKind::AlphaBeta { alpha: 0.8, beta: 0.8 * 0.8 / 1.2 };
+
     /// Checks the gains.
     pub fn validate(&self) -> Result<(), ConfigError> {
         if let PredictorKind::AlphaBeta { alpha, beta } = *self {

@@ -1,7 +1,7 @@
 //! One engine step of the swarm scenario (perception, control and plant of every UAV).
 
-use proxform_sim::engine::Simulation;
-use proxform_sim::swarm;
+use proxform_scenario::builtin::swarm;
+use proxform_sim::{RunOptions, Simulation};
 
 fn main() {
     divan::main();
@@ -9,8 +9,8 @@ fn main() {
 
 #[divan::bench(args = [1_000, 10_000], sample_count = 20)]
 fn swarm_step(bencher: divan::Bencher, uavs: usize) {
-    let scenario = swarm::scenario(uavs).expect("valid");
-    let mut sim = Simulation::new(&scenario, 1, 0).expect("valid");
+    let scenario = swarm(uavs).expect("valid");
+    let mut sim = Simulation::new(&scenario, RunOptions::default(), 1, 0);
     for _ in 0..5 {
         sim.step();
     }

@@ -1,37 +1,25 @@
-//! proxform-sim: the deterministic stepping engine around the per-UAV controllers.
+//! proxform-sim: the simulated world around the per-UAV agents, its measurement, and batches.
 //!
-//! It owns the scenario (who flies where, with which controller, vehicle, noise and path),
-//! the engine that steps every UAV from a shared snapshot, the seeded random streams, the
-//! observers that measure a run, and batches of seeded runs in parallel. It writes no files:
-//! output belongs to the caller.
+//! - [`world`]: the engine that steps every UAV in named phases (perceive, estimate, decide,
+//!   actuate, propagate) from a shared snapshot, the onboard sensor, the radio, wind and
+//!   faults. Each UAV's decision is its [`proxform_core::Agent`]'s step.
+//! - [`random`]: the seeded random streams every draw comes from.
+//! - [`measure`]: observers that watch a run (metrics, trajectories).
+//! - [`batch`]: seeded runs in parallel, comparisons of methods, throughput.
+//!
+//! The scenario is [`proxform_scenario::Scenario`]; how to run it (adjustment on or off, the
+//! neighbour search) is [`RunOptions`]. This crate writes no files: output belongs to the
+//! caller.
 
-pub mod autodeps;
 pub mod batch;
-pub mod compare;
-pub mod disturbance;
-pub mod engine;
-pub mod environment;
-pub mod faults;
-pub mod grid;
-pub mod load;
-pub mod metrics;
-pub mod normal;
-pub mod observer;
-pub mod path;
-pub mod radio;
-pub mod rng;
-pub mod scenario;
-pub mod sensing;
-pub mod shapes;
-pub mod spec;
-pub mod swarm;
-pub mod throughput;
-pub mod trajectory;
+pub mod measure;
+pub mod random;
+pub mod world;
 
-pub use batch::{run_batch, AxisErrors, BatchResult, Summary, SwarmMetrics};
-pub use engine::Simulation;
-pub use metrics::{RunMetrics, RunSummary};
-pub use observer::{Observer, StepFrame};
-pub use path::{NavigatorPath, PaperPath};
-pub use scenario::{AllowableErrors, MeasurementNoise, Scenario, ScenarioError};
-pub use trajectory::{Trajectory, TrajectoryRow};
+pub use batch::compare;
+pub use batch::runs::{run_batch, run_one, AxisErrors, BatchResult, Summary, SwarmMetrics};
+pub use measure::metrics::{RunMetrics, RunSummary};
+pub use measure::observer::{Observer, StepFrame};
+pub use measure::trajectory::{Trajectory, TrajectoryRow};
+pub use world::engine::Simulation;
+pub use world::options::RunOptions;

@@ -1,18 +1,30 @@
 //! The fixed-wing V: a climb and a 180° turn in moderate Dryden turbulence, safely.
 
-use proxform_sim::batch::{run_batch, run_one};
-use proxform_sim::disturbance::Wind;
+use proxform_scenario::builtin::FIXED_WING_V;
+use proxform_scenario::load::{parse, parse_spec};
+use proxform_scenario::{Scenario, ScenarioSpec};
+use proxform_sim::{run_one as run_one_with, RunOptions, RunSummary};
 
-fn scenario() -> proxform_sim::Scenario {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/fixed-wing-v.toml"))
-        .expect("file");
-    proxform_sim::load::parse(&text, "fixed-wing-v.toml").expect("valid")
+fn scenario() -> Scenario {
+    parse(FIXED_WING_V, "fixed-wing-v.toml").expect("valid")
+}
+
+fn edited(edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
+    Scenario::try_from(parse_spec(FIXED_WING_V, "fixed-wing-v.toml").expect("parses").with(edit)).expect("valid")
+}
+
+fn run_batch(s: &Scenario, seed: u64, runs: u64) -> proxform_sim::BatchResult {
+    proxform_sim::run_batch(s, RunOptions::default(), seed, runs, false, &|| {})
+}
+
+fn run_one(s: &Scenario, seed: u64, run: u64) -> RunSummary {
+    run_one_with(s, RunOptions::default(), seed, run, false).0
 }
 
 #[test]
 fn the_v_turns_and_climbs_without_any_pair_closer_than_15_m() {
     let s = scenario();
-    let r = run_batch(&s, 7, 40, false, &|| {}).expect("valid");
+    let r = run_batch(&s, 7, 40);
     assert!(r.summary.min_separation_m >= 15.0, "{}", r.summary.min_separation_m);
     assert_eq!(r.summary.swarm.close_pairs_max, 0);
     // It does turn: the navigator flew 180° and the followers' yaw errors stay bounded.
@@ -60,15 +72,16 @@ fn a_v_written_without_thresholds_gets_the_fixed_wing_defaults_and_keeps_its_dis
         [wind]
         turbulence = "moderate"
     "#;
-    let s = proxform_sim::load::parse(text, "minimal.toml").expect("valid");
-    assert_eq!(s.controller.envelope.thresholds, proxform_core::ControllerParams::fixed_wing_thresholds());
-    let r = run_batch(&s, 3, 20, false, &|| {}).expect("valid");
+    let s = parse(text, "minimal.toml").expect("valid");
+    assert_eq!(s.controller().envelope.thresholds, proxform_core::ControllerParams::fixed_wing_thresholds());
+    assert!(s.controller().bank_turn_feedforward, "on by default for the fixed wing");
+    let r = run_batch(&s, 3, 20);
     assert!(r.summary.min_separation_m >= 15.0, "{}", r.summary.min_separation_m);
     assert!(r.summary.rms_error.x_m < 5.0 && r.summary.rms_error.y_m < 5.0, "{:?}", r.summary.rms_error);
     // A fixed wing's speed limits are on its airspeed: it may start on any course.
     let north = text.replace("speed_kmh = 180.0", "speed_kmh = 180.0\n        course_deg = 90.0");
-    let s = proxform_sim::load::parse(&north, "north.toml").expect("a fixed wing may fly north");
-    let (r, _) = run_one(&s, 3, 0, false).expect("valid");
+    let s = parse(&north, "north.toml").expect("a fixed wing may fly north");
+    let r = run_one(&s, 3, 0);
     assert!(r.min_separation_m >= 15.0, "{}", r.min_separation_m);
 }
 
@@ -76,33 +89,29 @@ fn a_v_written_without_thresholds_gets_the_fixed_wing_defaults_and_keeps_its_dis
 fn separation_keeping_holds_a_wide_v_apart_where_formation_keeping_alone_does_not() {
     // A V of half-angle 45°: through the turn its inner arm must slow to 42 m/s, and in one run
     // in a hundred or two its tail catches up with the UAV ahead (run 198 of seed 1).
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/fixed-wing-v.toml"))
-        .expect("file")
-        .replace("angle_deg = 30.0", "angle_deg = 45.0");
-    let wide = proxform_sim::load::parse(&text, "wide-v.toml").expect("valid");
-    assert_eq!(wide.controller.separation_m, None, "by default twice the safety distance, 30 m");
-    let mut off = wide.clone();
-    off.controller.separation_m = Some(0.0);
-    let (with, _) = run_one(&wide, 1, 198, false).expect("valid");
-    let (without, _) = run_one(&off, 1, 198, false).expect("valid");
+    let text = FIXED_WING_V.replace("angle_deg = 30.0", "angle_deg = 45.0");
+    let wide = parse(&text, "wide-v.toml").expect("valid");
+    assert_eq!(wide.controller().separation_m, Some(30.0), "by default twice the safety distance, 30 m");
+    let spec = parse_spec(&text, "wide-v.toml").expect("parses");
+    let off = Scenario::try_from(spec.with(|s| s.controller.separation_m = Some(0.0))).expect("valid");
+    let with = run_one(&wide, 1, 198);
+    let without = run_one(&off, 1, 198);
     assert!(without.min_separation_m < 10.0, "{}", without.min_separation_m);
     assert!(with.min_separation_m > 15.0, "{}", with.min_separation_m);
 }
 
 #[test]
 fn without_adjustment_the_v_falls_apart() {
-    let mut s = scenario();
-    s.adjustment_enabled = false;
-    let (r, _) = run_one(&s, 7, 0, false).expect("valid");
+    let s = scenario();
+    let (r, _) = run_one_with(&s, RunOptions { adjustment_enabled: false, ..RunOptions::default() }, 7, 0, false);
     assert!(r.max_abs_error[0] > 200.0 || r.max_abs_error[1] > 200.0, "{:?}", r.max_abs_error);
 }
 
 #[test]
 fn turbulence_costs_accuracy() {
     let s = scenario();
-    let mut calm = s.clone();
-    calm.wind = Wind::default();
-    let rough = run_batch(&s, 7, 10, false, &|| {}).expect("valid").summary;
-    let calm = run_batch(&calm, 7, 10, false, &|| {}).expect("valid").summary;
+    let calm = edited(|s| s.wind = Default::default());
+    let rough = run_batch(&s, 7, 10).summary;
+    let calm = run_batch(&calm, 7, 10).summary;
     assert!(rough.rms_error.z_m > calm.rms_error.z_m, "{:?} vs {:?}", rough.rms_error, calm.rms_error);
 }

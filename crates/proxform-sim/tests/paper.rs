@@ -1,17 +1,37 @@
 //! The paper experiment end to end: it holds the formation over many seeds, fails when the
 //! adjustment is switched off, and is bit-for-bit reproducible for any thread count.
 
-use proxform_sim::batch::{run_batch, run_one};
-use proxform_sim::Scenario;
+use proxform_scenario::builtin::{paper, paper_spec};
+use proxform_scenario::Scenario;
+use proxform_sim::{run_batch, RunOptions};
+
+fn batch_with(
+    scenario: &Scenario,
+    options: RunOptions,
+    seed: u64,
+    runs: u64,
+    threads: usize,
+) -> proxform_sim::BatchResult {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+    pool.install(|| run_batch(scenario, options, seed, runs, false, &|| {}))
+}
 
 fn batch(scenario: &Scenario, seed: u64, runs: u64, threads: usize) -> proxform_sim::BatchResult {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
-    pool.install(|| run_batch(scenario, seed, runs, false, &|| {})).expect("valid scenario")
+    batch_with(scenario, RunOptions::default(), seed, runs, threads)
+}
+
+fn run_one(
+    s: &Scenario,
+    seed: u64,
+    run: u64,
+    record: bool,
+) -> (proxform_sim::RunSummary, Option<proxform_sim::Trajectory>) {
+    proxform_sim::run_one(s, RunOptions::default(), seed, run, record)
 }
 
 #[test]
 fn paper_experiment_stays_within_the_allowable_errors() {
-    let s = Scenario::paper();
+    let s = paper();
     let r = batch(&s, 2026, 300, 2);
     let m = &r.summary;
     assert!(m.pass_fraction >= 0.99, "pass fraction {}", m.pass_fraction);
@@ -25,9 +45,7 @@ fn paper_experiment_stays_within_the_allowable_errors() {
 
 #[test]
 fn switching_the_adjustment_off_breaks_the_formation() {
-    let mut s = Scenario::paper();
-    s.adjustment_enabled = false;
-    let r = batch(&s, 2026, 20, 2);
+    let r = batch_with(&paper(), RunOptions { adjustment_enabled: false, ..RunOptions::default() }, 2026, 20, 2);
     assert_eq!(r.summary.pass_fraction, 0.0);
     // Without adjustment the followers miss the navigator's lateral manoeuvre by far more
     // than the allowable 0.6 m.
@@ -37,9 +55,9 @@ fn switching_the_adjustment_off_breaks_the_formation() {
 #[test]
 fn the_plain_transition_predictor_is_worse_than_tracking() {
     // METHOD §3: a plain F lags neighbours that turn; the α-β track removes the lag.
-    let mut plain = Scenario::paper();
-    plain.controller.predictor = proxform_core::PredictorKind::ConstantVelocity;
-    let tracked = batch(&Scenario::paper(), 5, 40, 2).summary;
+    let plain = Scenario::try_from(paper_spec().with(|s| s.controller.predictor = Some("constant_velocity".into())))
+        .expect("valid");
+    let tracked = batch(&paper(), 5, 40, 2).summary;
     let plain = batch(&plain, 5, 40, 2).summary;
     assert!(plain.p99_abs_error.beta_deg > tracked.p99_abs_error.beta_deg);
     assert!(plain.pass_fraction < tracked.pass_fraction);
@@ -47,9 +65,9 @@ fn the_plain_transition_predictor_is_worse_than_tracking() {
 
 #[test]
 fn a_seed_gives_identical_bits_twice() {
-    let s = Scenario::paper();
-    let (a, ta) = run_one(&s, 42, 3, true).expect("valid");
-    let (b, tb) = run_one(&s, 42, 3, true).expect("valid");
+    let s = paper();
+    let (a, ta) = run_one(&s, 42, 3, true);
+    let (b, tb) = run_one(&s, 42, 3, true);
     assert_eq!(a, b);
     let (ta, tb) = (ta.expect("recorded"), tb.expect("recorded"));
     assert_eq!(ta.rows.len(), 6 * 1001);
@@ -59,13 +77,13 @@ fn a_seed_gives_identical_bits_twice() {
         }
     }
     // A different seed flies differently.
-    let (c, _) = run_one(&s, 43, 3, false).expect("valid");
+    let (c, _) = run_one(&s, 43, 3, false);
     assert_ne!(a.max_abs_error, c.max_abs_error);
 }
 
 #[test]
 fn summaries_do_not_depend_on_the_thread_count() {
-    let s = Scenario::paper();
+    let s = paper();
     let one = batch(&s, 9, 24, 1);
     let two = batch(&s, 9, 24, 2);
     let four = batch(&s, 9, 24, 4);
@@ -75,14 +93,15 @@ fn summaries_do_not_depend_on_the_thread_count() {
 }
 
 #[test]
-fn the_paper_scenario_file_is_the_built_in_experiment() {
-    let text =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/paper.toml")).expect("file");
-    let from_file = proxform_sim::load::parse(&text, "paper.toml").expect("valid");
-    let built_in = Scenario::paper();
+fn the_defaults_are_the_paper_experiment() {
+    // Only the formation and its dependency table written: every other value a default.
+    let mut bare = proxform_scenario::ScenarioSpec { name: Some("paper".into()), ..Default::default() };
+    bare.formation = paper_spec().formation;
+    let bare = Scenario::try_from(bare).expect("valid");
+    let built_in = paper();
     for seed in [1, 99] {
-        let (a, ta) = run_one(&from_file, seed, 0, true).expect("valid");
-        let (b, tb) = run_one(&built_in, seed, 0, true).expect("valid");
+        let (a, ta) = run_one(&bare, seed, 0, true);
+        let (b, tb) = run_one(&built_in, seed, 0, true);
         assert_eq!(a, b);
         let (ta, tb) = (ta.expect("recorded"), tb.expect("recorded"));
         assert!(ta.rows == tb.rows, "trajectories differ");

@@ -1,41 +1,46 @@
 //! The paper formation kept over the radio alone (sensing range too short to see anyone).
 
-use proxform_sim::batch::run_batch;
-use proxform_sim::faults::Fault;
-use proxform_sim::radio::{GilbertElliott, RadioModel};
-use proxform_sim::Scenario;
+use proxform_scenario::builtin::paper_spec;
+use proxform_scenario::spec::FaultSpec;
+use proxform_scenario::{Scenario, ScenarioSpec};
+use proxform_sim::{run_batch, RunOptions, Summary};
 
-fn radio_only() -> Scenario {
-    let mut s = Scenario::paper();
-    s.controller.areas.sensing_range_m = 50.0;
-    s.radio = RadioModel { broadcast_all: true, ..RadioModel::default() };
-    s
+fn radio_only(edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
+    let spec = paper_spec().with(|s| {
+        s.controller.sensing_range_m = Some(50.0);
+        s.radio.broadcast_all = Some(true);
+    });
+    Scenario::try_from(spec.with(edit)).expect("valid")
+}
+
+fn batch(s: &Scenario, seed: u64, runs: u64) -> Summary {
+    run_batch(s, RunOptions::default(), seed, runs, false, &|| {}).summary
 }
 
 #[test]
 fn an_ideal_radio_keeps_the_formation_and_a_blackout_loses_it() {
-    let s = radio_only();
-    let ideal = run_batch(&s, 4, 30, false, &|| {}).expect("valid").summary;
+    let ideal = batch(&radio_only(|_| {}), 4, 30);
     assert!(ideal.pass_fraction >= 0.95, "{}", ideal.pass_fraction);
     assert!(ideal.swarm.radio_msgs_per_uav_s > 40.0, "{}", ideal.swarm.radio_msgs_per_uav_s);
-    let mut dark = s.clone();
-    dark.faults = vec![Fault::RadioBlackout { at_s: 20.0, duration_s: 80.0 }];
-    let dark = run_batch(&dark, 4, 10, false, &|| {}).expect("valid").summary;
+    let dark = batch(&radio_only(|s| s.fault = vec![FaultSpec::radio_blackout(20.0, 80.0)]), 4, 10);
     assert_eq!(dark.pass_fraction, 0.0);
     assert!(dark.swarm.alone_s_per_uav > 70.0, "{}", dark.swarm.alone_s_per_uav);
 }
 
 #[test]
 fn delay_and_bursty_loss_cost_accuracy() {
-    let s = radio_only();
-    let base = run_batch(&s, 8, 20, false, &|| {}).expect("valid").summary;
-    let mut slow = s.clone();
-    slow.radio.delay_steps = 3;
-    let slow = run_batch(&slow, 8, 20, false, &|| {}).expect("valid").summary;
+    let base = batch(&radio_only(|_| {}), 8, 20);
+    let slow = batch(&radio_only(|s| s.radio.delay_s = Some(0.3)), 8, 20);
     assert!(slow.p99_abs_error.y_m > base.p99_abs_error.y_m, "{:?} vs {:?}", slow.p99_abs_error, base.p99_abs_error);
-    let mut bursty = s.clone();
-    bursty.radio.burst = Some(GilbertElliott { p_good_to_bad: 0.05, p_bad_to_good: 0.2, loss_bad: 1.0 });
-    let bursty = run_batch(&bursty, 8, 20, false, &|| {}).expect("valid").summary;
+    let bursty = batch(
+        &radio_only(|s| {
+            s.radio.burst_p_good_to_bad = Some(0.05);
+            s.radio.burst_p_bad_to_good = Some(0.2);
+            s.radio.burst_loss_bad = Some(1.0);
+        }),
+        8,
+        20,
+    );
     assert!(bursty.swarm.radio_msgs_per_uav_s < 0.9 * base.swarm.radio_msgs_per_uav_s);
     assert!(bursty.p99_abs_error.y_m > base.p99_abs_error.y_m);
 }

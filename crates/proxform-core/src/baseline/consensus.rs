@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 
-use super::{act, alone, mean_attitude, pd_acceleration, Hearing, PdGains};
+use super::{act, mean_attitude, pd_acceleration, Hearing, PdGains};
 use crate::controller::{ControllerSetup, Decision};
 use crate::error::{positive, ConfigError};
 use crate::formation::Formation;
@@ -95,7 +95,7 @@ impl Consensus {
         }
         let kappa: f64 = self.desired.iter().map(|d| d.2).sum();
         if self.desired.is_empty() || kappa <= 0.0 {
-            return alone();
+            return Decision::alone();
         }
         let dt = core.setup.params().dt_s;
         let mut a = [0.0; 3];

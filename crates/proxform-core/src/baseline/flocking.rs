@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 
-use super::{act, alone, mean_attitude, pd_acceleration, Hearing};
+use super::{act, mean_attitude, pd_acceleration, Hearing};
 use crate::controller::{ControllerSetup, Decision};
 use crate::error::{positive, ConfigError};
 use crate::formation::Formation;
@@ -131,9 +131,9 @@ impl Flocking {
         let range = core.setup.params().areas.sensing_range_m;
         core.hear(now_s, observations, |_| true);
         if core.heard.is_empty() {
-            return alone();
+            return Decision::alone();
         }
-        let Some(slot_i) = core.formation.slot(core.id) else { return alone() };
+        let Some(slot_i) = core.formation.slot(core.id) else { return Decision::alone() };
         let r_alpha = g.sigma_norm(range);
         let mut a = [0.0; 3];
         for h in &core.heard {

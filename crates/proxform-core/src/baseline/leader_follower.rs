@@ -11,7 +11,7 @@
 
 use std::sync::Arc;
 
-use super::{act, alone, pd_acceleration, Hearing, PdGains};
+use super::{act, pd_acceleration, Hearing, PdGains};
 use crate::controller::{ControllerSetup, Decision};
 use crate::error::ConfigError;
 use crate::formation::Formation;
@@ -75,8 +75,8 @@ impl LeaderFollower {
         let c = &mut self.core;
         let leader = c.leader;
         c.hear(now_s, observations, |o| o.id == leader);
-        let Some(h) = c.heard.first() else { return alone() };
-        let Some((d_now, d_next)) = c.slot_from(h) else { return alone() };
+        let Some(h) = c.heard.first() else { return Decision::alone() };
+        let Some((d_now, d_next)) = c.slot_from(h) else { return Decision::alone() };
         let a = pd_acceleration(own, &d_now, &d_next, c.setup.params().dt_s, &self.gains.pd);
         act(&c.setup, own, a, std::array::from_fn(|k| d_next[ALPHA + k]))
     }

@@ -27,7 +27,7 @@ use crate::error::{positive, ConfigError};
 use crate::formation::Formation;
 use crate::observation::{Observation, UavId};
 use crate::predictor::NeighbourTracks;
-use crate::state::{self, Input, State9, ALPHA, VX, X};
+use crate::state::{self, State9, ALPHA, VX, X};
 
 /// A neighbour as a baseline uses it: its predicted state now and one period ahead, and the
 /// weight of the estimate (1 when measured this period, fading while it coasts).
@@ -126,7 +126,7 @@ impl Hearing {
             if id == *me || heard.iter().any(|h| h.id == id) {
                 continue;
             }
-            let weight = (-tracks.age(s, now) / p.coast_decay_s).exp();
+            let weight = p.coasting_weight(tracks.age(s, now));
             heard.push(Heard { id, now: tracks.state_at(s, now), next: tracks.state_at(s, now + dt), weight });
         }
     }
@@ -177,9 +177,4 @@ pub(crate) fn mean_attitude(base: &State9, desired: impl Iterator<Item = (State9
         w += c;
     }
     (w > 0.0).then(|| std::array::from_fn(|k| base[ALPHA + k] + sum[k] / w))
-}
-
-/// Nothing heard: fly on (METHOD §8).
-pub(crate) fn alone() -> Decision {
-    Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 }
 }

@@ -1,0 +1,48 @@
+//! What one update period decided: held, adjusted (with the input) or alone.
+
+use crate::state::Input;
+
+/// What the controller decided in one update period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outcome {
+    /// The course-keeping state was inside the envelope: no new input.
+    Held,
+    /// The course left the envelope and the UAV adjusted.
+    Adjusted {
+        /// `Σ((X − O)/Δ)²` of the course-keeping state before the adjustment.
+        normalised_sq: f64,
+    },
+    /// Nothing was perceived: the UAV flies on its own prediction (METHOD §8).
+    Alone,
+}
+
+impl Outcome {
+    /// Short label used in reports.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Outcome::Held => "held",
+            Outcome::Adjusted { .. } => "adjusted",
+            Outcome::Alone => "alone",
+        }
+    }
+}
+
+/// The result of one step: the outcome and the input to apply (zero unless adjusted).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Decision {
+    /// Held, adjusted or alone.
+    pub outcome: Outcome,
+    /// Input Δu for the coming period.
+    pub input: Input,
+    /// Number of areas that held a neighbour.
+    pub occupied_areas: u16,
+    /// Number of main references perceived.
+    pub main_refs: u16,
+}
+
+impl Decision {
+    /// Nothing perceived: fly on (METHOD §6 step 8, §8).
+    pub fn alone() -> Self {
+        Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 }
+    }
+}

@@ -1,0 +1,385 @@
+//! The proximity formation controller of one UAV (METHOD §2-§7).
+//!
+//! One call of [`ProximityController::step`] is one update period of the paper's method,
+//! written as METHOD §6's numbered steps: it sorts what the UAV perceives into azimuth areas
+//! (§2, the information matrix S_i), predicts each kept neighbour (§3) and turns each
+//! prediction into an estimate X̂_ij of its own state through the formation offsets (step 1,
+//! eq. 10), averages them into X̄_i (step 2, eq. 11), leans on its main references by their
+//! dependency degrees in X̂ᴰ_i (step 3), places the envelope centre O_i on the line between the
+//! two (step 4), and keeps its course while the course stays inside the envelope (steps 5-6)
+//! or computes the predictive input (step 7, eq. 12). With nothing perceived it flies on
+//! (step 8). The controller sees only its own state estimate and its observations: it cannot
+//! tell a simulator from a network.
+//!
+//! Every estimate is kept as a deviation from X_hold = F·X_i, the state the UAV will have if
+//! it keeps its course: `X̂_ij − X_hold`, and so the centre `O_i − X_hold`. Attitude
+//! differences are then small and wrap correctly, and step 6's test is on `X_hold − O_i`.
+
+mod decision;
+mod params;
+mod setup;
+
+use std::sync::Arc;
+
+pub use decision::{Decision, Outcome};
+pub use params::{ControllerParams, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
+pub use setup::ControllerSetup;
+
+use crate::error::ConfigError;
+use crate::formation::{Formation, FormationSlot};
+use crate::observation::{Observation, ObservationSource, UavId};
+use crate::predictor::NeighbourTracks;
+use crate::state::{self, State9, VX, X};
+use crate::vehicle::VehicleModel;
+use crate::DependencySet;
+
+/// Marks an empty area in the per-area scratch.
+const EMPTY: u32 = u32::MAX;
+/// Marks an area candidate that is a coasting track (its slot in the low bits), not an
+/// observation index.
+const TRACK: u32 = 1 << 31;
+
+/// The controller of one UAV.
+#[derive(Debug, Clone)]
+pub struct ProximityController {
+    id: UavId,
+    setup: Arc<ControllerSetup>,
+    formation: Arc<Formation>,
+    dependency: DependencySet,
+    tracks: NeighbourTracks,
+    /// S_i: per area, index into the observation slice of the nearest UAV (or `EMPTY`, or a
+    /// coasting track marked `TRACK`) and its squared distance (f32 is ample to rank
+    /// neighbours). Working memory, allocated once.
+    nearest: Box<[(u32, f32)]>,
+}
+
+/// Steps 1-3 accumulated over the perceived neighbours, each estimate as `X̂_ij − X_hold`.
+#[derive(Debug, Clone, Copy)]
+struct Estimates {
+    /// Σ f_j·(X̂_ij − X_hold) over the occupied areas, f_j the neighbour's weight (1 when
+    /// measured, fading while it coasts).
+    sum_bar: State9,
+    /// Σ f_j over the occupied areas.
+    w_bar: f64,
+    /// Occupied areas.
+    n_bar: u16,
+    /// Σ c_ij·f_j·(X̂_ij − X_hold) over the main references perceived.
+    sum_dep: State9,
+    /// Σ c_ij·f_j.
+    c_sum: f64,
+    /// Main references perceived.
+    main_refs: u16,
+    /// Separation keeping: how far to move away from neighbours that come too close (m).
+    push: [f64; 3],
+}
+
+impl Estimates {
+    fn new() -> Self {
+        Self {
+            sum_bar: State9::zeros(),
+            w_bar: 0.0,
+            n_bar: 0,
+            sum_dep: State9::zeros(),
+            c_sum: 0.0,
+            main_refs: 0,
+            push: [0.0; 3],
+        }
+    }
+
+    /// Adds a main reference's estimate (degree `c`, weight `f`) to X̂ᴰ_i's sums.
+    fn add_reference(&mut self, c: f64, f: f64, x_hat_ij: &State9) {
+        self.sum_dep += (c * f) * x_hat_ij;
+        self.c_sum += c * f;
+        self.main_refs += 1;
+    }
+}
+
+impl ProximityController {
+    /// A controller for UAV `id` of `formation`.
+    pub fn new(
+        id: UavId,
+        setup: Arc<ControllerSetup>,
+        formation: Arc<Formation>,
+        dependency: DependencySet,
+    ) -> Result<Self, ConfigError> {
+        if formation.slot(id).is_none() {
+            return Err(ConfigError::UnknownUav { id, size: formation.len() });
+        }
+        for &(r, _) in dependency.refs() {
+            if formation.slot(r).is_none() {
+                return Err(ConfigError::BadReference { owner: id, reference: r, reason: "not in the formation" });
+            }
+        }
+        let p = &setup.params;
+        let m = p.areas.areas;
+        let tracks = NeighbourTracks::new(p.predictor, m + dependency.refs().len(), p.track_timeout_s, p.coast_accel_s);
+        Ok(Self { id, setup, formation, dependency, tracks, nearest: vec![(EMPTY, 0.0); m].into_boxed_slice() })
+    }
+
+    /// A controller with its own [`ControllerSetup`] (convenient for a single UAV).
+    pub fn standalone(
+        id: UavId,
+        params: ControllerParams,
+        formation: Arc<Formation>,
+        dependency: DependencySet,
+        vehicle: VehicleModel,
+    ) -> Result<Self, ConfigError> {
+        Self::new(id, ControllerSetup::new(params, vehicle)?, formation, dependency)
+    }
+
+    /// This controller's UAV.
+    pub fn id(&self) -> UavId {
+        self.id
+    }
+
+    /// Its parameters.
+    pub fn params(&self) -> &ControllerParams {
+        &self.setup.params
+    }
+
+    /// Its vehicle model.
+    pub fn vehicle(&self) -> &VehicleModel {
+        &self.setup.vehicle
+    }
+
+    /// The shared setup.
+    pub fn setup(&self) -> &ControllerSetup {
+        &self.setup
+    }
+
+    /// Bytes this controller holds on the heap (shared setup and formation excluded).
+    pub fn heap_bytes(&self) -> usize {
+        self.tracks.heap_bytes() + std::mem::size_of_val(&*self.nearest)
+    }
+
+    /// One update period at time `now_s`: `own` is the UAV's estimate of its own state X_i,
+    /// `observations` what it perceives of the others (each id at most once).
+    pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
+        let Some(slot_i) = self.formation.slot(self.id).copied() else { return Decision::alone() };
+        let setup = Arc::clone(&self.setup);
+        let (params, vehicle) = (&setup.params, &setup.vehicle);
+        // F·X_i: the state the UAV will have if it keeps its present course.
+        let x_hold = vehicle.hold(own, params.dt_s);
+
+        // §2: S_i, the nearest perceived UAV in each azimuth area.
+        self.sort_into_areas(now_s, own, observations);
+        // Steps 1-3: X̂_ij per neighbour, accumulated into X̄_i and X̂ᴰ_i.
+        let est = self.estimate(now_s, own, &slot_i, &x_hold, observations);
+        // Step 8: nothing perceived.
+        if est.n_bar == 0 && est.main_refs == 0 {
+            return Decision::alone();
+        }
+        // Step 4: the envelope centre O_i (as O_i − X_hold).
+        let o_i = envelope_centre(params, &est);
+        // Steps 5-6: keep the course while X_hold lies inside the envelope around O_i.
+        let x_hold_minus_o = -o_i;
+        let envelope = &params.envelope;
+        let (occupied_areas, main_refs) = (est.n_bar, est.main_refs);
+        if envelope.contains(&x_hold_minus_o) {
+            return Decision { outcome: Outcome::Held, input: state::Input::zeros(), occupied_areas, main_refs };
+        }
+        // Step 7: the predictive input within the vehicle's limits.
+        let normalised_sq = envelope.normalised_sq(&x_hold_minus_o);
+        let input = setup.input_toward(own, &x_hold_minus_o);
+        Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
+    }
+
+    /// §2: fills S_i (`self.nearest`) with the nearest UAV per azimuth area, from the UAV's
+    /// own view of the observations; then neighbours perceived recently but missing now coast
+    /// on their tracks (§3) into areas that have no fresh observation.
+    fn sort_into_areas(&mut self, now_s: f64, own: &State9, observations: &[Observation]) {
+        let Self { id: me, setup, tracks, nearest, .. } = self;
+        let me = *me;
+        let params = &setup.params;
+        let r2 = params.areas.sensing_range_m.powi(2);
+        nearest.iter_mut().for_each(|a| a.0 = EMPTY);
+        let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
+        for (k, o) in observations.iter().enumerate() {
+            if o.id == me {
+                continue;
+            }
+            let (dx, dy, dz) = (o.state[X] - own[X], o.state[X + 1] - own[X + 1], o.state[X + 2] - own[X + 2]);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if o.source == ObservationSource::Onboard && d2 > r2 {
+                continue;
+            }
+            let s = setup.classifier.area(sin_yaw, cos_yaw, dx, dy);
+            let a = &mut nearest[s];
+            let d2 = d2 as f32;
+            if a.0 == EMPTY || d2 < a.1 {
+                *a = (k as u32, d2);
+            }
+        }
+        for s in 0..tracks.slots() {
+            let Some(id) = tracks.coasting(s, now_s, params.coast_s) else { continue };
+            if id == me || observations.iter().any(|o| o.id == id) {
+                continue;
+            }
+            let x = tracks.state_at(s, now_s);
+            let (dx, dy, dz) = (x[X] - own[X], x[X + 1] - own[X + 1], x[X + 2] - own[X + 2]);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if d2 > r2 {
+                continue;
+            }
+            // A coasting neighbour only fills an area that has no fresh observation.
+            let a = &mut nearest[setup.classifier.area(sin_yaw, cos_yaw, dx, dy)];
+            let d2 = d2 as f32;
+            if a.0 == EMPTY || (a.0 & TRACK != 0 && d2 < a.1) {
+                *a = (TRACK | s as u32, d2);
+            }
+        }
+    }
+
+    /// Steps 1-3: for each neighbour in S_i, its predicted state F·X_j (§3, from its track)
+    /// and X̂_ij = F·X_j + W_ij (eq. 10); their weighted sums over the areas (for X̄_i) and over
+    /// the main references (for X̂ᴰ_i). Main references perceived outside the areas' nearest
+    /// count too (METHOD §6 Choice).
+    fn estimate(
+        &mut self,
+        now_s: f64,
+        own: &State9,
+        slot_i: &FormationSlot,
+        x_hold: &State9,
+        observations: &[Observation],
+    ) -> Estimates {
+        let Self { setup, formation, dependency, tracks, nearest, .. } = self;
+        let (params, formation) = (&setup.params, &**formation);
+        let dt = params.dt_s;
+        let r2 = params.areas.sensing_range_m.powi(2);
+        let separation = params.separation_m.unwrap_or(0.0);
+        let turning = params.bank_turn_feedforward;
+        let mut est = Estimates::new();
+        // Steps 1-2 (and 3 for main references in their areas).
+        for a in 0..nearest.len() {
+            let k = nearest[a].0;
+            if k == EMPTY {
+                continue;
+            }
+            let (id, f_x_j, f) = if k & TRACK != 0 {
+                let s = (k & !TRACK) as usize;
+                match tracks.coasting(s, now_s, params.coast_s) {
+                    Some(id) => (id, tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s))),
+                    None => continue,
+                }
+            } else {
+                let o = &observations[k as usize];
+                (o.id, tracks.predict(o, now_s, dt), 1.0)
+            };
+            if separation > 0.0 {
+                keep_apart(formation, id, &f_x_j, slot_i, x_hold, separation, &mut est.push);
+            }
+            let Some(x_hat_ij) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
+            est.sum_bar += f * x_hat_ij;
+            est.w_bar += f;
+            est.n_bar += 1;
+            if let Some(c) = dependency.degree(id) {
+                est.add_reference(c, f, &x_hat_ij);
+            }
+        }
+        // Step 3: main references perceived but not the nearest in their area.
+        for r in 0..dependency.refs().len() {
+            let (id, c) = dependency.refs()[r];
+            let (f_x_j, f) = match observations.iter().position(|o| o.id == id) {
+                Some(k) => {
+                    if nearest.iter().any(|a| a.0 == k as u32) {
+                        continue; // already counted with its area
+                    }
+                    let o = &observations[k];
+                    if o.source == ObservationSource::Onboard
+                        && (state::position(&o.state) - state::position(own)).norm_squared() > r2
+                    {
+                        continue;
+                    }
+                    (tracks.predict(o, now_s, dt), 1.0)
+                }
+                None => {
+                    // Not observed now: coast on its track, unless its area already did.
+                    let Some(s) = (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s, params.coast_s) == Some(id))
+                    else {
+                        continue;
+                    };
+                    if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
+                        continue;
+                    }
+                    (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)))
+                }
+            };
+            let Some(x_hat_ij) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
+            est.add_reference(c, f, &x_hat_ij);
+        }
+        est
+    }
+}
+
+/// Step 4: `O_i − X_hold` with `O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i` (O_i = X̄_i when no main reference
+/// is perceived, X̂ᴰ_i when only main references are), moved away from neighbours that come
+/// too close (separation keeping, beyond the paper), and with the velocity part of W closing
+/// the remaining position gap over τ (paper §2.3).
+fn envelope_centre(params: &ControllerParams, est: &Estimates) -> State9 {
+    let lambda = params.lambda;
+    let x_bar = if est.n_bar > 0 { est.sum_bar / est.w_bar } else { est.sum_dep / est.c_sum };
+    let mut o_i = if est.main_refs > 0 {
+        let x_hat_d = est.sum_dep / est.c_sum;
+        (1.0 - lambda) * x_bar + lambda * x_hat_d
+    } else {
+        x_bar
+    };
+    for k in X..VX {
+        o_i[k] += est.push[k];
+    }
+    if let Some(tau) = params.closing_time_s {
+        for k in X..VX {
+            o_i[k + 3] += o_i[k] / tau;
+        }
+    }
+    o_i
+}
+
+/// `X̂_ij − X_hold` for neighbour `id` predicted at `f_x_j` (eq. 10, attitudes wrapped); None
+/// when the neighbour is not in the formation.
+#[inline]
+fn implied_deviation(
+    formation: &Formation,
+    turning: bool,
+    id: UavId,
+    f_x_j: &State9,
+    slot_i: &FormationSlot,
+    x_hold: &State9,
+) -> Option<State9> {
+    let slot_j = formation.slot(id)?;
+    // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
+    let mut delta = f_x_j - x_hold;
+    formation.add_w_with(turning, slot_i, slot_j, f_x_j, &mut delta);
+    for k in state::ALPHA..=state::GAMMA {
+        delta[k] = crate::angle::wrap_pi(delta[k]);
+    }
+    Some(delta)
+}
+
+/// Adds to `push` how far the UAV, at `x_hold` next step, must move away from neighbour `id`
+/// predicted at `x_j` to be `separation` m from it, when it is closer than that and closer than
+/// [`SEPARATION_SLOT_FRACTION`] of their slots' distance.
+#[inline]
+fn keep_apart(
+    formation: &Formation,
+    id: UavId,
+    x_j: &State9,
+    slot_i: &FormationSlot,
+    x_hold: &State9,
+    separation: f64,
+    push: &mut [f64; 3],
+) {
+    let p = [x_hold[X] - x_j[X], x_hold[X + 1] - x_j[X + 1], x_hold[X + 2] - x_j[X + 2]];
+    let d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+    if d2 >= separation * separation {
+        return;
+    }
+    let Some(slot_j) = formation.slot(id) else { return };
+    let limit = separation.min(SEPARATION_SLOT_FRACTION * (slot_j.offset_m - slot_i.offset_m).norm());
+    let d = d2.sqrt();
+    if d < limit && d > 1e-9 {
+        for k in 0..3 {
+            push[k] += (limit - d) * p[k] / d;
+        }
+    }
+}

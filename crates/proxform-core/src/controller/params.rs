@@ -1,0 +1,171 @@
+//! The proximity controller's parameters, with their units and defaults (METHOD §9).
+
+use crate::azimuth::AzimuthAreas;
+use crate::envelope::Envelope;
+use crate::error::{positive, unit_interval, ConfigError};
+use crate::predictor::PredictorKind;
+use crate::state::State9;
+
+/// Parameters of the proximity controller. Defaults reproduce METHOD §9.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ControllerParams {
+    /// Update period Δt (s, > 0). Default 0.1 s.
+    pub dt_s: f64,
+    /// Azimuth areas m and sensing range r_sense. Default 8 areas, 250 m.
+    pub areas: AzimuthAreas,
+    /// Distance parameter λ ∈ [0, 1] placing the envelope centre between the area mean
+    /// (λ = 0) and the dependency mean (λ = 1). Default 0.8.
+    pub lambda: f64,
+    /// Permissible errors Δ and margin ρ of the envelope. Default: the paper's Δ, ρ = 0.4.
+    pub envelope: Envelope,
+    /// Time τ (s) over which the velocity reference closes a position gap: the velocity part
+    /// of W, "determined by the current speed and relative position of proximal UAVs"
+    /// (paper §2.3). `None` gives METHOD §4's zero velocity offset. Default 1 s.
+    pub closing_time_s: Option<f64>,
+    /// Input penalty (dimensionless, ≥ 0), applied to each input normalised by its per-step
+    /// rate limit. Default 0.01.
+    pub input_weight: f64,
+    /// Neighbour predictor. Default α-β with α = 0.8, β = α²/(2 − α).
+    pub predictor: PredictorKind,
+    /// A neighbour track not refreshed for this long restarts (s, > 0). Default 1 s.
+    pub track_timeout_s: f64,
+    /// A neighbour missing from the observations is predicted from its track for at most this
+    /// long (s, ≥ 0; 0 disables coasting). Default 0.5 s.
+    pub coast_s: f64,
+    /// A coasting neighbour's acceleration is extrapolated for at most this long after its last
+    /// measurement; beyond, it goes on at the velocity reached (s, ≥ 0). Default 0.2 s.
+    pub coast_accel_s: f64,
+    /// A coasting neighbour weighs `exp(−age / coast_decay_s)` in the means (a measured one
+    /// weighs 1), so that the centre does not jump when a neighbour drops out or comes back,
+    /// and a UAV that has really gone fades out instead of being followed as a ghost (s, > 0).
+    /// Default 0.1 s.
+    pub coast_decay_s: f64,
+    /// In a course-following formation frame, add the slots' velocity in the turn (ω × r),
+    /// with ω the reference's coordinated-turn rate from its bank. Only meaningful for vehicles
+    /// that turn by banking (the fixed wing); scenario files switch it on for them. Default off.
+    pub bank_turn_feedforward: bool,
+    /// Gain in (0, 1] of the UAV's filter of its own state: the estimate is the model's
+    /// prediction from the last estimate and the input the UAV applied, corrected toward the
+    /// measurement by this fraction. 1 uses the raw measurement (METHOD). Default 1.
+    pub own_filter_gain: f64,
+    /// Separation keeping (m, ≥ 0; beyond the paper, METHOD §8): a neighbour predicted closer
+    /// than this, and closer than [`SEPARATION_SLOT_FRACTION`] of the distance between the two
+    /// slots, pushes the envelope centre's position away from it by the shortfall, which the
+    /// velocity part of W then closes over τ. The slot condition keeps a formation whose
+    /// slots are closer than this from being pushed apart. 0 switches it off; `None` leaves
+    /// the choice to the caller (the simulator uses twice the scenario's safety distance) and
+    /// is off for a controller on its own. Default `None`.
+    pub separation_m: Option<f64>,
+    /// Horizon H of the predictive input (updates, 1 to 50). 1 is the paper's closed-form
+    /// one-step input; H > 1 solves a quadratic program with Clarabel ([`crate::horizon`]).
+    /// Default 1.
+    pub horizon: u32,
+}
+
+impl ControllerParams {
+    /// The paper's permissible errors Δ (METHOD §9) in SI units.
+    pub fn paper_thresholds() -> State9 {
+        use crate::angle::{deg, kmh};
+        State9::from_column_slice(&[0.5, 0.6, 0.2, kmh(5.0), kmh(2.0), kmh(2.0), deg(0.4), deg(0.2), deg(0.5)])
+    }
+
+    /// Permissible errors Δ for a fixed wing (SI units): 2 m on each axis, 2 m/s (7.2 km/h) on
+    /// each velocity component, 5° of pitch, 10° of yaw and of roll. A fixed wing corrects its
+    /// position only by pitching, turning and banking away from its neighbours' attitude, so
+    /// the paper's tenths of a degree, made for a vehicle that moves sideways without
+    /// turning, would forbid every correction (measured: the V of `scenarios/fixed-wing-v.toml`
+    /// with the paper's Δ errs by up to 75 m and has pairs within 12.7 m in 7 of 200 runs).
+    pub fn fixed_wing_thresholds() -> State9 {
+        use crate::angle::{deg, kmh};
+        State9::from_column_slice(&[2.0, 2.0, 2.0, kmh(7.2), kmh(7.2), kmh(7.2), deg(5.0), deg(10.0), deg(10.0)])
+    }
+
+    /// Checks every parameter, naming the first one out of its domain.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        positive("dt_s", self.dt_s)?;
+        self.areas.validate()?;
+        unit_interval("lambda", self.lambda)?;
+        self.envelope.validate()?;
+        if let Some(tau) = self.closing_time_s {
+            positive("closing_time_s", tau)?;
+        }
+        if !(self.input_weight.is_finite() && self.input_weight >= 0.0) {
+            return Err(ConfigError::OutOfRange {
+                field: "input_weight",
+                value: self.input_weight,
+                expected: "a finite weight ≥ 0",
+            });
+        }
+        self.predictor.validate()?;
+        positive("track_timeout_s", self.track_timeout_s)?;
+        if !(self.coast_s.is_finite() && self.coast_s >= 0.0) {
+            return Err(ConfigError::OutOfRange {
+                field: "coast_s",
+                value: self.coast_s,
+                expected: "a finite time ≥ 0 s",
+            });
+        }
+        if !(self.own_filter_gain > 0.0 && self.own_filter_gain <= 1.0) {
+            return Err(ConfigError::OutOfRange {
+                field: "own_filter_gain",
+                value: self.own_filter_gain,
+                expected: "a gain in (0, 1]",
+            });
+        }
+        if let Some(d) = self.separation_m {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(ConfigError::OutOfRange {
+                    field: "separation_m",
+                    value: d,
+                    expected: "a finite distance ≥ 0 m",
+                });
+            }
+        }
+        if !(1..=MAX_HORIZON).contains(&self.horizon) {
+            return Err(ConfigError::OutOfRange {
+                field: "horizon",
+                value: f64::from(self.horizon),
+                expected: "an integer horizon from 1 to 50",
+            });
+        }
+        Ok(())
+    }
+}
+
+impl ControllerParams {
+    /// Weight of a neighbour known only from its track, `age` seconds after its last
+    /// measurement: `exp(−age / coast_decay_s)` (measured neighbours weigh 1).
+    #[inline]
+    pub fn coasting_weight(&self, age: f64) -> f64 {
+        (-age / self.coast_decay_s).exp()
+    }
+}
+
+/// Separation keeping engages only for a neighbour closer than this fraction of the distance
+/// between its slot and the UAV's own (see [`ControllerParams::separation_m`]).
+pub const SEPARATION_SLOT_FRACTION: f64 = 0.8;
+
+/// Longest horizon accepted (updates).
+pub const MAX_HORIZON: u32 = 50;
+
+impl Default for ControllerParams {
+    fn default() -> Self {
+        Self {
+            dt_s: 0.1,
+            areas: AzimuthAreas::default(),
+            lambda: 0.8,
+            envelope: Envelope { thresholds: Self::paper_thresholds(), rho: 0.4 },
+            closing_time_s: Some(1.0),
+            input_weight: 0.01,
+            predictor: PredictorKind::default(),
+            track_timeout_s: 1.0,
+            coast_s: 0.5,
+            coast_accel_s: 0.2,
+            coast_decay_s: 0.1,
+            bank_turn_feedforward: false,
+            own_filter_gain: 1.0,
+            separation_m: None,
+            horizon: 1,
+        }
+    }
+}

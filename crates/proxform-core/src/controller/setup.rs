@@ -1,0 +1,94 @@
+//! What every controller of a swarm shares, and the input step all of them use.
+
+use std::sync::Arc;
+
+use crate::azimuth::AreaClassifier;
+use crate::control::{solve, Hessian};
+use crate::error::ConfigError;
+use crate::horizon::{solve_horizon, HorizonProblem};
+use crate::state::{Input, State9};
+use crate::vehicle::VehicleModel;
+
+use super::ControllerParams;
+
+/// What every controller of a swarm shares: the parameters, the vehicle model, and what is
+/// derived from them once (weights, area boundaries, the cost Hessian when B is constant).
+#[derive(Debug, Clone)]
+pub struct ControllerSetup {
+    pub(super) params: ControllerParams,
+    pub(super) vehicle: VehicleModel,
+    q: State9,
+    input_weights: Input,
+    pub(super) classifier: AreaClassifier,
+    hessian: Option<Hessian>,
+}
+
+impl ControllerSetup {
+    /// Checks `params` and `vehicle` and derives the shared quantities.
+    pub fn new(params: ControllerParams, vehicle: VehicleModel) -> Result<Arc<Self>, ConfigError> {
+        params.validate()?;
+        vehicle.validate()?;
+        let q = params.envelope.thresholds.map(|d| 1.0 / (d * d));
+        let scale = vehicle.input_scale(params.dt_s);
+        let n = vehicle.n_inputs();
+        let input_weights =
+            Input::from_fn(
+                |j, _| if j < n && scale[j] > 0.0 { params.input_weight / (scale[j] * scale[j]) } else { 0.0 },
+            );
+        let hessian = vehicle
+            .control_matrix_is_constant()
+            .then(|| Hessian::new(&vehicle.control_matrix(&State9::zeros(), params.dt_s), n, &q, &input_weights));
+        let classifier = AreaClassifier::new(params.areas.areas);
+        Ok(Arc::new(Self { params, vehicle, q, input_weights, classifier, hessian }))
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &ControllerParams {
+        &self.params
+    }
+
+    /// The vehicle model.
+    pub fn vehicle(&self) -> &VehicleModel {
+        &self.vehicle
+    }
+
+    /// METHOD §6 step 7: the input that brings the UAV at `own` toward the target whose
+    /// course-keeping deviation is `r = F·X − target`, within the vehicle's limits: the
+    /// closed-form step for H = 1, the horizon QP for H > 1 (falling back to the one-step
+    /// input if the solver fails). Every controller of proxform, the baselines included,
+    /// turns its target into an input here, so they all fly under the same limits.
+    pub fn input_toward(&self, own: &State9, r: &State9) -> Input {
+        let (vehicle, dt) = (&self.vehicle, self.params.dt_s);
+        let b = vehicle.control_matrix(own, dt);
+        let (lo, hi) = vehicle.input_bounds(own, dt);
+        if self.params.horizon > 1 {
+            let cumulative = vehicle.cumulative_input_bounds(own);
+            let rate = vehicle.input_scale(dt);
+            let neg_rate = -rate;
+            let pb = HorizonProblem {
+                horizon: self.params.horizon as usize,
+                n: vehicle.n_inputs(),
+                dt,
+                b: &b,
+                r,
+                q: &self.q,
+                w: &self.input_weights,
+                first: (&lo, &hi),
+                // Where the state limits are in the cumulative bounds, later steps are bound
+                // by the rate only; otherwise by the first step's bounds.
+                later: if cumulative.is_some() { (&neg_rate, &rate) } else { (&lo, &hi) },
+                cumulative: cumulative.as_ref().map(|(l, h)| (l, h)),
+            };
+            if let Ok(u) = solve_horizon(&pb) {
+                return u;
+            }
+        }
+        match &self.hessian {
+            Some(h) => solve(h, &b, r, &self.q, &lo, &hi),
+            None => {
+                let h = Hessian::new(&b, vehicle.n_inputs(), &self.q, &self.input_weights);
+                solve(&h, &b, r, &self.q, &lo, &hi)
+            }
+        }
+    }
+}

@@ -1,0 +1,120 @@
+//! The built-in scenarios and files: the paper's experiment, the large-swarm lattice, the
+//! fixed-wing V, the annotated example and the built-in comparison.
+//!
+//! Each built-in is a spec, converted like any file: the paper's experiment is the file
+//! `scenarios/paper.toml` of this crate (every other value its default), the swarm a spec
+//! built for its size.
+
+use crate::convert::SpecError;
+use crate::scenario::Scenario;
+use crate::spec::{AutoDepsSpec, FormationSpec, ScenarioSpec, ShapeSpec};
+
+/// `scenarios/paper.toml`: the paper's six-UAV experiment (METHOD §9).
+pub const PAPER: &str = include_str!("../scenarios/paper.toml");
+/// `scenarios/fixed-wing-v.toml`: 12 fixed wings in a V, climb and 180° turn in turbulence.
+pub const FIXED_WING_V: &str = include_str!("../scenarios/fixed-wing-v.toml");
+/// `scenarios/example.toml`: the annotated example `proxform init` writes.
+pub const EXAMPLE: &str = include_str!("../scenarios/example.toml");
+/// `scenarios/compare-paper.toml`: the built-in comparison.
+pub const COMPARE_PAPER: &str = include_str!("../scenarios/compare-paper.toml");
+
+/// Names of the built-in scenarios.
+pub const NAMES: [&str; 3] = ["paper", "swarm", "fixed-wing-v"];
+
+/// Horizontal spacing of the swarm's lattice (m).
+pub const SWARM_SPACING_M: f64 = 50.0;
+/// Vertical spacing of the swarm's levels (m).
+pub const SWARM_LEVEL_M: f64 = 20.0;
+/// Dependency degree of every swarm follower on the navigator, heard over the radio. Without
+/// it errors grow along the reference chains of a deep lattice (see README, Large swarms).
+pub const SWARM_NAVIGATOR_DEGREE: f64 = 0.3;
+/// UAVs of the swarm when no size is given.
+pub const SWARM_DEFAULT_UAVS: usize = 1000;
+
+/// The spec of the paper's experiment.
+pub fn paper_spec() -> ScenarioSpec {
+    crate::load::parse_spec(PAPER, "paper.toml").expect("the built-in paper.toml parses")
+}
+
+/// The paper's experiment.
+pub fn paper() -> Scenario {
+    Scenario::try_from(paper_spec()).expect("the built-in paper.toml is a valid scenario")
+}
+
+/// The spec of the swarm scenario with `n` UAVs: a multi-level lattice (rows of columns 50 m
+/// apart on up to four levels 20 m apart) behind the navigator, dependency tables derived from
+/// the geometry with the navigator heard over the radio, the paper's lateral and speed
+/// manoeuvres with gentler attitude sweeps; noise and vehicle are the paper's.
+pub fn swarm_spec(n: usize) -> ScenarioSpec {
+    let range = 1.6 * SWARM_SPACING_M;
+    let mut s = ScenarioSpec { name: Some("swarm".into()), safety_distance_m: Some(10.0), ..ScenarioSpec::default() };
+    s.formation = FormationSpec {
+        shape: Some(ShapeSpec {
+            kind: Some("lattice".into()),
+            uavs: Some(n.min(u32::MAX as usize) as u32),
+            spacing_m: Some(SWARM_SPACING_M),
+            level_step_m: Some(-SWARM_LEVEL_M),
+            ..ShapeSpec::default()
+        }),
+        dependencies: Some(AutoDepsSpec {
+            k: Some(3),
+            max_distance_m: Some(range),
+            navigator_degree: Some(SWARM_NAVIGATOR_DEGREE),
+        }),
+        ..FormationSpec::default()
+    };
+    s.path.kind = Some("paper".into());
+    s.path.height_amplitude_m = Some(10.0);
+    s.path.pitch_swing_deg = Some(10.0);
+    s.path.yaw_amplitude_deg = Some(5.0);
+    s.path.roll_amplitude_deg = Some(10.0);
+    s.controller.sensing_range_m = Some(range);
+    s.allowable.x_m = Some(5.0);
+    s.allowable.y_m = Some(5.0);
+    s.allowable.z_m = Some(5.0);
+    s.allowable.alpha_deg = Some(2.0);
+    s.allowable.beta_deg = Some(2.0);
+    s.allowable.gamma_deg = Some(3.0);
+    s.radio.beacons = Some(vec![1]);
+    s
+}
+
+/// The swarm scenario with `n ≥ 2` UAVs.
+pub fn swarm(n: usize) -> Result<Scenario, SpecError> {
+    Scenario::try_from(swarm_spec(n))
+}
+
+/// The spec of a built-in scenario by name; `uavs` sizes the swarm (and only the swarm).
+pub fn spec_by_name(name: &str, uavs: Option<usize>) -> Result<ScenarioSpec, String> {
+    match (name, uavs) {
+        ("paper", None) => Ok(paper_spec()),
+        ("swarm", n) => Ok(swarm_spec(n.unwrap_or(SWARM_DEFAULT_UAVS))),
+        ("fixed-wing-v", None) => {
+            Ok(crate::load::parse_spec(FIXED_WING_V, "fixed-wing-v.toml").expect("the built-in file parses"))
+        }
+        ("paper" | "fixed-wing-v", Some(_)) => Err(format!("--uavs applies to --scenario swarm only, not to {name}")),
+        (other, _) => Err(format!("unknown scenario '{other}' (built-in: {})", NAMES.join(", "))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_built_in_is_valid() {
+        let p = paper();
+        assert_eq!((p.len(), p.steps()), (6, 1000));
+        assert_eq!(p.dependencies()[4].degree(proxform_core::UavId(0)), Some(0.3));
+        assert_eq!(p.dependencies()[3].refs().len(), 2);
+        let s = swarm(500).expect("valid");
+        assert!(s.dependencies().iter().skip(1).all(|d| !d.is_empty()));
+        assert_eq!(s.beacons(), &[proxform_core::UavId(0)]);
+        for name in NAMES {
+            Scenario::try_from(spec_by_name(name, None).expect("known")).expect("valid");
+        }
+        let e = crate::load::parse(EXAMPLE, "example.toml").expect("the example loads");
+        assert!(e.len() >= 2);
+        assert!(swarm(1).is_err(), "one UAV is no swarm");
+    }
+}

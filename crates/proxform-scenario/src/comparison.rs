@@ -1,0 +1,437 @@
+//! Side-by-side comparisons: formation control methods × conditions × seeds.
+//!
+//! A comparison takes one base scenario, a list of methods (the proximity method with its
+//! horizon, and the baselines of [`proxform_core::baseline`]) and a list of conditions (radio
+//! loss and delay, sensor noise, a radio blackout, a failed UAV, onboard dropout), and runs
+//! every method under every condition for the same seeds, so that every cell sees the same
+//! disturbances. The raw file form is [`ComparisonSpec`] (TOML); [`Comparison`] is the checked
+//! form, whose every cell is a checked scenario. Running it is the simulator's.
+
+use proxform_core::controller::MAX_HORIZON;
+use proxform_core::{Method, UavId};
+
+use crate::convert::{method_from, SpecError};
+use crate::defaults;
+use crate::scenario::Scenario;
+use crate::spec::{FaultSpec, ScenarioSpec};
+
+/// Why a comparison is invalid or could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CompareError {
+    /// The file is not valid TOML or has unknown keys / wrong types.
+    #[error("{file}: {message}")]
+    Parse {
+        /// The file's name.
+        file: String,
+        /// The parser's message (with line and key).
+        message: String,
+    },
+    /// A value outside its domain.
+    #[error("{file}: {key}: {message}")]
+    Value {
+        /// The file's name.
+        file: String,
+        /// Key path of the value.
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A condition made the base scenario invalid.
+    #[error("condition '{condition}', method '{method}': {source}")]
+    Scenario {
+        /// The condition's name.
+        condition: String,
+        /// The method's name.
+        method: String,
+        /// The scenario's complaint.
+        source: SpecError,
+    },
+}
+
+/// A method entry of a comparison file: a label, or a table with options.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(untagged)]
+pub enum MethodSpec {
+    /// `"proximity"`, `"leader_follower"`, `"consensus"` or `"flocking"`, default gains.
+    Label(String),
+    /// `{ method = "proximity", horizon = 5, name = "proximity H=5" }`.
+    Table {
+        /// The method's label.
+        method: String,
+        /// Name in reports (default: the label, with the horizon when > 1).
+        name: Option<String>,
+        /// Horizon H of the proximity method (updates, 1 to 50).
+        horizon: Option<u32>,
+        /// A baseline's gains (keys of its gains struct; omitted ones keep their defaults),
+        /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_share = 0.5 }`.
+        gains: Option<toml::Table>,
+    },
+}
+
+/// A condition of a comparison file; every key is optional.
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConditionSpec {
+    /// Name in reports.
+    pub name: String,
+    /// i.i.d. loss probability of each radio message, in [0, 1]. Default 0.
+    pub radio_loss: Option<f64>,
+    /// Delay of every radio message (s, ≥ 0, a multiple of Δt). Default 0.
+    pub radio_delay_s: Option<f64>,
+    /// Factor on the scenario's measurement noise (≥ 0). Default 1.
+    pub noise_scale: Option<f64>,
+    /// Radio down for the whole flight. Default false.
+    pub blackout: Option<bool>,
+    /// UAV (numbered from 1, as in reports) that fails and leaves the formation.
+    pub fail_uav: Option<u32>,
+    /// When it fails (s). Default 40 s.
+    pub fail_at_s: Option<f64>,
+    /// Probability of losing each onboard observation, in [0, 1]. Default 0.
+    pub dropout: Option<f64>,
+}
+
+/// A comparison file (TOML).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComparisonSpec {
+    /// Name in reports and the default output directory.
+    pub name: String,
+    /// The base scenario: a built-in name or a scenario file (relative to this file).
+    pub scenario: String,
+    /// Seeds (runs) per cell, ≥ 1.
+    pub seeds: u64,
+    /// Base seed. Default 1.
+    pub seed: Option<u64>,
+    /// The methods.
+    pub methods: Vec<MethodSpec>,
+    /// The conditions.
+    #[serde(rename = "condition")]
+    pub conditions: Vec<ConditionSpec>,
+}
+
+/// A checked method entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodEntry {
+    /// Name in reports.
+    pub name: String,
+    /// The method.
+    pub method: Method,
+    /// Horizon of the proximity method.
+    pub horizon: u32,
+    /// A baseline's gains as written (None: its defaults).
+    pub gains: Option<toml::Table>,
+}
+
+/// A checked condition: what it changes in the base scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Condition {
+    /// Name in reports.
+    pub name: String,
+    /// i.i.d. radio loss probability.
+    pub radio_loss: f64,
+    /// Radio delay (s).
+    pub radio_delay_s: f64,
+    /// Factor on the measurement noise.
+    pub noise_scale: f64,
+    /// Radio down for the whole flight.
+    pub blackout: bool,
+    /// The UAV that fails, and when (s).
+    pub fail: Option<(UavId, f64)>,
+    /// Onboard observation dropout.
+    pub dropout: f64,
+}
+
+impl Condition {
+    /// A condition that changes nothing.
+    pub fn ideal(name: &str) -> Self {
+        Self {
+            name: name.into(),
+            radio_loss: 0.0,
+            radio_delay_s: 0.0,
+            noise_scale: 1.0,
+            blackout: false,
+            fail: None,
+            dropout: 0.0,
+        }
+    }
+
+    /// True when only the radio loss differs from [`Condition::ideal`] (a point of the
+    /// error-against-loss curve).
+    pub fn is_loss_only(&self) -> bool {
+        Self { name: String::new(), radio_loss: 0.0, ..self.clone() } == Self::ideal("")
+    }
+
+    /// True when only the radio delay differs from [`Condition::ideal`].
+    pub fn is_delay_only(&self) -> bool {
+        Self { name: String::new(), radio_delay_s: 0.0, ..self.clone() } == Self::ideal("")
+    }
+
+    /// The base scenario's spec under this condition, flown by `method`.
+    pub fn apply(&self, base: &ScenarioSpec, method: &MethodEntry) -> ScenarioSpec {
+        let mut sc = base.clone();
+        sc.radio.loss = Some(self.radio_loss);
+        sc.radio.delay_s = Some(self.radio_delay_s);
+        sc.noise.scale = Some(self.noise_scale * base.noise.scale.unwrap_or(1.0));
+        if self.blackout {
+            let duration = base.duration_s.unwrap_or(defaults::DURATION_S);
+            sc.fault.push(FaultSpec::radio_blackout(0.0, duration + 1.0));
+        }
+        if let Some((uav, at_s)) = self.fail {
+            sc.fault.push(FaultSpec::remove(uav.0 + 1, at_s));
+        }
+        sc.sensing.dropout = Some(self.dropout);
+        sc.controller.horizon = Some(i64::from(method.horizon));
+        sc.controller.method = Some(method.method.label().into());
+        sc.controller.gains = method.gains.clone();
+        let base_name = base.name.as_deref().unwrap_or("scenario");
+        sc.name = Some(format!("{base_name} / {} / {}", method.name, self.name));
+        sc
+    }
+
+    /// The checked scenario of this condition flown by `method`.
+    pub fn scenario(&self, base: &ScenarioSpec, method: &MethodEntry) -> Result<Scenario, CompareError> {
+        Scenario::try_from(self.apply(base, method)).map_err(|source| CompareError::Scenario {
+            condition: self.name.clone(),
+            method: method.name.clone(),
+            source,
+        })
+    }
+}
+
+/// A checked comparison.
+#[derive(Debug, Clone)]
+pub struct Comparison {
+    /// Name in reports.
+    pub name: String,
+    /// The base scenario's spec (each cell applies its condition to it).
+    pub base_spec: ScenarioSpec,
+    /// The base scenario.
+    pub base: Scenario,
+    /// Seeds per cell.
+    pub seeds: u64,
+    /// Base seed.
+    pub seed: u64,
+    /// The methods.
+    pub methods: Vec<MethodEntry>,
+    /// The conditions.
+    pub conditions: Vec<Condition>,
+}
+
+/// The built-in comparison: the paper's experiment under every condition, for the proximity
+/// method (H = 1 and H = 5) and the three baselines.
+pub const BUILT_IN: &str = crate::builtin::COMPARE_PAPER;
+
+impl Comparison {
+    /// Parses a comparison file; `resolve` turns its `scenario` entry into the base scenario's
+    /// spec (already checked where it was read, so its errors name its own file).
+    pub fn parse(
+        text: &str,
+        file: &str,
+        resolve: impl FnOnce(&str) -> Result<ScenarioSpec, String>,
+    ) -> Result<Self, CompareError> {
+        let spec = Self::parse_spec(text, file)?;
+        let base = resolve(&spec.scenario).map_err(|message| CompareError::Value {
+            file: file.into(),
+            key: "scenario".into(),
+            message,
+        })?;
+        Self::check(spec, base, file)
+    }
+
+    /// Parses a comparison file's text into its spec.
+    pub fn parse_spec(text: &str, file: &str) -> Result<ComparisonSpec, CompareError> {
+        toml::from_str(text).map_err(|e| CompareError::Parse { file: file.into(), message: e.to_string() })
+    }
+
+    /// Checks a parsed specification against its base scenario's spec.
+    pub fn check(spec: ComparisonSpec, base_spec: ScenarioSpec, file: &str) -> Result<Self, CompareError> {
+        let base = Scenario::try_from(base_spec.clone()).map_err(|e| CompareError::Value {
+            file: file.into(),
+            key: "scenario".into(),
+            message: e.to_string(),
+        })?;
+        let bad = |key: String, message: String| CompareError::Value { file: file.into(), key, message };
+        if spec.seeds == 0 {
+            return Err(bad("seeds".into(), "must be at least 1".into()));
+        }
+        if spec.methods.is_empty() {
+            return Err(bad("methods".into(), "name at least one method".into()));
+        }
+        if spec.conditions.is_empty() {
+            return Err(bad("condition".into(), "give at least one [[condition]]".into()));
+        }
+        let mut methods = Vec::new();
+        for (k, m) in spec.methods.iter().enumerate() {
+            let (label, name, horizon, gains) = match m {
+                MethodSpec::Label(l) => (l.as_str(), None, None, None),
+                MethodSpec::Table { method, name, horizon, gains } => {
+                    (method.as_str(), name.clone(), *horizon, gains.clone())
+                }
+            };
+            let key = format!("methods[{k}]");
+            let method = method_from(label, gains.as_ref())
+                .map_err(|(sub, message)| bad(if sub { format!("{key}.gains") } else { key.clone() }, message))?;
+            let horizon = horizon.unwrap_or(1);
+            if !(1..=MAX_HORIZON).contains(&horizon) {
+                return Err(bad(format!("{key}.horizon"), format!("must be 1 to {MAX_HORIZON}, found {horizon}")));
+            }
+            if horizon > 1 && method != Method::Proximity {
+                return Err(bad(format!("{key}.horizon"), "applies to the proximity method only".into()));
+            }
+            let name =
+                name.unwrap_or_else(|| if horizon > 1 { format!("{label} H={horizon}") } else { label.to_string() });
+            if methods.iter().any(|e: &MethodEntry| e.name == name) {
+                return Err(bad(key, format!("duplicate method name '{name}'")));
+            }
+            methods.push(MethodEntry { name, method, horizon, gains });
+        }
+        let mut conditions: Vec<Condition> = Vec::new();
+        for (k, c) in spec.conditions.iter().enumerate() {
+            let key = |f: &str| format!("condition[{k}].{f}");
+            let probability = |f: &str, v: Option<f64>| match v {
+                Some(p) if !(0.0..=1.0).contains(&p) => {
+                    Err(bad(key(f), format!("must be a probability in [0, 1], found {p}")))
+                }
+                Some(p) => Ok(p),
+                None => Ok(0.0),
+            };
+            let radio_loss = probability("radio_loss", c.radio_loss)?;
+            let dropout = probability("dropout", c.dropout)?;
+            let radio_delay_s = c.radio_delay_s.unwrap_or(0.0);
+            let steps = radio_delay_s / base.dt_s;
+            if !(radio_delay_s.is_finite() && radio_delay_s >= 0.0) || (steps - steps.round()).abs() > 1e-6 {
+                return Err(bad(
+                    key("radio_delay_s"),
+                    format!("must be ≥ 0 s and a multiple of the update period {} s, found {radio_delay_s}", base.dt_s),
+                ));
+            }
+            let noise_scale = c.noise_scale.unwrap_or(1.0);
+            if !(noise_scale.is_finite() && noise_scale >= 0.0) {
+                return Err(bad(key("noise_scale"), format!("must be a finite factor ≥ 0, found {noise_scale}")));
+            }
+            let fail = match c.fail_uav {
+                Some(u) if u == 0 || u as usize > base.len() => {
+                    return Err(bad(key("fail_uav"), format!("UAVs are numbered 1 to {}, found {u}", base.len())))
+                }
+                Some(u) => {
+                    let at = c.fail_at_s.unwrap_or(defaults::FAIL_AT_S);
+                    if !(at.is_finite() && at >= 0.0) {
+                        return Err(bad(key("fail_at_s"), format!("must be a time ≥ 0 s, found {at}")));
+                    }
+                    Some((UavId(u - 1), at))
+                }
+                None if c.fail_at_s.is_some() => {
+                    return Err(bad(key("fail_at_s"), "needs fail_uav".into()));
+                }
+                None => None,
+            };
+            if c.name.trim().is_empty() || conditions.iter().any(|d| d.name == c.name) {
+                return Err(bad(key("name"), format!("needs a unique, non-empty name, found '{}'", c.name)));
+            }
+            conditions.push(Condition {
+                name: c.name.clone(),
+                radio_loss,
+                radio_delay_s,
+                noise_scale,
+                blackout: c.blackout.unwrap_or(false),
+                fail,
+                dropout,
+            });
+        }
+        let cmp = Self {
+            name: spec.name,
+            base_spec,
+            base,
+            seeds: spec.seeds,
+            seed: spec.seed.unwrap_or(defaults::SEED),
+            methods,
+            conditions,
+        };
+        // Every cell's scenario must be valid before anything runs.
+        for m in &cmp.methods {
+            for c in &cmp.conditions {
+                c.scenario(&cmp.base_spec, m)?;
+            }
+        }
+        Ok(cmp)
+    }
+
+    /// Number of runs (cells × seeds, before sharing).
+    pub fn runs(&self) -> u64 {
+        self.methods.len() as u64 * self.conditions.len() as u64 * self.seeds
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Comparison, CompareError> {
+        Comparison::parse(text, "test.toml", |name| match name {
+            "paper" => Ok(crate::builtin::paper_spec()),
+            other => Err(format!("unknown scenario '{other}'")),
+        })
+    }
+
+    #[test]
+    fn the_built_in_comparison_parses() {
+        let c = parse(BUILT_IN).expect("valid");
+        assert!(c.seeds >= 50);
+        assert!(c.methods.iter().any(|m| m.horizon > 1));
+        assert!(c.conditions.iter().any(|c| c.blackout));
+        assert!(c.conditions.iter().any(|c| c.fail.is_some()));
+        assert!(c.conditions.iter().filter(|c| c.is_loss_only()).count() >= 3);
+        assert!(c.conditions.iter().filter(|c| c.is_delay_only()).count() >= 3);
+    }
+
+    #[test]
+    fn bad_comparisons_name_the_key() {
+        let head = "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = ['proximity']\n";
+        let cases = [
+            (format!("{head}[[condition]]\nname = 'a'\nradio_loss = 1.5\n"), "condition[0].radio_loss"),
+            (format!("{head}[[condition]]\nname = 'a'\nradio_delay_s = 0.05\n"), "condition[0].radio_delay_s"),
+            (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 9\n"), "condition[0].fail_uav"),
+            (format!("{head}[[condition]]\nname = 'a'\nwind = 3\n"), "wind"),
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
+                 methods = [{ method = 'consensus', gains = { leader_share = -1.0 } }]\n[[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods[0].gains",
+            ),
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
+                 methods = [{ method = 'flocking', gains = { c3 = 1.0 } }]\n[[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods[0].gains",
+            ),
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = ['pid']\n[[condition]]\nname = 'a'\n".into(),
+                "methods[0]",
+            ),
+            (
+                "name = 'x'\nscenario = 'moon'\nseeds = 2\nmethods = ['proximity']\n[[condition]]\nname = 'a'\n".into(),
+                "scenario",
+            ),
+        ];
+        for (text, key) in cases {
+            let e = parse(&text).expect_err(key).to_string();
+            assert!(e.contains(key), "{e} should name {key}");
+        }
+    }
+
+    #[test]
+    fn gains_given_in_the_file_reach_the_method() {
+        let text = "name = 'x'\nscenario = 'paper'\nseeds = 1\n\
+                    methods = [{ method = 'leader_follower', name = 'lf fast', gains = { pd = { kp = 4.0 } } }]\n\
+                    [[condition]]\nname = 'a'\n";
+        let c = parse(text).expect("valid");
+        match c.methods[0].method {
+            Method::LeaderFollower(g) => {
+                assert_eq!(g.pd.kp, 4.0);
+                assert_eq!(g.pd.kv, 2.0, "omitted gains keep their defaults");
+            }
+            m => panic!("{m:?}"),
+        }
+        assert_eq!(c.methods[0].name, "lf fast");
+    }
+}

@@ -1,0 +1,166 @@
+//! `[controller]`: the proximity controller's parameters and the followers' method.
+
+use proxform_core::angle::{deg, kmh};
+use proxform_core::controller::MAX_HORIZON;
+use proxform_core::state;
+use proxform_core::{ControllerParams, Envelope, Method, PredictorKind};
+
+use super::values::{err, finite, non_negative, positive, probability, SpecError};
+use crate::spec::ControllerSpec;
+
+/// A threshold's state index, key, value as written and unit conversion.
+type ThresholdKey<'a> = (usize, &'a str, Option<f64>, fn(f64) -> f64);
+
+/// Most azimuth areas.
+pub const MAX_AREAS: i64 = 1024;
+
+/// α of the default α-β predictor.
+const DEFAULT_ALPHA: f64 = match PredictorKind::DEFAULT {
+    PredictorKind::AlphaBeta { alpha, .. } => alpha,
+    PredictorKind::ConstantVelocity => 1.0,
+};
+
+/// The controller's parameters; unset permissible errors take the vehicle's defaults, and the
+/// turn feed-forward is on for the fixed wing. The separation distance is resolved by the caller.
+pub fn params(
+    c: &ControllerSpec,
+    dt_s: f64,
+    fixed_wing: bool,
+    _safety_distance_m: f64,
+) -> Result<ControllerParams, SpecError> {
+    let mut p = ControllerParams { dt_s, ..ControllerParams::default() };
+    if fixed_wing {
+        p.envelope.thresholds = ControllerParams::fixed_wing_thresholds();
+    }
+    if let Some(m) = c.areas {
+        if !(1..=MAX_AREAS).contains(&m) {
+            return Err(err("controller.areas", format!("m must be between 1 and {MAX_AREAS}, found {m}")));
+        }
+        p.areas.areas = m as usize;
+    }
+    if let Some(v) = c.sensing_range_m {
+        p.areas.sensing_range_m = positive("controller.sensing_range_m", v)?;
+    }
+    if let Some(v) = c.lambda {
+        let v = finite("controller.lambda", v)?;
+        if !(0.0..=1.0).contains(&v) {
+            return Err(err("controller.lambda", format!("λ must be in [0, 1], found {v}")));
+        }
+        p.lambda = v;
+    }
+    if let Some(v) = c.rho {
+        let v = positive("controller.rho", v)?;
+        if v > 1.0 {
+            return Err(err("controller.rho", format!("ρ must be in (0, 1], found {v}")));
+        }
+        p.envelope.rho = v;
+    }
+    if let Some(v) = c.closing_time_s {
+        let v = non_negative("controller.closing_time_s", v)?;
+        p.closing_time_s = (v > 0.0).then_some(v);
+    }
+    if let Some(v) = c.input_weight {
+        p.input_weight = non_negative("controller.input_weight", v)?;
+    }
+    if let Some(v) = c.track_timeout_s {
+        p.track_timeout_s = positive("controller.track_timeout_s", v)?;
+    }
+    if let Some(v) = c.coast_s {
+        p.coast_s = non_negative("controller.coast_s", v)?;
+    }
+    if let Some(v) = c.coast_accel_s {
+        p.coast_accel_s = non_negative("controller.coast_accel_s", v)?;
+    }
+    if let Some(v) = c.coast_decay_s {
+        p.coast_decay_s = positive("controller.coast_decay_s", v)?;
+    }
+    if let Some(v) = c.horizon {
+        if !(1..=i64::from(MAX_HORIZON)).contains(&v) {
+            return Err(err("controller.horizon", format!("must be an integer from 1 to {MAX_HORIZON}, found {v}")));
+        }
+        p.horizon = v as u32;
+    }
+    if let Some(v) = c.separation_m {
+        p.separation_m = Some(non_negative("controller.separation_m", v)?);
+    }
+    if let Some(v) = c.own_filter_gain {
+        let v = positive("controller.own_filter_gain", v)?;
+        if v > 1.0 {
+            return Err(err("controller.own_filter_gain", format!("must be in (0, 1], found {v}")));
+        }
+        p.own_filter_gain = v;
+    }
+    p.predictor = match c.predictor.as_deref() {
+        None | Some("alpha_beta") => {
+            let alpha = c.predictor_alpha.unwrap_or(DEFAULT_ALPHA);
+            let alpha = positive("controller.predictor_alpha", alpha)?;
+            if alpha > 1.0 {
+                return Err(err("controller.predictor_alpha", format!("must be in (0, 1], found {alpha}")));
+            }
+            let beta = match c.predictor_beta {
+                Some(b) => probability("controller.predictor_beta", b)?,
+                None => alpha * alpha / (2.0 - alpha),
+            };
+            PredictorKind::AlphaBeta { alpha, beta }
+        }
+        Some("constant_velocity") => PredictorKind::ConstantVelocity,
+        Some(o) => {
+            return Err(err(
+                "controller.predictor",
+                format!("unknown predictor \"{o}\" (expected \"alpha_beta\" or \"constant_velocity\")"),
+            ))
+        }
+    };
+    p.bank_turn_feedforward = c.bank_turn_feedforward.unwrap_or(fixed_wing);
+    if let Some(t) = &c.thresholds {
+        let mut d = p.envelope.thresholds;
+        let keys: [ThresholdKey; 9] = [
+            (state::X, "x_m", t.x_m, |v| v),
+            (state::Y, "y_m", t.y_m, |v| v),
+            (state::Z, "z_m", t.z_m, |v| v),
+            (state::VX, "vx_kmh", t.vx_kmh, kmh),
+            (state::VY, "vy_kmh", t.vy_kmh, kmh),
+            (state::VZ, "vz_kmh", t.vz_kmh, kmh),
+            (state::ALPHA, "alpha_deg", t.alpha_deg, deg),
+            (state::BETA, "beta_deg", t.beta_deg, deg),
+            (state::GAMMA, "gamma_deg", t.gamma_deg, deg),
+        ];
+        for (k, key, v, scale) in keys {
+            if let Some(v) = v {
+                d[k] = scale(positive(&format!("controller.thresholds.{key}"), v)?);
+            }
+        }
+        p.envelope = Envelope { thresholds: d, ..p.envelope };
+    }
+    Ok(p)
+}
+
+/// The followers' method: `controller.method` with its `controller.gains`.
+pub fn method(c: &ControllerSpec) -> Result<Method, SpecError> {
+    match c.method.as_deref() {
+        None => match &c.gains {
+            Some(_) => Err(err("controller.gains", "the proximity method's parameters are the [controller] keys")),
+            None => Ok(Method::Proximity),
+        },
+        Some(label) => method_from(label, c.gains.as_ref())
+            .map_err(|(sub, message)| err(if sub { "controller.gains" } else { "controller.method" }, message)),
+    }
+}
+
+/// The method of `label` with `gains` (keys of its gains struct; omitted ones keep their
+/// defaults). On error: whether the gains are at fault (else the label), and the message.
+pub fn method_from(label: &str, gains: Option<&toml::Table>) -> Result<Method, (bool, String)> {
+    let method = Method::from_label(label)
+        .ok_or_else(|| (false, format!("unknown method '{label}' (known: {})", Method::LABELS.join(", "))))?;
+    let Some(g) = gains else { return Ok(method) };
+    let value = toml::Value::Table(g.clone());
+    let parsed = match method {
+        Method::Proximity => Err("the proximity method's parameters are the [controller] keys".to_string()),
+        Method::LeaderFollower(_) => value.try_into().map(Method::LeaderFollower).map_err(|e| e.to_string()),
+        Method::Consensus(_) => value.try_into().map(Method::Consensus).map_err(|e| e.to_string()),
+        Method::Flocking(_) => value.try_into().map(Method::Flocking).map_err(|e| e.to_string()),
+    };
+    let method = parsed.map_err(|msg| (true, msg.trim().to_string()))?;
+    method.validate().map_err(|e| (true, e.to_string()))?;
+    Ok(method)
+}

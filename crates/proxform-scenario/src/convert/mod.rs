@@ -1,0 +1,106 @@
+//! Spec → checked scenario: the one place where a [`ScenarioSpec`] becomes a [`Scenario`].
+//!
+//! Parsing (serde) has already rejected unknown keys and wrong types; [`TryFrom`] checks every
+//! value (finite, in range, consistent), fills every default ([`crate::defaults`]), converts
+//! units once (km/h → m/s, degrees → radians) and checks that the followers' vehicle can fly
+//! the navigator's path. Every error names its key (`controller.lambda`, `fault[2].at_s`).
+//! Each section has a converter of its own in this folder.
+
+mod controller;
+mod feasibility;
+mod formation;
+mod path;
+mod values;
+mod vehicle;
+mod world;
+
+use std::sync::Arc;
+
+use proxform_core::{AgentSetup, ControllerSetup, Formation, RadioNeed, VehicleModel};
+
+use crate::defaults;
+use crate::scenario::Scenario;
+use crate::spec::ScenarioSpec;
+
+pub use controller::method_from;
+pub use values::SpecError;
+use values::{err, non_negative, or_default, positive, uav};
+
+/// Longest flight accepted, in update periods.
+pub const MAX_STEPS: f64 = 1e8;
+/// Most UAVs a scenario may have.
+pub const MAX_UAVS: usize = 10_000_000;
+
+impl TryFrom<ScenarioSpec> for Scenario {
+    type Error = SpecError;
+
+    fn try_from(spec: ScenarioSpec) -> Result<Self, SpecError> {
+        let name = spec.name.clone().unwrap_or_else(|| "scenario".into());
+        let dt_s = or_default("dt_s", spec.dt_s, defaults::DT_S, positive)?;
+        let duration_s = or_default("duration_s", spec.duration_s, defaults::DURATION_S, positive)?;
+        if duration_s / dt_s > MAX_STEPS {
+            return Err(err("duration_s", format!("{duration_s} s at Δt = {dt_s} s is more than {MAX_STEPS:e} steps")));
+        }
+        let safety_distance_m =
+            or_default("safety_distance_m", spec.safety_distance_m, defaults::SAFETY_DISTANCE_M, positive)?;
+        let warmup_s = or_default("warmup_s", spec.warmup_s, defaults::WARMUP_S, non_negative)?;
+        let vehicle = vehicle::vehicle(&spec.vehicle)?;
+        let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
+        let mut params = controller::params(&spec.controller, dt_s, fixed_wing, safety_distance_m)?;
+
+        let formation::Slots { slots, frame, explicit } = formation::slots(&spec.formation)?;
+        let n = slots.len();
+        let navigator = uav("navigator", spec.navigator.unwrap_or(defaults::NAVIGATOR), n)?;
+        feasibility::separated(&slots, safety_distance_m)?;
+        let dependencies =
+            formation::dependencies(&spec.formation, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
+        let formation = Arc::new(Formation { slots, frame });
+
+        let path = path::path(&spec.path, duration_s)?;
+        let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
+        feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
+
+        let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
+        let (dropout, reference_dropout) = world::sensing(&spec.sensing)?;
+        let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
+        let allowable = world::allowable(&spec.allowable)?;
+        let wind = world::wind(&spec.wind)?;
+        let faults = world::faults(&spec.fault, n)?;
+        let method = controller::method(&spec.controller)?;
+        // The radio carries what the method needs: the navigator's broadcasts or everybody's.
+        match method.radio_need() {
+            RadioNeed::None => {}
+            RadioNeed::Navigator => {
+                if !radio.broadcast_all && !beacons.contains(&navigator) {
+                    beacons.push(navigator);
+                }
+            }
+            RadioNeed::All => radio.broadcast_all = true,
+        }
+        params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
+        let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
+        let agents = AgentSetup::new(method, navigator, setup, formation, dependencies)
+            .map_err(|e| err("controller.method", e.to_string()))?;
+        Ok(Scenario {
+            spec,
+            name,
+            dt_s,
+            duration_s,
+            agents: Arc::new(agents),
+            path,
+            initial,
+            noise,
+            gnss_bias,
+            actuation_error,
+            allowable,
+            safety_distance_m,
+            warmup_s,
+            dropout,
+            reference_dropout,
+            faults,
+            beacons,
+            wind,
+            radio,
+        })
+    }
+}

@@ -1,0 +1,86 @@
+//! `[path]`: the paper's scripted profile, segments, or waypoints joined by turns.
+
+use proxform_core::angle::{deg, kmh};
+
+use super::values::{err, finite, non_negative, positive, required, vec3, SpecError};
+use crate::defaults;
+use crate::path::waypoints::waypoint_segments;
+use crate::path::{NavigatorPath, PaperPath, Segment, SegmentsPath};
+use crate::spec::PathSpec;
+
+fn paper_keys(p: &PathSpec) -> bool {
+    p.height_amplitude_m.is_some()
+        || p.pitch_swing_deg.is_some()
+        || p.yaw_amplitude_deg.is_some()
+        || p.roll_amplitude_deg.is_some()
+}
+
+/// The navigator's path, covering the flight.
+pub fn path(p: &PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> {
+    match p.kind.as_deref() {
+        None | Some("paper") => {
+            if p.speed_kmh.is_some()
+                || p.course_deg.is_some()
+                || p.transition_s.is_some()
+                || !p.segment.is_empty()
+                || p.points_m.is_some()
+                || p.turn_radius_m.is_some()
+            {
+                return Err(err("path", "the paper path takes no speed, course or segments (use kind = \"segments\")"));
+            }
+            let d = PaperPath::default();
+            let amplitude = |key: &str, v: Option<f64>, default: f64, scale: fn(f64) -> f64| {
+                v.map_or(Ok(default), |v| non_negative(&format!("path.{key}"), v).map(scale))
+            };
+            let id = |v| v;
+            Ok(NavigatorPath::Paper(PaperPath {
+                height_amplitude_m: amplitude("height_amplitude_m", p.height_amplitude_m, d.height_amplitude_m, id)?,
+                pitch_swing_rad: amplitude("pitch_swing_deg", p.pitch_swing_deg, d.pitch_swing_rad, deg)?,
+                yaw_amplitude_rad: amplitude("yaw_amplitude_deg", p.yaw_amplitude_deg, d.yaw_amplitude_rad, deg)?,
+                roll_amplitude_rad: amplitude("roll_amplitude_deg", p.roll_amplitude_deg, d.roll_amplitude_rad, deg)?,
+                ..d
+            }))
+        }
+        Some("segments") | Some("waypoints") if paper_keys(p) => {
+            Err(err("path", "amplitudes apply to the paper path only (kind = \"paper\")"))
+        }
+        Some("segments") => {
+            let v0 = kmh(positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?);
+            let course = deg(finite("path.course_deg", p.course_deg.unwrap_or(0.0))?);
+            let mut speed = v0;
+            let mut segments = Vec::new();
+            for (k, s) in p.segment.iter().enumerate() {
+                let key = format!("path.segment[{}]", k + 1);
+                let d = positive(&format!("{key}.duration_s"), required(&format!("{key}.duration_s"), s.duration_s)?)?;
+                let w = deg(finite(&format!("{key}.turn_rate_deg_s"), s.turn_rate_deg_s.unwrap_or(0.0))?);
+                let c = kmh(finite(&format!("{key}.climb_kmh"), s.climb_kmh.unwrap_or(0.0))?);
+                if let Some(v) = s.speed_kmh {
+                    speed = kmh(positive(&format!("{key}.speed_kmh"), v)?);
+                }
+                segments.push(Segment { duration_s: d, turn_rate_radps: w, climb_mps: c, end_speed_mps: speed });
+            }
+            let transition = positive("path.transition_s", p.transition_s.unwrap_or(defaults::PATH_TRANSITION_S))?;
+            Ok(NavigatorPath::Segments(SegmentsPath::new(v0, course, segments, transition, duration_s + 1.0)))
+        }
+        Some("waypoints") => {
+            if !p.segment.is_empty() {
+                return Err(err("path.segment", "a waypoints path takes points_m, not segments"));
+            }
+            let v = kmh(positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?);
+            let r = positive("path.turn_radius_m", required("path.turn_radius_m", p.turn_radius_m)?)?;
+            let points = required("path.points_m", p.points_m.clone())?;
+            let transition = positive("path.transition_s", p.transition_s.unwrap_or(defaults::PATH_TRANSITION_S))?;
+            for (k, pt) in points.iter().enumerate() {
+                vec3(&format!("path.points_m[{}]", k + 1), *pt)?;
+            }
+            let segments = waypoint_segments(&points, v, r, transition).map_err(|e| {
+                err(e.point.map_or("path.points_m".into(), |k| format!("path.points_m[{k}]")), e.message)
+            })?;
+            let course = segments.1;
+            Ok(NavigatorPath::Segments(SegmentsPath::new(v, course, segments.0, transition, duration_s + 1.0)))
+        }
+        Some(o) => {
+            Err(err("path.kind", format!("unknown path \"{o}\" (expected \"paper\", \"segments\" or \"waypoints\")")))
+        }
+    }
+}

@@ -1,0 +1,99 @@
+//! The value checks every converter uses, and the error that names the offending key.
+
+use nalgebra::Vector3;
+use proxform_core::UavId;
+
+/// A problem with one key of a scenario.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key}: {message}")]
+pub struct SpecError {
+    /// Dotted key path, with array indices from 1 (`fault[2].at_s`).
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// A [`SpecError`] for `key`.
+pub fn err(key: impl Into<String>, message: impl Into<String>) -> SpecError {
+    SpecError { key: key.into(), message: message.into() }
+}
+
+/// A finite number.
+pub fn finite(key: &str, v: f64) -> Result<f64, SpecError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(err(key, format!("{v} is not a finite number")))
+    }
+}
+
+/// A finite number > 0.
+pub fn positive(key: &str, v: f64) -> Result<f64, SpecError> {
+    let v = finite(key, v)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(err(key, format!("must be > 0, found {v}")))
+    }
+}
+
+/// A finite number ≥ 0.
+pub fn non_negative(key: &str, v: f64) -> Result<f64, SpecError> {
+    let v = finite(key, v)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(err(key, format!("must be ≥ 0, found {v}")))
+    }
+}
+
+/// A probability in [0, 1].
+pub fn probability(key: &str, v: f64) -> Result<f64, SpecError> {
+    let v = finite(key, v)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(err(key, format!("must be a probability in [0, 1], found {v}")))
+    }
+}
+
+/// Three finite numbers.
+pub fn vec3(key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SpecError> {
+    for (k, x) in v.iter().enumerate() {
+        finite(&format!("{key}[{}]", k + 1), *x)?;
+    }
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+/// Three finite numbers > 0.
+pub fn positive3(key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SpecError> {
+    let out = vec3(key, v)?;
+    for k in 0..3 {
+        positive(&format!("{key}[{}]", k + 1), out[k])?;
+    }
+    Ok(out)
+}
+
+/// A key that must be present.
+pub fn required<T>(key: &str, v: Option<T>) -> Result<T, SpecError> {
+    v.ok_or_else(|| err(key, "is required"))
+}
+
+/// A UAV number (from 1) of a formation of `n`.
+pub fn uav(key: &str, number: u32, n: usize) -> Result<UavId, SpecError> {
+    if number >= 1 && (number as usize) <= n {
+        Ok(UavId(number - 1))
+    } else {
+        Err(err(key, format!("UAV {number} is not in the formation (UAVs are numbered 1 to {n})")))
+    }
+}
+
+/// `Some(check(key, v))` when the key is set, else `default`.
+pub fn or_default(
+    key: &str,
+    v: Option<f64>,
+    default: f64,
+    check: fn(&str, f64) -> Result<f64, SpecError>,
+) -> Result<f64, SpecError> {
+    v.map_or(Ok(default), |v| check(key, v))
+}

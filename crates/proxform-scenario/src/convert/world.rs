@@ -1,0 +1,178 @@
+//! The world's sections: `[noise]`, `[sensing]`, `[radio]`, `[allowable]`, `[wind]` and the
+//! `[[fault]]` schedule.
+
+use nalgebra::Vector3;
+use proxform_core::angle::{deg, kmh};
+use proxform_core::UavId;
+
+use super::values::{err, non_negative, or_default, positive, probability, required, uav, vec3, SpecError};
+use crate::defaults;
+use crate::faults::Fault;
+use crate::radio::{GilbertElliott, RadioModel};
+use crate::scenario::{AllowableErrors, CorrelatedNoise, MeasurementNoise};
+use crate::spec::{AllowableSpec, FaultSpec, NoiseSpec, RadioSpec, SensingSpec, WindSpec};
+use crate::wind::{Gust, Severity, Turbulence, Wind};
+
+/// Measurement noise (each σ times `noise.scale`), the GNSS-like bias and the actuation error.
+pub fn noise(n: &NoiseSpec) -> Result<(MeasurementNoise, Option<CorrelatedNoise>, f64), SpecError> {
+    let scale = or_default("noise.scale", n.scale, 1.0, non_negative)?;
+    let noise = MeasurementNoise {
+        position_m: or_default("noise.position_m", n.position_m, defaults::NOISE_POSITION_M, non_negative)? * scale,
+        velocity_mps: kmh(or_default(
+            "noise.velocity_kmh",
+            n.velocity_kmh,
+            defaults::NOISE_VELOCITY_KMH,
+            non_negative,
+        )?) * scale,
+        attitude_rad: deg(or_default(
+            "noise.attitude_deg",
+            n.attitude_deg,
+            defaults::NOISE_ATTITUDE_DEG,
+            non_negative,
+        )?) * scale,
+    };
+    let actuation = or_default("noise.actuation_error", n.actuation_error, defaults::ACTUATION_ERROR, probability)?;
+    let gnss = match (n.gnss_bias_m, n.gnss_tau_s) {
+        (Some(sigma), tau) => Some(CorrelatedNoise {
+            sigma_m: non_negative("noise.gnss_bias_m", sigma)?,
+            tau_s: positive("noise.gnss_tau_s", tau.unwrap_or(defaults::GNSS_TAU_S))?,
+        }),
+        (None, Some(_)) => return Err(err("noise.gnss_tau_s", "needs noise.gnss_bias_m")),
+        (None, None) => None,
+    };
+    Ok((noise, gnss, actuation))
+}
+
+/// Onboard dropout, and the dropout of observations of main references when it differs.
+pub fn sensing(s: &SensingSpec) -> Result<(f64, Option<f64>), SpecError> {
+    let dropout = or_default("sensing.dropout", s.dropout, 0.0, probability)?;
+    let reference = s.reference_dropout.map(|v| probability("sensing.reference_dropout", v)).transpose()?;
+    Ok((dropout, reference))
+}
+
+/// The allowable errors (SI).
+pub fn allowable(a: &AllowableSpec) -> Result<AllowableErrors, SpecError> {
+    let [x, y, z] = defaults::ALLOWABLE_POSITION_M;
+    let [al, be, ga] = defaults::ALLOWABLE_ATTITUDE_DEG;
+    Ok(AllowableErrors {
+        position_m: [
+            or_default("allowable.x_m", a.x_m, x, positive)?,
+            or_default("allowable.y_m", a.y_m, y, positive)?,
+            or_default("allowable.z_m", a.z_m, z, positive)?,
+        ],
+        attitude_rad: [
+            deg(or_default("allowable.alpha_deg", a.alpha_deg, al, positive)?),
+            deg(or_default("allowable.beta_deg", a.beta_deg, be, positive)?),
+            deg(or_default("allowable.gamma_deg", a.gamma_deg, ga, positive)?),
+        ],
+    })
+}
+
+/// The fault schedule.
+pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
+    specs.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect()
+}
+
+/// The wind.
+pub fn wind(w: &WindSpec) -> Result<Wind, SpecError> {
+    let mut out = Wind::default();
+    if let Some(v) = w.steady_kmh {
+        out.steady_mps = vec3("wind.steady_kmh", v)?.map(kmh);
+    }
+    let severity = match w.turbulence.as_deref() {
+        None | Some("none") => None,
+        Some("light") => Some(Severity::Light),
+        Some("moderate") => Some(Severity::Moderate),
+        Some("severe") => Some(Severity::Severe),
+        Some(o) => {
+            return Err(err(
+                "wind.turbulence",
+                format!("unknown turbulence \"{o}\" (expected none, light, moderate or severe)"),
+            ))
+        }
+    };
+    let altitude = positive("wind.altitude_m", w.altitude_m.unwrap_or(defaults::TURBULENCE_ALTITUDE_M))?;
+    out.turbulence = severity.map(|severity| Turbulence { severity, altitude_m: altitude });
+    match (w.gust_at_s, w.gust_duration_s, w.gust_peak_kmh) {
+        (None, None, None) => {}
+        (Some(at), Some(d), Some(peak)) => {
+            out.gust = Some(Gust {
+                at_s: non_negative("wind.gust_at_s", at)?,
+                duration_s: positive("wind.gust_duration_s", d)?,
+                peak_mps: vec3("wind.gust_peak_kmh", peak)?.map(kmh),
+            });
+        }
+        _ => return Err(err("wind.gust_at_s", "a gust needs gust_at_s, gust_duration_s and gust_peak_kmh")),
+    }
+    Ok(out)
+}
+
+/// The radio and its beacons.
+pub fn radio(r: &RadioSpec, dt_s: f64, n: usize) -> Result<(RadioModel, Vec<UavId>), SpecError> {
+    let beacons = match &r.beacons {
+        Some(b) => b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?,
+        None => Vec::new(),
+    };
+    let mut m = RadioModel { broadcast_all: r.broadcast_all.unwrap_or(false), ..Default::default() };
+    if let Some(v) = r.range_m {
+        m.range_m = positive("radio.range_m", v)?;
+    }
+    if let Some(v) = r.delay_s {
+        let v = non_negative("radio.delay_s", v)?;
+        let steps = (v / dt_s).round();
+        if (v / dt_s - steps).abs() > 1e-6 || steps > 10_000.0 {
+            return Err(err(
+                "radio.delay_s",
+                format!("{v} s is not a multiple of dt_s = {dt_s} s (at most 10000 periods)"),
+            ));
+        }
+        m.delay_steps = steps as u32;
+    }
+    if let Some(v) = r.loss {
+        m.loss = probability("radio.loss", v)?;
+    }
+    match (r.burst_p_good_to_bad, r.burst_p_bad_to_good) {
+        (None, None) => {
+            if r.burst_loss_bad.is_some() {
+                return Err(err("radio.burst_loss_bad", "needs burst_p_good_to_bad and burst_p_bad_to_good"));
+            }
+        }
+        (Some(gb), Some(bg)) => {
+            m.burst = Some(GilbertElliott {
+                p_good_to_bad: probability("radio.burst_p_good_to_bad", gb)?,
+                p_bad_to_good: probability("radio.burst_p_bad_to_good", bg)?,
+                loss_bad: probability("radio.burst_loss_bad", r.burst_loss_bad.unwrap_or(defaults::BURST_LOSS_BAD))?,
+            });
+        }
+        (None, Some(_)) => return Err(err("radio.burst_p_good_to_bad", "is required with burst_p_bad_to_good")),
+        (Some(_), None) => return Err(err("radio.burst_p_bad_to_good", "is required with burst_p_good_to_bad")),
+    }
+    Ok((m, beacons))
+}
+
+fn fault(k: usize, f: &FaultSpec, n: usize) -> Result<Fault, SpecError> {
+    let key = format!("fault[{k}]");
+    let kind = required(&format!("{key}.kind"), f.kind.clone())?;
+    let at_s = non_negative(&format!("{key}.at_s"), required(&format!("{key}.at_s"), f.at_s)?)?;
+    let who = || -> Result<UavId, SpecError> { uav(&format!("{key}.uav"), required(&format!("{key}.uav"), f.uav)?, n) };
+    let duration = || positive(&format!("{key}.duration_s"), required(&format!("{key}.duration_s"), f.duration_s)?);
+    let offset = || -> Result<Vector3<f64>, SpecError> {
+        match f.offset_m {
+            Some(o) => vec3(&format!("{key}.offset_m"), o),
+            None => Ok(Vector3::zeros()),
+        }
+    };
+    Ok(match kind.as_str() {
+        "remove" => Fault::Remove { uav: who()?, at_s },
+        "join" => Fault::Join { uav: who()?, at_s, offset_m: offset()? },
+        "glitch" => Fault::Glitch { uav: who()?, at_s, duration_s: duration()?, offset_m: offset()? },
+        "stuck_sensor" => Fault::StuckSensor { uav: who()?, at_s, duration_s: duration()? },
+        "radio_blackout" => Fault::RadioBlackout { at_s, duration_s: duration()? },
+        o => {
+            return Err(err(
+                format!("{key}.kind"),
+                format!("unknown fault \"{o}\" (expected remove, join, glitch, stuck_sensor or radio_blackout)"),
+            ))
+        }
+    })
+}

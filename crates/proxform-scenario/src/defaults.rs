@@ -1,0 +1,53 @@
+//! Every default of a scenario, in one place.
+//!
+//! A key a file (or a Python dict) leaves out takes the value below when the spec is
+//! converted ([`crate::convert`]); the checked [`crate::Scenario`] shows the value that runs, and
+//! `proxform run --print-scenario` prints it. The defaults are the paper experiment's (METHOD
+//! §9). The controller's and the vehicles' own defaults are their parameter structs' `Default`
+//! impls in `proxform-core` ([`proxform_core::ControllerParams`],
+//! [`proxform_core::KinematicLimits`], [`proxform_core::FixedWingModel`]); the scenario only
+//! chooses between them (the fixed wing's permissible errors, its turn feed-forward) here.
+
+/// Update period Δt (s).
+pub const DT_S: f64 = 0.1;
+/// Flight duration (s).
+pub const DURATION_S: f64 = 100.0;
+/// Number (from 1) of the navigator.
+pub const NAVIGATOR: u32 = 1;
+/// Pairs closer than this are unsafe (m).
+pub const SAFETY_DISTANCE_M: f64 = 50.0;
+/// How long the formation has flown before t = 0 (s).
+pub const WARMUP_S: f64 = 1.0;
+/// Separation keeping distance, in safety distances (when `controller.separation_m` is unset).
+pub const SEPARATION_PER_SAFETY: f64 = 2.0;
+
+/// Position noise 1σ (m).
+pub const NOISE_POSITION_M: f64 = 0.02;
+/// Velocity noise 1σ (km/h): 0.05 m/s.
+pub const NOISE_VELOCITY_KMH: f64 = 0.18;
+/// Attitude noise 1σ (deg).
+pub const NOISE_ATTITUDE_DEG: f64 = 0.01;
+/// Relative actuation error (uniform in ±e).
+pub const ACTUATION_ERROR: f64 = 0.1;
+/// Correlation time of a GNSS-like position bias (s).
+pub const GNSS_TAU_S: f64 = 60.0;
+
+/// Allowable errors x, y, z (m): the pass criterion.
+pub const ALLOWABLE_POSITION_M: [f64; 3] = [0.5, 0.6, 0.2];
+/// Allowable errors α, β, γ (deg).
+pub const ALLOWABLE_ATTITUDE_DEG: [f64; 3] = [0.4, 0.3, 1.0];
+
+/// Main references per UAV in derived dependency tables.
+pub const REFERENCES_PER_UAV: u32 = 2;
+/// Half-angle of a V, angle of an echelon (deg).
+pub const SHAPE_ANGLE_DEG: f64 = 30.0;
+/// Blend time of turn and climb rates at each path segment's start (s).
+pub const PATH_TRANSITION_S: f64 = 8.0;
+/// Altitude above ground of the turbulence model (m).
+pub const TURBULENCE_ALTITUDE_M: f64 = 300.0;
+/// Loss probability of the Gilbert-Elliott channel's bad state.
+pub const BURST_LOSS_BAD: f64 = 1.0;
+/// When a comparison's failed UAV fails (s).
+pub const FAIL_AT_S: f64 = 40.0;
+/// The base seed.
+pub const SEED: u64 = 1;

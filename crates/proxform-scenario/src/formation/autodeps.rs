@@ -1,0 +1,89 @@
+//! Dependency tables derived from the formation's geometry.
+//!
+//! Each UAV takes as main references its `k` nearest slots among those strictly closer to the
+//! navigator's slot (within `max_distance_m`), with degrees proportional to 1/distance and
+//! normalised to sum to 1. Every reference is closer to the navigator than its owner, so the
+//! references form a tree-like graph without cycles that leads to the navigator. Uses the
+//! neighbour grid: O(N) for N slots.
+
+use proxform_core::{ConfigError, DependencySet, FormationSlot, UavId};
+
+use proxform_core::grid::NeighbourGrid;
+
+/// Derives every UAV's dependency table (the navigator's is empty).
+///
+/// With `navigator_degree` > 0 every follower also names the navigator (heard over the
+/// radio when out of sensing range) with that degree; the local degrees share the rest.
+pub fn derive(
+    slots: &[FormationSlot],
+    navigator: UavId,
+    k: usize,
+    max_distance_m: f64,
+    navigator_degree: f64,
+) -> Result<Vec<DependencySet>, ConfigError> {
+    let n = slots.len();
+    let nav = slots.get(navigator.index()).ok_or(ConfigError::UnknownUav { id: navigator, size: n })?.offset_m;
+    let mut grid = NeighbourGrid::new();
+    grid.rebuild(slots.iter().map(|s| [s.offset_m.x, s.offset_m.y, s.offset_m.z]), max_distance_m);
+    let to_nav: Vec<f64> = slots.iter().map(|s| (s.offset_m - nav).norm()).collect();
+    let mut out = Vec::with_capacity(n);
+    let mut cands: Vec<(f64, u32)> = Vec::with_capacity(64);
+    for (i, s) in slots.iter().enumerate() {
+        if i == navigator.index() {
+            out.push(DependencySet::default());
+            continue;
+        }
+        cands.clear();
+        grid.for_each_within([s.offset_m.x, s.offset_m.y, s.offset_m.z], max_distance_m, |j, _, d2| {
+            if to_nav[j as usize] < to_nav[i] - 1e-9 {
+                cands.push((d2.sqrt(), j));
+            }
+        });
+        cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        cands.truncate(k);
+        let nav_in_cands = cands.iter().any(|c| c.1 == navigator.0);
+        let local_share = if navigator_degree > 0.0 && !nav_in_cands { 1.0 - navigator_degree } else { 1.0 };
+        let total: f64 = cands.iter().map(|(d, _)| 1.0 / d.max(1e-9)).sum();
+        let mut refs: Vec<(UavId, f64)> =
+            cands.iter().map(|&(d, j)| (UavId(j), local_share * (1.0 / d.max(1e-9)) / total)).collect();
+        if navigator_degree > 0.0 && !nav_in_cands {
+            refs.push((navigator, if refs.is_empty() { 1.0 } else { navigator_degree }));
+        }
+        out.push(DependencySet::new(UavId(i as u32), n, refs)?);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn references_lead_to_the_navigator() {
+        let slots: Vec<FormationSlot> =
+            (0..30).map(|i| FormationSlot::at(-(i / 5) as f64 * 50.0, ((i % 5) as f64 - 2.0) * 50.0, 0.0)).collect();
+        let nav = UavId(2); // front row, centre
+        let deps = derive(&slots, nav, 3, 80.0, 0.0).expect("valid");
+        assert!(deps[2].is_empty());
+        for (i, d) in deps.iter().enumerate() {
+            if i == 2 {
+                continue;
+            }
+            assert!(!d.is_empty(), "UAV {i} has no reference");
+            let sum: f64 = d.refs().iter().map(|r| r.1).sum();
+            assert!((sum - 1.0).abs() < 1e-12);
+            // Following the strongest reference always reaches the navigator.
+            let mut at = i;
+            for _ in 0..30 {
+                if at == 2 {
+                    break;
+                }
+                let best = deps[at].refs().iter().max_by(|a, b| a.1.total_cmp(&b.1)).expect("non-empty");
+                at = best.0.index();
+            }
+            assert_eq!(at, 2, "UAV {i} does not lead to the navigator");
+        }
+        // The UAV right behind the navigator leans on it most.
+        assert_eq!(deps[7].refs()[0].0, UavId(2));
+    }
+}

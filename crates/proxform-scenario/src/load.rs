@@ -1,0 +1,187 @@
+//! Scenario files: TOML text → [`ScenarioSpec`] → checked [`Scenario`], with every error
+//! located in its source (file name, line and key).
+
+use std::collections::BTreeMap;
+
+use crate::scenario::Scenario;
+use crate::spec::ScenarioSpec;
+
+/// A scenario that could not be loaded, located in its source.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct LoadError {
+    /// The file name (or other source name).
+    pub source_name: String,
+    /// 1-based line of the offending key, when known.
+    pub line: Option<usize>,
+    /// The key path, when known.
+    pub key: Option<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.source_name)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+        }
+        if let Some(key) = &self.key {
+            write!(f, ": {key}")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+/// Parses and checks a scenario file's text; `source_name` names it in errors.
+pub fn parse(text: &str, source_name: &str) -> Result<Scenario, LoadError> {
+    check(parse_spec(text, source_name)?, text, source_name)
+}
+
+/// Parses a scenario file's text into its spec (TOML syntax, known keys, value types only);
+/// the name defaults to the file's stem.
+pub fn parse_spec(text: &str, source_name: &str) -> Result<ScenarioSpec, LoadError> {
+    let spec: ScenarioSpec = toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start));
+        LoadError { source_name: source_name.into(), line, key: None, message: e.message().trim().replace('\n', " ") }
+    })?;
+    let default_name =
+        std::path::Path::new(source_name).file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
+    Ok(ScenarioSpec { name: spec.name.clone().or(Some(default_name)), ..spec })
+}
+
+/// Converts `spec` (read from `text`, or from `text` and then overridden) into a checked
+/// scenario; an error names the source, the key and the line where that key stands.
+pub fn check(spec: ScenarioSpec, text: &str, source_name: &str) -> Result<Scenario, LoadError> {
+    Scenario::try_from(spec).map_err(|e| {
+        // A missing key is reported where its table starts.
+        let mut line = locate(text, &e.key);
+        let mut key = e.key.as_str();
+        while line.is_none() {
+            match key.rsplit_once('.') {
+                Some((parent, _)) => {
+                    key = parent;
+                    line = locate(text, key);
+                }
+                None => break,
+            }
+        }
+        LoadError { source_name: source_name.into(), line, key: Some(e.key.clone()), message: e.message }
+    })
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].bytes().filter(|b| *b == b'\n').count() + 1
+}
+
+/// Finds the line of a key path such as `controller.lambda` or `fault[2].at_s`: under the
+/// matching `[table]` or the n-th `[[array]]` header, the line that assigns the first key
+/// component not in the header (a key inside an inline table is reported at its table's line).
+pub fn locate(text: &str, key: &str) -> Option<usize> {
+    let parts: Vec<(String, Option<usize>)> = key
+        .split('.')
+        .map(|p| match p.split_once('[') {
+            Some((name, idx)) => (name.to_string(), idx.trim_end_matches(']').parse().ok()),
+            None => (p.to_string(), None),
+        })
+        .collect();
+    let mut header: Vec<String> = Vec::new();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut best: Option<usize> = None;
+    // A sub-table of the key (`[[formation.slot]]` for `formation`) stands for it if the key
+    // has no header of its own.
+    let mut sub: Option<usize> = None;
+    let names: Vec<&str> = parts.iter().map(|p| p.0.as_str()).collect();
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if let Some(h) = line.strip_prefix("[[").and_then(|l| l.strip_suffix("]]")) {
+            let name = h.trim().to_string();
+            *counts.entry(name.clone()).or_default() += 1;
+            header = name.split('.').map(|s| s.trim().to_string()).collect();
+            if sub.is_none() && header.len() > names.len() && header.iter().zip(&names).all(|(h, p)| h == p) {
+                sub = Some(n + 1);
+            }
+            let idx = counts[&name];
+            // An array-of-tables header matches `name[idx]` prefixes.
+            if header_matches(&header, Some(idx), &parts) && parts.len() == header.len() {
+                best = Some(n + 1);
+            }
+            header.push(format!("#{idx}"));
+            continue;
+        }
+        if let Some(h) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            header = h.split('.').map(|s| s.trim().to_string()).collect();
+            if sub.is_none() && header.len() > names.len() && header.iter().zip(&names).all(|(h, p)| h == p) {
+                sub = Some(n + 1);
+            }
+            if header_matches(&header, None, &parts) && parts.len() == header.len() {
+                best = Some(n + 1);
+            }
+            continue;
+        }
+        let Some((k, _)) = line.split_once('=') else { continue };
+        let k = k.trim().trim_matches('"');
+        let mut path: Vec<String> = header.clone();
+        path.extend(k.split('.').map(|s| s.trim().to_string()));
+        if path_matches(&path, &parts) {
+            return Some(n + 1);
+        }
+    }
+    best.or(sub)
+}
+
+fn header_matches(header: &[String], idx: Option<usize>, parts: &[(String, Option<usize>)]) -> bool {
+    if header.len() > parts.len() {
+        return false;
+    }
+    for (k, h) in header.iter().enumerate() {
+        if parts[k].0 != *h {
+            return false;
+        }
+    }
+    match idx {
+        Some(i) => parts[header.len() - 1].1 == Some(i),
+        None => true,
+    }
+}
+
+/// Whether a flattened line path (header components, `#n` array markers, key components) is a
+/// prefix-compatible match for the wanted key path.
+fn path_matches(path: &[String], parts: &[(String, Option<usize>)]) -> bool {
+    let mut p = 0;
+    let mut k = 0;
+    while p < path.len() {
+        if k >= parts.len() {
+            return false;
+        }
+        if parts[k].0 != path[p] {
+            return false;
+        }
+        p += 1;
+        if let Some(i) = parts[k].1 {
+            if p < path.len() && path[p] == format!("#{i}") {
+                p += 1;
+            } else if p < path.len() && path[p].starts_with('#') {
+                return false;
+            }
+        } else if p < path.len() && path[p].starts_with('#') {
+            p += 1;
+        }
+        k += 1;
+    }
+    k >= 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locates_keys_in_tables_and_arrays() {
+        let text = "name = \"x\"\n[controller]\nareas = 8\nlambda = 2.0\n\n[[fault]]\nkind = \"remove\"\nat_s = 1\n[[fault]]\nkind = \"join\"\nat_s = -1\n";
+        assert_eq!(locate(text, "controller.lambda"), Some(4));
+        assert_eq!(locate(text, "fault[2].at_s"), Some(11));
+        assert_eq!(locate(text, "fault[1].at_s"), Some(8));
+        assert_eq!(locate(text, "name"), Some(1));
+        assert_eq!(locate(text, "controller"), Some(2));
+    }
+}

@@ -1,0 +1,392 @@
+//! Scripted navigator paths.
+//!
+//! [`PaperPath`] is METHOD §9's profile of the paper's experiment: forward speed with two
+//! smooth rises, lateral displacement with cosine ramps, a sinusoidal height, and attitude
+//! profiles kept inside the vehicle's stated limits. Positions are the exact integrals of the
+//! velocities, so the navigator's state is consistent at every instant.
+
+use std::f64::consts::{PI, TAU};
+
+use proxform_core::angle::{deg, kmh};
+use proxform_core::state::{self, State9};
+use proxform_core::vehicle::G;
+
+pub mod waypoints;
+
+/// A cosine ramp from `from` to `to` over `[t0, t1]` (s).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Ramp {
+    /// Start time (s).
+    pub t0: f64,
+    /// End time (s).
+    pub t1: f64,
+    /// Value change over the ramp.
+    pub delta: f64,
+}
+
+impl Ramp {
+    #[inline]
+    fn phase(&self, t: f64) -> f64 {
+        ((t - self.t0) / (self.t1 - self.t0)).clamp(0.0, 1.0)
+    }
+
+    /// Contribution to the value at t: `delta·(1 − cos πs)/2`.
+    #[inline]
+    fn value(&self, t: f64) -> f64 {
+        self.delta * 0.5 * (1.0 - (PI * self.phase(t)).cos())
+    }
+
+    /// Its time derivative.
+    #[inline]
+    fn rate(&self, t: f64) -> f64 {
+        if t <= self.t0 || t >= self.t1 {
+            return 0.0;
+        }
+        let tt = self.t1 - self.t0;
+        self.delta * 0.5 * PI / tt * (PI * self.phase(t)).sin()
+    }
+
+    /// Its integral from 0 to t.
+    #[inline]
+    fn integral(&self, t: f64) -> f64 {
+        if t <= self.t0 {
+            return 0.0;
+        }
+        let tt = self.t1 - self.t0;
+        let tau = (t - self.t0).min(tt);
+        let inside = 0.5 * self.delta * (tau - tt / PI * (PI * tau / tt).sin());
+        inside + if t > self.t1 { self.delta * (t - self.t1) } else { 0.0 }
+    }
+}
+
+/// METHOD §9's navigator profile. All fields SI / radians.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PaperPath {
+    /// Initial forward speed (m/s). 250 km/h.
+    pub vx0_mps: f64,
+    /// Forward speed changes: 250 → 288 km/h over 30-40 s, → 324 km/h over 70-80 s.
+    pub speed_ramps: Vec<Ramp>,
+    /// Lateral displacement: 0 → 200 m (10-30 s) → −200 m (40-75 s) → 0 (80-100 s).
+    pub lateral_ramps: Vec<Ramp>,
+    /// Height oscillation amplitude (m) and period (s): 20 m, 50 s.
+    pub height_amplitude_m: f64,
+    /// Height oscillation period (s).
+    pub height_period_s: f64,
+    /// α = α0 + Δα·(1 − cos 2πt/T)/2: α0 = 5°, Δα = 40°, T = 100 s.
+    pub pitch_base_rad: f64,
+    /// Δα (rad).
+    pub pitch_swing_rad: f64,
+    /// β = β_amp·sin(2πt/T + φ): 15°, φ = asin 0.2 (so β(0) = 3°).
+    pub yaw_amplitude_rad: f64,
+    /// φ (rad).
+    pub yaw_phase_rad: f64,
+    /// γ = γ_amp·sin(2πt/T): 30°.
+    pub roll_amplitude_rad: f64,
+    /// T of the attitude profiles (s): 100 s.
+    pub attitude_period_s: f64,
+}
+
+impl Default for PaperPath {
+    fn default() -> Self {
+        Self {
+            vx0_mps: kmh(250.0),
+            speed_ramps: vec![
+                Ramp { t0: 30.0, t1: 40.0, delta: kmh(38.0) },
+                Ramp { t0: 70.0, t1: 80.0, delta: kmh(36.0) },
+            ],
+            lateral_ramps: vec![
+                Ramp { t0: 10.0, t1: 30.0, delta: 200.0 },
+                Ramp { t0: 40.0, t1: 75.0, delta: -400.0 },
+                Ramp { t0: 80.0, t1: 100.0, delta: 200.0 },
+            ],
+            height_amplitude_m: 20.0,
+            height_period_s: 50.0,
+            pitch_base_rad: deg(5.0),
+            pitch_swing_rad: deg(40.0),
+            yaw_amplitude_rad: deg(15.0),
+            yaw_phase_rad: 0.2f64.asin(),
+            roll_amplitude_rad: deg(30.0),
+            attitude_period_s: 100.0,
+        }
+    }
+}
+
+impl PaperPath {
+    /// The navigator's state at time `t` (s), starting from position `start` (m).
+    pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
+        let mut s = State9::zeros();
+        s[state::VX] = self.vx0_mps + self.speed_ramps.iter().map(|r| r.value(t)).sum::<f64>();
+        s[state::X] = start[0] + self.vx0_mps * t + self.speed_ramps.iter().map(|r| r.integral(t)).sum::<f64>();
+        s[state::Y] = start[1] + self.lateral_ramps.iter().map(|r| r.value(t)).sum::<f64>();
+        s[state::VY] = self.lateral_ramps.iter().map(|r| r.rate(t)).sum();
+        let wz = TAU / self.height_period_s;
+        s[state::Z] = start[2] + self.height_amplitude_m * (wz * t).sin();
+        s[state::VZ] = self.height_amplitude_m * wz * (wz * t).cos();
+        let wa = TAU / self.attitude_period_s;
+        s[state::ALPHA] = self.pitch_base_rad + self.pitch_swing_rad * 0.5 * (1.0 - (wa * t).cos());
+        s[state::BETA] = self.yaw_amplitude_rad * (wa * t + self.yaw_phase_rad).sin();
+        s[state::GAMMA] = self.roll_amplitude_rad * (wa * t).sin();
+        s
+    }
+}
+
+/// One piece of a [`SegmentsPath`]: constant turn and climb rates, a smooth speed change.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Segment {
+    /// Duration (s).
+    pub duration_s: f64,
+    /// Turn rate (rad/s, counter-clockwise positive).
+    pub turn_rate_radps: f64,
+    /// Climb rate (m/s).
+    pub climb_mps: f64,
+    /// Horizontal speed at the end of the segment (m/s), reached by a cosine ramp.
+    pub end_speed_mps: f64,
+}
+
+/// A path of segments: turns, climbs and descents at constant rates, speed changes. Each
+/// segment's turn and climb rates are reached from the previous ones by a cosine blend over
+/// its first `transition_s` (at most half the segment), so bank and pitch change smoothly;
+/// speed changes by a cosine ramp over the whole segment. After the last segment the
+/// navigator holds its last rates' end state and flies straight and level. Its attitude
+/// follows the path: yaw along the course, pitch along the flight-path angle, roll at the
+/// coordinated-turn bank `atan(v·ω/g)`. Positions are integrated once at construction
+/// (0.01 s steps, midpoint rule).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SegmentsPath {
+    /// Initial horizontal speed (m/s).
+    pub start_speed_mps: f64,
+    /// Initial course (rad).
+    pub start_course_rad: f64,
+    /// The segments.
+    pub segments: Vec<Segment>,
+    /// Blend time of turn and climb rates at each segment start (s).
+    pub transition_s: f64,
+    #[serde(skip)]
+    table: Vec<[f64; 3]>,
+}
+
+/// `∫₀^τ ½(1 − cos(πu/T)) du` for τ ≥ 0 (the cosine blend's integral; 1 after T).
+fn blend_integral(tau: f64, t: f64) -> f64 {
+    if t <= 0.0 {
+        return tau;
+    }
+    if tau <= t {
+        0.5 * tau - t / (2.0 * PI) * (PI * tau / t).sin()
+    } else {
+        0.5 * t + (tau - t)
+    }
+}
+
+/// `½(1 − cos(πτ/T))`, 1 after T.
+fn blend(tau: f64, t: f64) -> f64 {
+    if t <= 0.0 || tau >= t {
+        1.0
+    } else {
+        0.5 * (1.0 - (PI * tau.max(0.0) / t).cos())
+    }
+}
+
+/// Integration step of the segment path's positions (s).
+const PATH_STEP_S: f64 = 0.01;
+
+impl SegmentsPath {
+    /// A path covering at least `horizon_s` seconds.
+    pub fn new(
+        start_speed_mps: f64,
+        start_course_rad: f64,
+        segments: Vec<Segment>,
+        transition_s: f64,
+        horizon_s: f64,
+    ) -> Self {
+        let mut p = Self { start_speed_mps, start_course_rad, segments, transition_s, table: Vec::new() };
+        let n = (horizon_s.max(0.0) / PATH_STEP_S).ceil() as usize + 2;
+        let mut pos = [0.0f64; 3];
+        p.table.reserve(n);
+        p.table.push(pos);
+        for k in 1..n {
+            let tm = (k as f64 - 0.5) * PATH_STEP_S;
+            let v = p.velocity_at(tm);
+            for a in 0..3 {
+                pos[a] += PATH_STEP_S * v[a];
+            }
+            p.table.push(pos);
+        }
+        p
+    }
+
+    /// Speed, course, turn rate and climb rate at `t`.
+    fn kinematics(&self, t: f64) -> (f64, f64, f64, f64) {
+        let (mut t0, mut speed, mut course) = (0.0, self.start_speed_mps, self.start_course_rad);
+        let (mut turn, mut climb) = (0.0, 0.0);
+        for s in &self.segments {
+            let t1 = t0 + s.duration_s;
+            let blend_t = self.transition_s.min(0.5 * s.duration_s);
+            if t < t1 {
+                let tau = t - t0;
+                let u = (tau / s.duration_s).clamp(0.0, 1.0);
+                let v = speed + (s.end_speed_mps - speed) * 0.5 * (1.0 - (PI * u).cos());
+                let b = blend(tau, blend_t);
+                let w = turn + (s.turn_rate_radps - turn) * b;
+                let c = climb + (s.climb_mps - climb) * b;
+                let heading = course + turn * tau + (s.turn_rate_radps - turn) * blend_integral(tau, blend_t);
+                return (v, heading, w, c);
+            }
+            course += turn * s.duration_s + (s.turn_rate_radps - turn) * blend_integral(s.duration_s, blend_t);
+            speed = s.end_speed_mps;
+            turn = s.turn_rate_radps;
+            climb = s.climb_mps;
+            t0 = t1;
+        }
+        // After the last segment: its rates blend back to straight and level.
+        let tau = t - t0;
+        let b = blend(tau, self.transition_s);
+        (
+            speed,
+            course + turn * tau - turn * blend_integral(tau, self.transition_s),
+            turn * (1.0 - b),
+            climb * (1.0 - b),
+        )
+    }
+
+    fn velocity_at(&self, t: f64) -> [f64; 3] {
+        let (v, course, _, climb) = self.kinematics(t);
+        [v * course.cos(), v * course.sin(), climb]
+    }
+
+    /// The navigator's state at `t` from `start`.
+    pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
+        let (v, course, turn, climb) = self.kinematics(t.max(0.0));
+        if t < 0.0 {
+            // Before the path starts: straight on at the initial state.
+            let mut s = self.state_at(0.0, start);
+            for k in 0..3 {
+                s[k] += t * s[k + 3];
+            }
+            return s;
+        }
+        let x = t / PATH_STEP_S;
+        let k = (x.floor().max(0.0) as usize).min(self.table.len().saturating_sub(2));
+        let f = (x - k as f64).clamp(0.0, 1.0);
+        let (a, b) = (self.table[k], self.table[(k + 1).min(self.table.len() - 1)]);
+        let mut s = State9::zeros();
+        for i in 0..3 {
+            s[i] = start[i] + a[i] + f * (b[i] - a[i]);
+        }
+        s[state::VX] = v * course.cos();
+        s[state::VY] = v * course.sin();
+        s[state::VZ] = climb;
+        s[state::ALPHA] = climb.atan2(v);
+        s[state::BETA] = proxform_core::angle::wrap_pi(course);
+        s[state::GAMMA] = -(v * turn / G).atan(); // right wing down is positive: a left turn banks left
+        s
+    }
+}
+
+/// How the navigator flies.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum NavigatorPath {
+    /// METHOD §9's scripted profile.
+    Paper(PaperPath),
+    /// Turns, climbs and speed changes.
+    Segments(SegmentsPath),
+}
+
+impl NavigatorPath {
+    /// The navigator's state at `t` from start position `start`.
+    #[inline]
+    pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
+        match self {
+            NavigatorPath::Paper(p) => p.state_at(t, start),
+            NavigatorPath::Segments(p) => p.state_at(t, start),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn matches_method_section_9() {
+        let p = PaperPath::default();
+        let s0 = p.state_at(0.0, [0.0; 3]);
+        assert_relative_eq!(s0[state::VX], kmh(250.0));
+        assert_relative_eq!(s0[state::ALPHA], deg(5.0), epsilon = 1e-12);
+        assert_relative_eq!(s0[state::BETA], deg(3.0), epsilon = 1e-9);
+        assert_relative_eq!(s0[state::GAMMA], 0.0);
+        let s35 = p.state_at(35.0, [0.0; 3]);
+        assert_relative_eq!(s35[state::VX], kmh(269.0), epsilon = 1e-9);
+        assert_relative_eq!(p.state_at(30.0, [0.0; 3])[state::Y], 200.0, epsilon = 1e-9);
+        assert_relative_eq!(p.state_at(77.0, [0.0; 3])[state::Y], -200.0, epsilon = 1e-9);
+        let s100 = p.state_at(100.0, [0.0; 3]);
+        assert_relative_eq!(s100[state::Y], 0.0, epsilon = 1e-9);
+        assert_relative_eq!(s100[state::VX], kmh(324.0), epsilon = 1e-9);
+        assert_relative_eq!(p.state_at(50.0, [0.0; 3])[state::ALPHA], deg(45.0), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn positions_integrate_velocities() {
+        let p = PaperPath::default();
+        let h = 1e-4;
+        for &t in &[5.0, 20.0, 35.0, 57.5, 75.5, 92.0] {
+            let a = p.state_at(t - h, [0.0; 3]);
+            let b = p.state_at(t + h, [0.0; 3]);
+            let s = p.state_at(t, [0.0; 3]);
+            for k in 0..3 {
+                assert_relative_eq!((b[k] - a[k]) / (2.0 * h), s[k + 3], epsilon = 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn segments_turn_climb_and_change_speed() {
+        let seg = |d, w: f64, c, v| Segment {
+            duration_s: d,
+            turn_rate_radps: w.to_radians(),
+            climb_mps: c,
+            end_speed_mps: v,
+        };
+        // A 36 s turn at 5 °/s, blended in and out over 4 s each: 180° in all.
+        let p = SegmentsPath::new(
+            60.0,
+            0.0,
+            vec![seg(10.0, 0.0, 0.0, 60.0), seg(36.0, 5.0, 2.0, 70.0), seg(10.0, 0.0, 0.0, 70.0)],
+            4.0,
+            70.0,
+        );
+        // Straight for 10 s: 600 m along x.
+        let s10 = p.state_at(10.0, [0.0; 3]);
+        assert_relative_eq!(s10[0], 600.0, epsilon = 1e-6);
+        // After the turn the course points along −x: 5°/s · (36 − 4/2 + 4/2) s = 180°.
+        let s56 = p.state_at(56.0, [0.0; 3]);
+        assert_relative_eq!(s56[state::VX], -70.0, epsilon = 1e-9);
+        assert_relative_eq!(s56[state::VZ], 0.0, epsilon = 1e-12);
+        // Positions integrate velocities.
+        let h = 0.05;
+        for &t in &[5.0, 11.0, 17.3, 33.0, 45.0, 47.0] {
+            let (a, b, s) = (p.state_at(t - h, [0.0; 3]), p.state_at(t + h, [0.0; 3]), p.state_at(t, [0.0; 3]));
+            for k in 0..3 {
+                assert_relative_eq!((b[k] - a[k]) / (2.0 * h), s[k + 3], epsilon = 2e-2);
+            }
+        }
+        // Banked into the (left) turn.
+        assert!(p.state_at(20.0, [0.0; 3])[state::GAMMA] < 0.0);
+    }
+
+    #[test]
+    fn stays_inside_the_kinematic_limits() {
+        let p = PaperPath::default();
+        let lim = proxform_core::KinematicLimits::default();
+        for k in 0..=1000 {
+            let s = p.state_at(k as f64 * 0.1, [0.0; 3]);
+            assert!(s[state::VY].abs() <= lim.vy_max_mps);
+            assert!(s[state::VZ].abs() <= lim.vz_max_mps);
+            assert!(s[state::VX] >= lim.vx_min_mps && s[state::VX] <= lim.vx_max_mps);
+            for j in 0..3 {
+                assert!(s[state::ALPHA + j].abs() <= lim.attitude_max_rad[j] + 1e-12);
+            }
+        }
+    }
+}

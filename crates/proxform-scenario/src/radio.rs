@@ -1,0 +1,48 @@
+//! The radio: who hears whom, how late and how reliably.
+//!
+//! A UAV that broadcasts sends, every period, its own measured state (the estimate it has of
+//! itself). A receiver gets the message `delay_steps` periods later if the sender was within
+//! radio range when it sent, the radio is not blacked out, and the message is not lost. Losses
+//! are i.i.d. with probability `loss`, plus, when `burst` is set, a Gilbert-Elliott channel per
+//! receiver: a two-state Markov chain (good, bad) stepped once per period, which loses each
+//! message with `loss_bad` in the bad state. Broadcasting from every UAV costs O(N²) per step;
+//! large swarms name a few broadcasters (`beacons`) instead.
+
+/// Gilbert-Elliott bursty loss (per receiver).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GilbertElliott {
+    /// Probability per period of going from good to bad.
+    pub p_good_to_bad: f64,
+    /// Probability per period of going from bad to good.
+    pub p_bad_to_good: f64,
+    /// Loss probability in the bad state.
+    pub loss_bad: f64,
+}
+
+/// The radio model of a scenario. The default is an ideal radio with no broadcasters.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RadioModel {
+    /// True when every UAV broadcasts (besides the listed beacons).
+    pub broadcast_all: bool,
+    /// Range of a message (m); `f64::INFINITY` for no limit.
+    pub range_m: f64,
+    /// Delay of every message, in update periods.
+    pub delay_steps: u32,
+    /// i.i.d. loss probability of each message.
+    pub loss: f64,
+    /// Optional bursty loss.
+    pub burst: Option<GilbertElliott>,
+}
+
+impl Default for RadioModel {
+    fn default() -> Self {
+        Self { broadcast_all: false, range_m: f64::INFINITY, delay_steps: 0, loss: 0.0, burst: None }
+    }
+}
+
+impl RadioModel {
+    /// The same broadcasters and range with no delay and no loss.
+    pub fn ideal(&self) -> Self {
+        Self { delay_steps: 0, loss: 0.0, burst: None, ..*self }
+    }
+}

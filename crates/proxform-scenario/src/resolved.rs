@@ -1,0 +1,323 @@
+//! The checked scenario written back as a spec with every default filled in: what
+//! `proxform run --print-scenario` prints, and a file that converts to the same scenario.
+//!
+//! Units go back to the file's (km/h, degrees), so a value may differ from the file's in its
+//! last bit; derived values are written explicitly (every slot with its `depends_on`, a
+//! waypoint path as its segments, the separation distance).
+
+use std::collections::BTreeMap;
+
+use proxform_core::state::{self, State9};
+use proxform_core::{FormationFrame, Method, PredictorKind, VehicleModel};
+
+use crate::faults::Fault;
+use crate::path::NavigatorPath;
+use crate::scenario::Scenario;
+use crate::spec::{
+    AllowableSpec, ControllerSpec, FaultSpec, FormationSpec, InitialSpec, NoiseSpec, PathSpec, RadioSpec, ScenarioSpec,
+    SegmentSpec, SensingSpec, SlotSpec, ThresholdsSpec, VehicleSpec, WindSpec,
+};
+
+fn kmh(v: f64) -> f64 {
+    v * 3.6
+}
+
+fn deg3(v: &nalgebra::Vector3<f64>) -> [f64; 3] {
+    [v.x.to_degrees(), v.y.to_degrees(), v.z.to_degrees()]
+}
+
+/// The scenario as a spec with every key that has a value.
+pub fn resolved(sc: &Scenario) -> ScenarioSpec {
+    ScenarioSpec {
+        name: Some(sc.name().to_string()),
+        dt_s: Some(sc.dt_s()),
+        duration_s: Some(sc.duration_s()),
+        navigator: Some(sc.navigator().0 + 1),
+        safety_distance_m: Some(sc.safety_distance_m()),
+        warmup_s: Some(sc.warmup_s()),
+        formation: formation(sc),
+        path: path(sc.path()),
+        initial: InitialSpec {
+            speed_kmh: Some(kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()]))),
+        },
+        controller: controller(sc),
+        vehicle: vehicle(sc.vehicle()),
+        noise: noise(sc),
+        sensing: SensingSpec { dropout: Some(sc.dropout()), reference_dropout: Some(sc.reference_dropout()) },
+        radio: radio(sc),
+        wind: wind(sc),
+        allowable: allowable(sc),
+        fault: sc.faults().iter().map(fault).collect(),
+    }
+}
+
+/// [`resolved`] as TOML text.
+pub fn to_toml(sc: &Scenario) -> Result<String, toml::ser::Error> {
+    toml::to_string(&resolved(sc))
+}
+
+fn formation(sc: &Scenario) -> FormationSpec {
+    let f = sc.formation();
+    let slot = f
+        .slots
+        .iter()
+        .zip(sc.dependencies())
+        .enumerate()
+        .map(|(i, (s, d))| SlotSpec {
+            id: Some(i as u32 + 1),
+            offset_m: Some([s.offset_m.x, s.offset_m.y, s.offset_m.z]),
+            attitude_offset_deg: Some(deg3(&s.attitude_offset_rad)),
+            depends_on: (i != sc.navigator().index())
+                .then(|| d.refs().iter().map(|(j, c)| ((j.0 + 1).to_string(), *c)).collect::<BTreeMap<_, _>>()),
+        })
+        .collect();
+    let frame = match f.frame {
+        FormationFrame::World => "world",
+        FormationFrame::Course => "course",
+    };
+    FormationSpec { frame: Some(frame.into()), slot, shape: None, dependencies: None }
+}
+
+fn path(p: &NavigatorPath) -> PathSpec {
+    match p {
+        NavigatorPath::Paper(p) => PathSpec {
+            kind: Some("paper".into()),
+            height_amplitude_m: Some(p.height_amplitude_m),
+            pitch_swing_deg: Some(p.pitch_swing_rad.to_degrees()),
+            yaw_amplitude_deg: Some(p.yaw_amplitude_rad.to_degrees()),
+            roll_amplitude_deg: Some(p.roll_amplitude_rad.to_degrees()),
+            ..PathSpec::default()
+        },
+        NavigatorPath::Segments(p) => PathSpec {
+            kind: Some("segments".into()),
+            speed_kmh: Some(kmh(p.start_speed_mps)),
+            course_deg: Some(p.start_course_rad.to_degrees()),
+            transition_s: Some(p.transition_s),
+            segment: p
+                .segments
+                .iter()
+                .map(|s| SegmentSpec {
+                    duration_s: Some(s.duration_s),
+                    turn_rate_deg_s: Some(s.turn_rate_radps.to_degrees()),
+                    climb_kmh: Some(kmh(s.climb_mps)),
+                    speed_kmh: Some(kmh(s.end_speed_mps)),
+                })
+                .collect(),
+            ..PathSpec::default()
+        },
+    }
+}
+
+fn controller(sc: &Scenario) -> ControllerSpec {
+    let p = sc.controller();
+    let d: &State9 = &p.envelope.thresholds;
+    let (predictor, alpha, beta) = match p.predictor {
+        PredictorKind::ConstantVelocity => ("constant_velocity", None, None),
+        PredictorKind::AlphaBeta { alpha, beta } => ("alpha_beta", Some(alpha), Some(beta)),
+    };
+    let method = sc.method();
+    let gains = match method {
+        Method::Proximity => None,
+        Method::LeaderFollower(g) => toml::Table::try_from(g).ok(),
+        Method::Consensus(g) => toml::Table::try_from(g).ok(),
+        Method::Flocking(g) => toml::Table::try_from(g).ok(),
+    };
+    ControllerSpec {
+        areas: Some(p.areas.areas as i64),
+        sensing_range_m: Some(p.areas.sensing_range_m),
+        lambda: Some(p.lambda),
+        rho: Some(p.envelope.rho),
+        closing_time_s: Some(p.closing_time_s.unwrap_or(0.0)),
+        input_weight: Some(p.input_weight),
+        predictor: Some(predictor.into()),
+        predictor_alpha: alpha,
+        predictor_beta: beta,
+        track_timeout_s: Some(p.track_timeout_s),
+        coast_s: Some(p.coast_s),
+        coast_accel_s: Some(p.coast_accel_s),
+        coast_decay_s: Some(p.coast_decay_s),
+        bank_turn_feedforward: Some(p.bank_turn_feedforward),
+        own_filter_gain: Some(p.own_filter_gain),
+        separation_m: p.separation_m,
+        horizon: Some(i64::from(p.horizon)),
+        method: Some(method.label().into()),
+        gains,
+        thresholds: Some(ThresholdsSpec {
+            x_m: Some(d[state::X]),
+            y_m: Some(d[state::Y]),
+            z_m: Some(d[state::Z]),
+            vx_kmh: Some(kmh(d[state::VX])),
+            vy_kmh: Some(kmh(d[state::VY])),
+            vz_kmh: Some(kmh(d[state::VZ])),
+            alpha_deg: Some(d[state::ALPHA].to_degrees()),
+            beta_deg: Some(d[state::BETA].to_degrees()),
+            gamma_deg: Some(d[state::GAMMA].to_degrees()),
+        }),
+    }
+}
+
+fn vehicle(v: &VehicleModel) -> VehicleSpec {
+    match v {
+        VehicleModel::Kinematic(m) => {
+            let l = &m.limits;
+            VehicleSpec {
+                model: Some("kinematic".into()),
+                vx_min_kmh: Some(kmh(l.vx_min_mps)),
+                vx_max_kmh: Some(kmh(l.vx_max_mps)),
+                vy_max_kmh: Some(kmh(l.vy_max_mps)),
+                vz_max_kmh: Some(kmh(l.vz_max_mps)),
+                attitude_max_deg: Some(deg3(&l.attitude_max_rad)),
+                accel_kmh_s: Some([kmh(l.accel_max_mps2.x), kmh(l.accel_max_mps2.y), kmh(l.accel_max_mps2.z)]),
+                attitude_rate_deg_s: Some(deg3(&l.attitude_rate_max_radps)),
+                ..VehicleSpec::default()
+            }
+        }
+        VehicleModel::FixedWing(m) => VehicleSpec {
+            model: Some("fixed_wing".into()),
+            stall_speed_kmh: Some(kmh(m.stall_speed_mps)),
+            max_speed_kmh: Some(kmh(m.max_speed_mps)),
+            bank_max_deg: Some(m.bank_max_rad.to_degrees()),
+            load_factor_max: Some(m.load_factor_max),
+            pitch_max_deg: Some(m.pitch_max_rad.to_degrees()),
+            roll_rate_max_deg_s: Some(m.roll_rate_max_radps.to_degrees()),
+            pitch_rate_max_deg_s: Some(m.pitch_rate_max_radps.to_degrees()),
+            yaw_rate_max_deg_s: Some(m.yaw_rate_max_radps.to_degrees()),
+            throttle_accel_kmh_s: Some(kmh(m.accel_max_mps2)),
+            ..VehicleSpec::default()
+        },
+    }
+}
+
+fn noise(sc: &Scenario) -> NoiseSpec {
+    let n = sc.noise();
+    NoiseSpec {
+        position_m: Some(n.position_m),
+        velocity_kmh: Some(kmh(n.velocity_mps)),
+        attitude_deg: Some(n.attitude_rad.to_degrees()),
+        actuation_error: Some(sc.actuation_error()),
+        scale: None,
+        gnss_bias_m: sc.gnss_bias().map(|g| g.sigma_m),
+        gnss_tau_s: sc.gnss_bias().map(|g| g.tau_s),
+    }
+}
+
+fn radio(sc: &Scenario) -> RadioSpec {
+    let r = sc.radio();
+    RadioSpec {
+        beacons: Some(sc.beacons().iter().map(|b| b.0 + 1).collect()),
+        broadcast_all: Some(r.broadcast_all),
+        range_m: r.range_m.is_finite().then_some(r.range_m),
+        delay_s: Some(f64::from(r.delay_steps) * sc.dt_s()),
+        loss: Some(r.loss),
+        burst_p_good_to_bad: r.burst.map(|b| b.p_good_to_bad),
+        burst_p_bad_to_good: r.burst.map(|b| b.p_bad_to_good),
+        burst_loss_bad: r.burst.map(|b| b.loss_bad),
+    }
+}
+
+fn wind(sc: &Scenario) -> WindSpec {
+    use crate::wind::Severity;
+    let w = sc.wind();
+    let s = w.steady_mps;
+    WindSpec {
+        steady_kmh: Some([kmh(s.x), kmh(s.y), kmh(s.z)]),
+        turbulence: Some(
+            match w.turbulence.map(|t| t.severity) {
+                None => "none",
+                Some(Severity::Light) => "light",
+                Some(Severity::Moderate) => "moderate",
+                Some(Severity::Severe) => "severe",
+            }
+            .into(),
+        ),
+        altitude_m: w.turbulence.map(|t| t.altitude_m),
+        gust_at_s: w.gust.map(|g| g.at_s),
+        gust_duration_s: w.gust.map(|g| g.duration_s),
+        gust_peak_kmh: w.gust.map(|g| [kmh(g.peak_mps.x), kmh(g.peak_mps.y), kmh(g.peak_mps.z)]),
+    }
+}
+
+fn allowable(sc: &Scenario) -> AllowableSpec {
+    let a = sc.allowable();
+    AllowableSpec {
+        x_m: Some(a.position_m[0]),
+        y_m: Some(a.position_m[1]),
+        z_m: Some(a.position_m[2]),
+        alpha_deg: Some(a.attitude_rad[0].to_degrees()),
+        beta_deg: Some(a.attitude_rad[1].to_degrees()),
+        gamma_deg: Some(a.attitude_rad[2].to_degrees()),
+    }
+}
+
+fn fault(f: &Fault) -> FaultSpec {
+    let o = |v: &nalgebra::Vector3<f64>| Some([v.x, v.y, v.z]);
+    match f {
+        Fault::Remove { uav, at_s } => FaultSpec::remove(uav.0 + 1, *at_s),
+        Fault::Join { uav, at_s, offset_m } => FaultSpec {
+            kind: Some("join".into()),
+            uav: Some(uav.0 + 1),
+            at_s: Some(*at_s),
+            offset_m: o(offset_m),
+            ..FaultSpec::default()
+        },
+        Fault::Glitch { uav, at_s, duration_s, offset_m } => FaultSpec {
+            kind: Some("glitch".into()),
+            uav: Some(uav.0 + 1),
+            at_s: Some(*at_s),
+            duration_s: Some(*duration_s),
+            offset_m: o(offset_m),
+        },
+        Fault::StuckSensor { uav, at_s, duration_s } => FaultSpec {
+            kind: Some("stuck_sensor".into()),
+            uav: Some(uav.0 + 1),
+            at_s: Some(*at_s),
+            duration_s: Some(*duration_s),
+            ..FaultSpec::default()
+        },
+        Fault::RadioBlackout { at_s, duration_s } => FaultSpec::radio_blackout(*at_s, *duration_s),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin;
+
+    /// Relative closeness of two floats (unit conversions may change the last bits).
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-9)
+    }
+
+    #[test]
+    fn the_resolved_spec_converts_back_to_the_same_scenario() {
+        for text in [builtin::PAPER, builtin::FIXED_WING_V, builtin::EXAMPLE] {
+            let sc = crate::load::parse(text, "test.toml").expect("valid");
+            let printed = to_toml(&sc).expect("serialises");
+            let again = crate::load::parse(&printed, "printed.toml").expect("the printed scenario loads");
+            assert_eq!(again.len(), sc.len());
+            assert_eq!(again.formation().slots, sc.formation().slots);
+            assert_eq!(again.dependencies(), sc.dependencies());
+            assert_eq!(again.method(), sc.method());
+            let (p, q) = (sc.controller(), again.controller());
+            assert_eq!((p.areas, p.horizon, p.predictor), (q.areas, q.horizon, q.predictor));
+            for k in 0..9 {
+                assert!(close(p.envelope.thresholds[k], q.envelope.thresholds[k]), "threshold {k}");
+            }
+            assert!(close(p.separation_m.unwrap_or(0.0), q.separation_m.unwrap_or(0.0)));
+            for (a, b) in sc.initial().iter().zip(again.initial()) {
+                for k in 0..9 {
+                    assert!(close(a[k], b[k]), "initial state {k}: {} vs {}", a[k], b[k]);
+                }
+            }
+            for t in [0.0, 17.3, 55.0] {
+                let (a, b) = (sc.path().state_at(t, [0.0; 3]), again.path().state_at(t, [0.0; 3]));
+                for k in 0..9 {
+                    assert!((a[k] - b[k]).abs() < 1e-6, "path at {t} s, component {k}");
+                }
+            }
+            // Printing is a fixed point: nothing is left to resolve.
+            let twice = to_toml(&again).expect("serialises");
+            assert_eq!(printed.lines().count(), twice.lines().count());
+        }
+    }
+}

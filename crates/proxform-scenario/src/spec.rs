@@ -1,0 +1,407 @@
+//! The scenario file format: raw TOML tables as written by users, before any check.
+//!
+//! Units are always in the key: `_m`, `_s`, `_kmh` (speeds), `_kmh_s` (speed change per
+//! second), `_deg`, `_deg_s`. Every key is optional unless marked; omitted keys take the
+//! paper experiment's values. Unknown keys are errors. The conversion in [`crate::convert`]
+//! turns a spec into a checked [`crate::Scenario`]; [`crate::load`] reads one from TOML text and
+//! locates errors in it; `docs/scenarios.md` documents every key.
+//!
+//! A spec is also what every override edits: the command line, a comparison's conditions and
+//! the Python package change the spec and convert it again, so every check applies to them.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scenario file.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSpec {
+    /// Name used in reports. Default: the file name.
+    pub name: Option<String>,
+    /// Update period Δt (s). Default 0.1.
+    pub dt_s: Option<f64>,
+    /// Flight duration (s). Default 100.
+    pub duration_s: Option<f64>,
+    /// Number (from 1) of the navigator. Default 1.
+    pub navigator: Option<u32>,
+    /// Pairs closer than this are unsafe (m). Default 50.
+    pub safety_distance_m: Option<f64>,
+    /// How long the formation has flown before t = 0 (s, ≥ 0). Default 1.
+    pub warmup_s: Option<f64>,
+    /// The formation (required: slots or a shape).
+    #[serde(default)]
+    pub formation: FormationSpec,
+    /// The navigator's path. Default: the paper's.
+    #[serde(default)]
+    pub path: PathSpec,
+    /// Initial state of every UAV. Default: the navigator's initial state, each in its slot.
+    #[serde(default)]
+    pub initial: InitialSpec,
+    /// Controller parameters.
+    #[serde(default)]
+    pub controller: ControllerSpec,
+    /// Vehicle model.
+    #[serde(default)]
+    pub vehicle: VehicleSpec,
+    /// Measurement noise and actuation error.
+    #[serde(default)]
+    pub noise: NoiseSpec,
+    /// Onboard sensing.
+    #[serde(default)]
+    pub sensing: SensingSpec,
+    /// Radio.
+    #[serde(default)]
+    pub radio: RadioSpec,
+    /// Wind, turbulence and gusts.
+    #[serde(default)]
+    pub wind: WindSpec,
+    /// Pass criterion.
+    #[serde(default)]
+    pub allowable: AllowableSpec,
+    /// Scheduled faults.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fault: Vec<FaultSpec>,
+}
+
+/// `[formation]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationSpec {
+    /// "world" (default) or "course".
+    pub frame: Option<String>,
+    /// Explicit slots (`[[formation.slot]]`), or …
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slot: Vec<SlotSpec>,
+    /// … a generated shape (`[formation.shape]`).
+    pub shape: Option<ShapeSpec>,
+    /// How dependency tables are derived for slots without `depends_on`.
+    pub dependencies: Option<AutoDepsSpec>,
+}
+
+/// One explicit slot.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlotSpec {
+    /// UAV number, from 1, unique (required).
+    pub id: Option<u32>,
+    /// Offset in the formation frame: forward, left, up (m) (required).
+    pub offset_m: Option<[f64; 3]>,
+    /// Attitude offset: pitch, yaw, roll (deg). Default 0.
+    pub attitude_offset_deg: Option<[f64; 3]>,
+    /// Main references: UAV number (as a string key) → dependency degree.
+    pub depends_on: Option<BTreeMap<String, f64>>,
+}
+
+/// `[formation.shape]`: a generated formation.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSpec {
+    /// "triangle", "v", "echelon", "line_abreast", "column", "diamond", "grid", "lattice",
+    /// "circle".
+    pub kind: Option<String>,
+    /// Number of UAVs (all shapes but triangle, which uses `rows`).
+    pub uavs: Option<u32>,
+    /// Rows of the triangle (row r holds r + 1 UAVs) or of the grid.
+    pub rows: Option<u32>,
+    /// Distance between neighbouring UAVs (m).
+    pub spacing_m: Option<f64>,
+    /// Half-angle of a V or angle of an echelon from the course (deg). Default 30.
+    pub angle_deg: Option<f64>,
+    /// Height step between successive rows or ranks (m, may be negative). Default 0.
+    pub level_step_m: Option<f64>,
+    /// Echelon side: "left" or "right". Default "right".
+    pub side: Option<String>,
+    /// Lattice levels (≥ 1). Default: 1 below 50 UAVs, 2 below 400, then 4.
+    pub levels: Option<u32>,
+}
+
+/// `[formation.dependencies]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutoDepsSpec {
+    /// Main references per UAV. Default 2.
+    pub k: Option<u32>,
+    /// Farthest reference (m). Default: the sensing range.
+    pub max_distance_m: Option<f64>,
+    /// Degree of every follower on the navigator (heard over the radio), in [0, 1). Default 0.
+    pub navigator_degree: Option<f64>,
+}
+
+/// `[path]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathSpec {
+    /// "paper" (default), "segments" or "waypoints".
+    pub kind: Option<String>,
+    /// Waypoints path: the points to fly through, `[x, y, z]` (m, world frame, relative to
+    /// the navigator's start), in order.
+    pub points_m: Option<Vec<[f64; 3]>>,
+    /// Waypoints path: radius of the turns at each waypoint (m).
+    pub turn_radius_m: Option<f64>,
+    /// Segments path: initial speed (km/h).
+    pub speed_kmh: Option<f64>,
+    /// Segments path: initial course (deg, counter-clockwise from x). Default 0.
+    pub course_deg: Option<f64>,
+    /// Segments path: blend time of turn and climb rates at each segment start (s). Default 8.
+    pub transition_s: Option<f64>,
+    /// Paper path: amplitude of the height oscillation (m). Default 20.
+    pub height_amplitude_m: Option<f64>,
+    /// Paper path: pitch swing Δα (deg). Default 40.
+    pub pitch_swing_deg: Option<f64>,
+    /// Paper path: yaw amplitude (deg). Default 15.
+    pub yaw_amplitude_deg: Option<f64>,
+    /// Paper path: roll amplitude (deg). Default 30.
+    pub roll_amplitude_deg: Option<f64>,
+    /// Segments path: the pieces, flown in order; after the last, straight on.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub segment: Vec<SegmentSpec>,
+}
+
+/// One `[[path.segment]]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentSpec {
+    /// Duration (s, > 0) (required).
+    pub duration_s: Option<f64>,
+    /// Turn rate (deg/s, counter-clockwise positive). Default 0.
+    pub turn_rate_deg_s: Option<f64>,
+    /// Climb rate (km/h, up positive). Default 0.
+    pub climb_kmh: Option<f64>,
+    /// Speed at the end of the segment (km/h), reached smoothly. Default: unchanged.
+    pub speed_kmh: Option<f64>,
+}
+
+/// `[initial]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    /// Forward speed of every UAV (km/h). Default: the navigator's.
+    pub speed_kmh: Option<f64>,
+}
+
+/// `[controller]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSpec {
+    /// Azimuth areas m (≥ 1). Default 8.
+    pub areas: Option<i64>,
+    /// Sensing range (m). Default 250.
+    pub sensing_range_m: Option<f64>,
+    /// λ in [0, 1]. Default 0.8.
+    pub lambda: Option<f64>,
+    /// ρ in (0, 1]. Default 0.4.
+    pub rho: Option<f64>,
+    /// Position-closing time τ (s); 0 switches it off. Default 1.
+    pub closing_time_s: Option<f64>,
+    /// Input penalty (≥ 0). Default 0.01.
+    pub input_weight: Option<f64>,
+    /// "alpha_beta" (default) or "constant_velocity".
+    pub predictor: Option<String>,
+    /// α of the α-β predictor, in (0, 1]. Default 0.8.
+    pub predictor_alpha: Option<f64>,
+    /// β of the α-β predictor, in [0, 1]. Default α²/(2 − α).
+    pub predictor_beta: Option<f64>,
+    /// Track timeout (s). Default 1.
+    pub track_timeout_s: Option<f64>,
+    /// Longest a missing neighbour coasts on its track (s, ≥ 0). Default 0.5.
+    pub coast_s: Option<f64>,
+    /// How long a coasting neighbour's acceleration is extrapolated (s, ≥ 0). Default 0.2.
+    pub coast_accel_s: Option<f64>,
+    /// Fading time of a coasting neighbour's weight (s, > 0). Default 0.1.
+    pub coast_decay_s: Option<f64>,
+    /// Course frame: add the slots' turn velocity from the reference's bank. Default: on for
+    /// the fixed wing, off for the kinematic vehicle.
+    pub bank_turn_feedforward: Option<bool>,
+    /// Gain of the own-state filter, in (0, 1]; 1 uses raw measurements. Default 1.
+    pub own_filter_gain: Option<f64>,
+    /// Separation keeping distance (m, ≥ 0; 0 off). Default twice `safety_distance_m`.
+    pub separation_m: Option<f64>,
+    /// Horizon H of the predictive input (1 to 50). Default 1.
+    pub horizon: Option<i64>,
+    /// Formation control method: "proximity" (default), "leader_follower", "consensus" or
+    /// "flocking" (baselines, default gains; the radio then carries what they need).
+    pub method: Option<String>,
+    /// Gains of a baseline method (keys of its gains table; omitted ones keep their
+    /// defaults), e.g. `{ pd = { kp = 2.0, kv = 2.8 } }`.
+    pub gains: Option<toml::Table>,
+    /// Permissible errors Δ.
+    pub thresholds: Option<ThresholdsSpec>,
+}
+
+/// `[controller.thresholds]`: permissible errors Δ, all > 0.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct ThresholdsSpec {
+    pub x_m: Option<f64>,
+    pub y_m: Option<f64>,
+    pub z_m: Option<f64>,
+    pub vx_kmh: Option<f64>,
+    pub vy_kmh: Option<f64>,
+    pub vz_kmh: Option<f64>,
+    pub alpha_deg: Option<f64>,
+    pub beta_deg: Option<f64>,
+    pub gamma_deg: Option<f64>,
+}
+
+/// `[vehicle]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleSpec {
+    /// "kinematic" (default).
+    pub model: Option<String>,
+    /// Forward speed limits (km/h). Default 180, 360.
+    pub vx_min_kmh: Option<f64>,
+    /// See `vx_min_kmh`.
+    pub vx_max_kmh: Option<f64>,
+    /// Lateral and vertical speed limits (km/h). Default 72, 54.
+    pub vy_max_kmh: Option<f64>,
+    /// See `vy_max_kmh`.
+    pub vz_max_kmh: Option<f64>,
+    /// Attitude limits α, β, γ (deg). Default 45, 15, 30.
+    pub attitude_max_deg: Option<[f64; 3]>,
+    /// Adjusting rates of vx, vy, vz (km/h per second). Default 18 each.
+    pub accel_kmh_s: Option<[f64; 3]>,
+    /// Adjusting rates of α, β, γ (deg/s). Default 3, 2, 2.
+    pub attitude_rate_deg_s: Option<[f64; 3]>,
+    /// Fixed wing: stall speed (km/h). Default 90.
+    pub stall_speed_kmh: Option<f64>,
+    /// Fixed wing: maximum airspeed (km/h). Default 300.
+    pub max_speed_kmh: Option<f64>,
+    /// Fixed wing: bank limit (deg). Default 45.
+    pub bank_max_deg: Option<f64>,
+    /// Fixed wing: structural load-factor limit (≥ 1). Default 2.5.
+    pub load_factor_max: Option<f64>,
+    /// Fixed wing: pitch limit (deg). Default 20.
+    pub pitch_max_deg: Option<f64>,
+    /// Fixed wing: roll rate at full aileron (deg/s). Default 45.
+    pub roll_rate_max_deg_s: Option<f64>,
+    /// Fixed wing: pitch rate at full elevator (deg/s). Default 15.
+    pub pitch_rate_max_deg_s: Option<f64>,
+    /// Fixed wing: yaw rate at full rudder (deg/s). Default 10.
+    pub yaw_rate_max_deg_s: Option<f64>,
+    /// Fixed wing: airspeed change at full throttle (km/h per second). Default 10.8.
+    pub throttle_accel_kmh_s: Option<f64>,
+}
+
+/// `[wind]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindSpec {
+    /// Steady wind `[x, y, z]` (km/h, world frame). Default calm.
+    pub steady_kmh: Option<[f64; 3]>,
+    /// Dryden turbulence: "none" (default), "light", "moderate", "severe".
+    pub turbulence: Option<String>,
+    /// Altitude above ground for the turbulence model (m). Default 300.
+    pub altitude_m: Option<f64>,
+    /// A 1 − cos gust: start (s).
+    pub gust_at_s: Option<f64>,
+    /// Gust duration (s).
+    pub gust_duration_s: Option<f64>,
+    /// Gust peak `[x, y, z]` (km/h, world frame).
+    pub gust_peak_kmh: Option<[f64; 3]>,
+}
+
+/// `[noise]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseSpec {
+    /// Position noise 1σ (m). Default 0.02.
+    pub position_m: Option<f64>,
+    /// Velocity noise 1σ (km/h). Default 0.18 (0.05 m/s).
+    pub velocity_kmh: Option<f64>,
+    /// Attitude noise 1σ (deg). Default 0.01.
+    pub attitude_deg: Option<f64>,
+    /// Actuation error: relative, uniform in ±e, in [0, 1]. Default 0.1.
+    pub actuation_error: Option<f64>,
+    /// Factor on the three measurement noises above (≥ 0). Default 1.
+    pub scale: Option<f64>,
+    /// GNSS-like correlated bias of each UAV's own position fix, 1σ (m). Default none.
+    pub gnss_bias_m: Option<f64>,
+    /// Correlation time of that bias (s). Default 60.
+    pub gnss_tau_s: Option<f64>,
+}
+
+/// `[sensing]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensingSpec {
+    /// Probability that an onboard observation is lost, per observation and step, in [0, 1].
+    /// Default 0.
+    pub dropout: Option<f64>,
+    /// Probability that an observation of one of the UAV's main references is lost, per
+    /// observation and step, in [0, 1]. Default: `dropout`.
+    pub reference_dropout: Option<f64>,
+}
+
+/// `[radio]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadioSpec {
+    /// UAVs that broadcast their state to every UAV (regardless of `broadcast_all`).
+    pub beacons: Option<Vec<u32>>,
+    /// Every UAV broadcasts its state each period. Default false.
+    pub broadcast_all: Option<bool>,
+    /// Range of a message (m). Default unlimited.
+    pub range_m: Option<f64>,
+    /// Delay of every message (s, a multiple of dt_s). Default 0.
+    pub delay_s: Option<f64>,
+    /// i.i.d. loss probability per message, in [0, 1]. Default 0.
+    pub loss: Option<f64>,
+    /// Gilbert-Elliott channel per receiver: probability per period of good → bad.
+    pub burst_p_good_to_bad: Option<f64>,
+    /// … of bad → good.
+    pub burst_p_bad_to_good: Option<f64>,
+    /// … loss probability in the bad state. Default 1.
+    pub burst_loss_bad: Option<f64>,
+}
+
+/// `[allowable]`: pass criterion, all > 0.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct AllowableSpec {
+    pub x_m: Option<f64>,
+    pub y_m: Option<f64>,
+    pub z_m: Option<f64>,
+    pub alpha_deg: Option<f64>,
+    pub beta_deg: Option<f64>,
+    pub gamma_deg: Option<f64>,
+}
+
+/// One `[[fault]]`.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultSpec {
+    /// "remove", "join", "glitch", "stuck_sensor", "radio_blackout" (required).
+    pub kind: Option<String>,
+    /// The UAV concerned (all but radio_blackout).
+    pub uav: Option<u32>,
+    /// Start time (s) (required).
+    pub at_s: Option<f64>,
+    /// Duration (s) of a glitch, stuck sensor or blackout (required for those).
+    pub duration_s: Option<f64>,
+    /// Position offset of a glitch (m).
+    pub offset_m: Option<[f64; 3]>,
+}
+
+impl FaultSpec {
+    /// `kind = "remove"`: UAV `uav` (from 1) vanishes at `at_s`.
+    pub fn remove(uav: u32, at_s: f64) -> Self {
+        Self { kind: Some("remove".into()), uav: Some(uav), at_s: Some(at_s), ..Self::default() }
+    }
+
+    /// `kind = "radio_blackout"` from `at_s` for `duration_s`.
+    pub fn radio_blackout(at_s: f64, duration_s: f64) -> Self {
+        Self { kind: Some("radio_blackout".into()), at_s: Some(at_s), duration_s: Some(duration_s), ..Self::default() }
+    }
+}
+
+impl ScenarioSpec {
+    /// The spec edited by `f`: `paper_spec().with(|s| s.duration_s = Some(20.0))`.
+    pub fn with(mut self, f: impl FnOnce(&mut Self)) -> Self {
+        f(&mut self);
+        self
+    }
+}

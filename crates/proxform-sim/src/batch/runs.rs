@@ -1,0 +1,282 @@
+//! Batches of seeded runs, in parallel, aggregated into one summary.
+//!
+//! Run r of seed S draws from streams keyed by (S, r), so each run's result is fixed by the
+//! seed and its index whatever thread runs it; results are collected in run order and
+//! aggregated sequentially, so the summary is bit-identical for any thread count.
+
+use rayon::prelude::*;
+
+use proxform_scenario::Scenario;
+
+use crate::measure::metrics::{RunMetrics, RunSummary};
+use crate::measure::observer::Observer;
+use crate::measure::stats::quantile_of;
+use crate::measure::trajectory::Trajectory;
+use crate::world::engine::Simulation;
+use crate::world::options::RunOptions;
+
+/// Per-axis errors: x, y, z (m) and α, β, γ (deg).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct AxisErrors {
+    /// x (m).
+    pub x_m: f64,
+    /// y (m).
+    pub y_m: f64,
+    /// z (m).
+    pub z_m: f64,
+    /// α (deg).
+    pub alpha_deg: f64,
+    /// β (deg).
+    pub beta_deg: f64,
+    /// γ (deg).
+    pub gamma_deg: f64,
+}
+
+impl AxisErrors {
+    /// From SI values (m, rad).
+    pub fn from_si(v: [f64; 6]) -> Self {
+        Self {
+            x_m: v[0],
+            y_m: v[1],
+            z_m: v[2],
+            alpha_deg: v[3].to_degrees(),
+            beta_deg: v[4].to_degrees(),
+            gamma_deg: v[5].to_degrees(),
+        }
+    }
+
+    /// As an array in report units.
+    pub fn as_array(&self) -> [f64; 6] {
+        [self.x_m, self.y_m, self.z_m, self.alpha_deg, self.beta_deg, self.gamma_deg]
+    }
+}
+
+/// Aggregate of a batch.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Number of UAVs.
+    pub uavs: u64,
+    /// Number of runs.
+    pub runs: u64,
+    /// Base seed.
+    pub seed: u64,
+    /// Fraction of runs in which every follower stayed within every allowable error.
+    pub pass_fraction: f64,
+    /// Largest |error| over all runs and followers.
+    pub worst_abs_error: AxisErrors,
+    /// 99th percentile (nearest rank) over runs of each run's largest |error|.
+    pub p99_abs_error: AxisErrors,
+    /// Median over runs of each run's largest |error|.
+    pub median_abs_error: AxisErrors,
+    /// RMS error over all runs, followers and steps.
+    pub rms_error: AxisErrors,
+    /// The allowable errors.
+    pub allowable_error: AxisErrors,
+    /// Predicted error band of eq. 17, σ = sqrt(σm² + σn²), per axis.
+    pub predicted_sigma: AxisErrors,
+    /// Smallest separation between two UAVs over all runs (m).
+    pub min_separation_m: f64,
+    /// The scenario's safety distance (m).
+    pub safety_distance_m: f64,
+    /// Runs in which some pair came closer than the safety distance.
+    pub unsafe_runs: u64,
+    /// Adjustments per follower per minute of flight, mean over runs.
+    pub adjustments_per_uav_minute: f64,
+    /// Swarm and control metrics, each the mean over runs of the run's value.
+    pub swarm: SwarmMetrics,
+    /// Numbers (from 1) of the followers with per-UAV detail (the first followers).
+    pub per_uav: Vec<u32>,
+    /// Per listed follower: largest |error| over all runs.
+    pub per_uav_worst: Vec<AxisErrors>,
+    /// Per follower: mean adjustments per run.
+    pub per_uav_adjustments: Vec<f64>,
+}
+
+/// Swarm and control metrics of a batch (means over runs, but `close_pairs_max` and the
+/// minima, which are over all runs).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SwarmMetrics {
+    /// Fraction of follower steps whose course stayed inside the envelope (held).
+    pub held_fraction: f64,
+    /// Fraction of follower steps within every allowable error.
+    pub within_allowable_fraction: f64,
+    /// Mean control effort per follower step (inputs over their per-step limits, root sum of
+    /// squares).
+    pub control_effort: f64,
+    /// Distinct pairs closer than the safety distance, mean per run.
+    pub close_pairs_mean: f64,
+    /// The same, largest run.
+    pub close_pairs_max: u64,
+    /// Radio messages received per UAV per second.
+    pub radio_msgs_per_uav_s: f64,
+    /// Order (polarisation), mean over the flight.
+    pub order_mean: f64,
+    /// Order, smallest over all runs and steps.
+    pub order_min: f64,
+    /// Largest connected group of the sensing graph as a fraction of the UAVs, smallest over
+    /// all runs.
+    pub connectivity_min: f64,
+    /// Seconds per follower flown alone.
+    pub alone_s_per_uav: f64,
+}
+
+/// A batch's results.
+#[derive(Debug, Clone)]
+pub struct BatchResult {
+    /// Every run's summary, in run order.
+    pub runs: Vec<RunSummary>,
+    /// The aggregate.
+    pub summary: Summary,
+    /// The first run's trajectories, when asked for.
+    pub first_trajectory: Option<Trajectory>,
+}
+
+/// Runs one flight and returns its summary (and its trajectory when `record`).
+pub fn run_one(
+    scenario: &Scenario,
+    options: RunOptions,
+    seed: u64,
+    run: u64,
+    record: bool,
+) -> (RunSummary, Option<Trajectory>) {
+    run_one_ticking(scenario, options, (seed, run), record, &|| {})
+}
+
+/// Observer that calls a function after every step (a progress bar's tick).
+struct Ticker<'a>(&'a (dyn Fn() + Sync));
+
+impl Observer for Ticker<'_> {
+    fn on_step(&mut self, _: &Scenario, frame: &crate::measure::observer::StepFrame<'_>) {
+        if frame.k > 0 {
+            (self.0)();
+        }
+    }
+}
+
+/// [`run_one`] of `(seed, run)`, calling `tick` after every step.
+pub fn run_one_ticking(
+    scenario: &Scenario,
+    options: RunOptions,
+    (seed, run): (u64, u64),
+    record: bool,
+    tick: &(dyn Fn() + Sync),
+) -> (RunSummary, Option<Trajectory>) {
+    let sim = Simulation::new(scenario, options, seed, run);
+    let metrics = RunMetrics::new(scenario);
+    if record {
+        let mut obs = ((metrics, Trajectory::default()), Ticker(tick));
+        sim.run(&mut obs);
+        (obs.0 .0.finish(run, scenario.duration_s()), Some(obs.0 .1))
+    } else {
+        let mut obs = (metrics, Ticker(tick));
+        sim.run(&mut obs);
+        (obs.0.finish(run, scenario.duration_s()), None)
+    }
+}
+
+/// Runs `runs` flights of `scenario` with seed `seed` on the current rayon pool, calling
+/// `progress` after each finished run, or after each step when there is a single run (a long
+/// flight of a large swarm). The first run's trajectory is kept when `record_first`.
+pub fn run_batch(
+    scenario: &Scenario,
+    options: RunOptions,
+    seed: u64,
+    runs: u64,
+    record_first: bool,
+    progress: &(dyn Fn() + Sync),
+) -> BatchResult {
+    let results: Vec<(RunSummary, Option<Trajectory>)> = if runs == 1 {
+        vec![run_one_ticking(scenario, options, (seed, 0), record_first, progress)]
+    } else {
+        (0..runs)
+            .into_par_iter()
+            .map(|r| {
+                let out = run_one(scenario, options, seed, r, record_first && r == 0);
+                progress();
+                out
+            })
+            .collect()
+    };
+    let mut first_trajectory = None;
+    let mut summaries = Vec::with_capacity(results.len());
+    for (s, t) in results {
+        if t.is_some() {
+            first_trajectory = t;
+        }
+        summaries.push(s);
+    }
+    let summary = aggregate(scenario, seed, &summaries);
+    BatchResult { runs: summaries, summary, first_trajectory }
+}
+
+/// Aggregates run summaries (in run order) into a [`Summary`].
+pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary {
+    let n = runs.len().max(1) as f64;
+    let mut worst = [0.0f64; 6];
+    let mut p99 = [0.0f64; 6];
+    let mut median = [0.0f64; 6];
+    let mut rms = [0.0f64; 6];
+    for k in 0..6 {
+        let mut col: Vec<f64> = runs.iter().map(|r| r.max_abs_error[k]).collect();
+        worst[k] = col.iter().copied().fold(0.0, f64::max);
+        p99[k] = quantile_of(&mut col, 0.99);
+        median[k] = quantile_of(&mut col, 0.5);
+        rms[k] = (runs.iter().map(|r| r.rms_error[k] * r.rms_error[k]).sum::<f64>() / n).sqrt();
+    }
+    let sample = runs.first().map_or(0, |r| r.per_uav.len());
+    let mut per_uav_worst = vec![[0.0f64; 6]; sample];
+    let mut per_uav_adj = vec![0.0f64; sample];
+    for r in runs {
+        for (f, u) in r.per_uav.iter().enumerate().take(sample) {
+            for k in 0..6 {
+                per_uav_worst[f][k] = per_uav_worst[f][k].max(u.max_abs_error[k]);
+            }
+            per_uav_adj[f] += u.adjustments as f64 / n;
+        }
+    }
+    let adj_rate = runs.iter().map(RunSummary::adjustments_per_uav_minute).sum::<f64>() / n;
+    // eq. 17: σ = sqrt(σm² + σn²), σm measured as the RMS actuation-error effect per step.
+    let sigma_n = scenario.noise().sigma();
+    let mut model = [0.0f64; 9];
+    for r in runs {
+        for k in 0..9 {
+            model[k] += r.model_error_rms[k].powi(2) / n;
+        }
+    }
+    let idx = [0, 1, 2, 6, 7, 8];
+    let predicted = idx.map(|k| (model[k] + sigma_n[k].powi(2)).sqrt());
+    Summary {
+        scenario: scenario.name().to_string(),
+        uavs: scenario.len() as u64,
+        runs: runs.len() as u64,
+        seed,
+        pass_fraction: runs.iter().filter(|r| r.pass).count() as f64 / n,
+        worst_abs_error: AxisErrors::from_si(worst),
+        p99_abs_error: AxisErrors::from_si(p99),
+        median_abs_error: AxisErrors::from_si(median),
+        rms_error: AxisErrors::from_si(rms),
+        allowable_error: AxisErrors::from_si(scenario.allowable().as_array()),
+        predicted_sigma: AxisErrors::from_si(predicted),
+        min_separation_m: runs.iter().map(|r| r.min_separation_m).fold(f64::INFINITY, f64::min),
+        safety_distance_m: scenario.safety_distance_m(),
+        unsafe_runs: runs.iter().filter(|r| r.min_separation_m < scenario.safety_distance_m()).count() as u64,
+        adjustments_per_uav_minute: adj_rate,
+        swarm: SwarmMetrics {
+            held_fraction: runs.iter().map(|r| r.held_fraction).sum::<f64>() / n,
+            within_allowable_fraction: runs.iter().map(|r| r.within_allowable_fraction).sum::<f64>() / n,
+            control_effort: runs.iter().map(|r| r.control_effort).sum::<f64>() / n,
+            close_pairs_mean: runs.iter().map(|r| r.close_pairs as f64).sum::<f64>() / n,
+            close_pairs_max: runs.iter().map(|r| r.close_pairs).max().unwrap_or(0),
+            radio_msgs_per_uav_s: runs.iter().map(|r| r.radio_msgs_per_uav_s).sum::<f64>() / n,
+            order_mean: runs.iter().map(|r| r.order_mean).sum::<f64>() / n,
+            order_min: runs.iter().map(|r| r.order_min).fold(1.0, f64::min),
+            connectivity_min: runs.iter().map(|r| r.connectivity_min).fold(1.0, f64::min),
+            alone_s_per_uav: runs.iter().map(|r| r.alone_s_per_uav).sum::<f64>() / n,
+        },
+        per_uav: runs.first().map(|r| r.per_uav.iter().map(|u| u.uav + 1).collect()).unwrap_or_default(),
+        per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
+        per_uav_adjustments: per_uav_adj,
+    }
+}

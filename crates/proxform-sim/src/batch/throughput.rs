@@ -1,0 +1,72 @@
+//! Throughput measurement: agent-updates per second of the stepping engine.
+//!
+//! Times the steps only (building the scenario and the controllers is reported apart), with
+//! the observers a real run uses, so the figure includes neighbour search, perception,
+//! control, plant and metrics.
+
+use std::time::Instant;
+
+use proxform_scenario::Scenario;
+
+use crate::measure::metrics::RunMetrics;
+use crate::measure::observer::{Observer, StepFrame};
+use crate::world::engine::Simulation;
+use crate::world::options::{NeighbourSearch, RunOptions};
+
+/// One throughput measurement.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Throughput {
+    /// UAVs in the scenario.
+    pub uavs: u64,
+    /// Steps timed.
+    pub steps: u64,
+    /// Neighbour search used.
+    pub search: NeighbourSearch,
+    /// Worker threads of the pool the steps ran on.
+    pub threads: usize,
+    /// Seconds spent building the engine and controllers.
+    pub setup_s: f64,
+    /// Seconds spent stepping.
+    pub step_s: f64,
+    /// Follower updates per second of stepping.
+    pub updates_per_s: f64,
+    /// Nanoseconds per agent-update.
+    pub ns_per_update: f64,
+    /// Bytes held by the engine and controllers.
+    pub heap_bytes: u64,
+}
+
+struct Metrics<'a>(&'a mut RunMetrics);
+
+impl Observer for Metrics<'_> {
+    fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        self.0.on_step(scenario, frame);
+    }
+}
+
+/// Runs `steps` steps of `sc` (seed 1, run 0; at most the flight's steps) with `search`, in
+/// parallel within the run when `parallel`, on the current rayon pool.
+pub fn measure(sc: &Scenario, steps: u64, search: NeighbourSearch, parallel: bool) -> Throughput {
+    let options = RunOptions { neighbour_search: search, ..RunOptions::default() };
+    let t0 = Instant::now();
+    let sim = Simulation::new(sc, options, 1, 0).with_parallel(parallel);
+    let heap_bytes = sim.heap_bytes() as u64;
+    let mut metrics = RunMetrics::new(sc);
+    let setup_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    sim.run_steps(steps, &mut Metrics(&mut metrics));
+    let step_s = t1.elapsed().as_secs_f64();
+    let steps = steps.min(sc.steps());
+    let updates = (sc.len() as u64 - 1) * steps;
+    Throughput {
+        uavs: sc.len() as u64,
+        steps,
+        search,
+        threads: rayon::current_num_threads(),
+        setup_s,
+        step_s,
+        updates_per_s: updates as f64 / step_s.max(1e-12),
+        ns_per_update: step_s * 1e9 / updates.max(1) as f64,
+        heap_bytes,
+    }
+}

@@ -1,0 +1,381 @@
+//! Per-run metrics: the formation errors, separations and corrections of one flight.
+//!
+//! Errors and adjustments are accumulated over every follower; per-UAV detail is kept for the
+//! first [`PER_UAV_SAMPLE`] followers only, so a run of a million UAVs stays small.
+
+use proxform_core::state::{State9, P};
+use proxform_core::Outcome;
+
+use proxform_scenario::Scenario;
+
+use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame};
+
+/// Followers with per-UAV detail in summaries and tables.
+pub const PER_UAV_SAMPLE: usize = 32;
+
+/// One follower's statistics over a run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UavStats {
+    /// UAV index.
+    pub uav: u32,
+    /// Max |error| x, y, z (m), α, β, γ (rad).
+    pub max_abs_error: [f64; 6],
+    /// RMS error over the flight, same units.
+    pub rms_error: [f64; 6],
+    /// Number of adjustments.
+    pub adjustments: u64,
+    /// Steps flown alone (nothing perceived).
+    pub alone_steps: u64,
+}
+
+/// What one run measured, small enough to keep for thousands of runs.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunSummary {
+    /// Run index within its batch.
+    pub run: u64,
+    /// True when every follower stayed within every allowable error for the whole flight.
+    pub pass: bool,
+    /// Number of followers.
+    pub followers: u64,
+    /// Max |error| over all followers: x, y, z (m), α, β, γ (rad).
+    pub max_abs_error: [f64; 6],
+    /// RMS error over all followers and steps, same units.
+    pub rms_error: [f64; 6],
+    /// Adjustments of all followers.
+    pub adjustments: u64,
+    /// Steps flown alone, all followers.
+    pub alone_steps: u64,
+    /// Per-UAV detail for the first followers.
+    pub per_uav: Vec<UavStats>,
+    /// Smallest distance between any two UAVs (m); separations beyond the sensing range are
+    /// not tracked and count as the sensing range.
+    pub min_separation_m: f64,
+    /// RMS model error σm per state parameter over all follower steps.
+    pub model_error_rms: [f64; P],
+    /// Flight duration (s).
+    pub duration_s: f64,
+    /// Fraction of follower steps whose course stayed inside the envelope (held).
+    pub held_fraction: f64,
+    /// Fraction of follower steps with every error within the allowable errors.
+    pub within_allowable_fraction: f64,
+    /// Mean control effort per follower step: root sum of squares of the inputs, each over its
+    /// per-step limit.
+    pub control_effort: f64,
+    /// Distinct pairs ever closer than the safety distance (as nearest neighbours).
+    pub close_pairs: u64,
+    /// Radio messages received per UAV per second.
+    pub radio_msgs_per_uav_s: f64,
+    /// Order (polarisation) |Σ v_i/|v_i|| / N: mean over the flight.
+    pub order_mean: f64,
+    /// Order: smallest over the flight.
+    pub order_min: f64,
+    /// Fraction of the UAVs in the largest connected group of the sensing graph (UAVs within
+    /// sensing range of each other): smallest over the sampled steps.
+    pub connectivity_min: f64,
+    /// Seconds per follower flown alone (nothing perceived), mean.
+    pub alone_s_per_uav: f64,
+}
+
+impl RunSummary {
+    /// Adjustments per follower per minute of flight.
+    pub fn adjustments_per_uav_minute(&self) -> f64 {
+        self.adjustments as f64 / (self.followers.max(1) as f64 * (self.duration_s / 60.0))
+    }
+}
+
+#[derive(Debug, Clone, Default)]
+struct Acc {
+    max_abs: [f64; 6],
+    sum_sq: [f64; 6],
+    adjustments: u64,
+    alone: u64,
+    held: u64,
+    within: u64,
+    follower_steps: u64,
+    effort: f64,
+}
+
+/// Observer accumulating a [`RunSummary`].
+#[derive(Debug, Clone)]
+pub struct RunMetrics {
+    nav: usize,
+    total: Acc,
+    sample: Vec<(usize, Acc)>,
+    samples: u64,
+    followers: u64,
+    min_sep: f64,
+    range: f64,
+    model_sq: State9,
+    model_n: u64,
+    allowable: [f64; 6],
+    close: std::collections::BTreeSet<(u32, u32)>,
+    radio_msgs: u64,
+    uav_steps: u64,
+    order_sum: f64,
+    order_min: f64,
+    connectivity_min: f64,
+    dt: f64,
+    grid: proxform_core::grid::NeighbourGrid,
+}
+
+/// Steps between connectivity samples for swarms larger than [`CONNECTIVITY_EVERY_STEP_UP_TO`].
+const CONNECTIVITY_STRIDE: u64 = 50;
+/// Formations up to this size get their connectivity measured at every step.
+const CONNECTIVITY_EVERY_STEP_UP_TO: usize = 64;
+
+impl RunMetrics {
+    /// Metrics for `scenario`.
+    pub fn new(scenario: &Scenario) -> Self {
+        let nav = scenario.navigator().index();
+        let sample =
+            (0..scenario.len()).filter(|&i| i != nav).take(PER_UAV_SAMPLE).map(|i| (i, Acc::default())).collect();
+        Self {
+            nav,
+            total: Acc::default(),
+            sample,
+            samples: 0,
+            followers: scenario.len() as u64 - 1,
+            min_sep: f64::INFINITY,
+            range: scenario.controller().areas.sensing_range_m,
+            model_sq: State9::zeros(),
+            model_n: 0,
+            allowable: scenario.allowable().as_array(),
+            close: std::collections::BTreeSet::new(),
+            radio_msgs: 0,
+            uav_steps: 0,
+            order_sum: 0.0,
+            order_min: f64::INFINITY,
+            connectivity_min: f64::INFINITY,
+            dt: scenario.dt_s(),
+            grid: proxform_core::grid::NeighbourGrid::new(),
+        }
+    }
+
+    /// Fraction of the active UAVs in the largest group connected by sensing range.
+    fn connectivity(&mut self, frame: &StepFrame<'_>) -> f64 {
+        let states = frame.states;
+        let n = states.len();
+        let active = frame.active;
+        self.grid.rebuild_ids(
+            states.iter().enumerate().filter(|(i, _)| active[*i]).map(|(i, s)| (i as u32, [s[0], s[1], s[2]])),
+            self.range,
+        );
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(p: &mut [u32], mut x: u32) -> u32 {
+            while p[x as usize] != x {
+                let up = p[p[x as usize] as usize];
+                p[x as usize] = up;
+                x = up;
+            }
+            x
+        }
+        for (i, s) in states.iter().enumerate() {
+            if !active[i] {
+                continue;
+            }
+            self.grid.for_each_within([s[0], s[1], s[2]], self.range, |j, _, _| {
+                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            });
+        }
+        let mut size = vec![0u32; n];
+        let mut total = 0u32;
+        for i in 0..n {
+            if active[i] {
+                let r = find(&mut parent, i as u32);
+                size[r as usize] += 1;
+                total += 1;
+            }
+        }
+        f64::from(size.into_iter().max().unwrap_or(0)) / f64::from(total.max(1))
+    }
+
+    /// The summary of run `run` lasting `duration_s`.
+    pub fn finish(self, run: u64, duration_s: f64) -> RunSummary {
+        let steps = self.samples.max(1) as f64;
+        let rms = |a: &Acc, n: f64| a.sum_sq.map(|v| (v / n).sqrt());
+        let pass = self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a);
+        let mn = self.model_n.max(1) as f64;
+        let mut model_error_rms = [0.0; P];
+        for (k, v) in model_error_rms.iter_mut().enumerate() {
+            *v = (self.model_sq[k] / mn).sqrt();
+        }
+        let fs = self.total.follower_steps.max(1) as f64;
+        RunSummary {
+            held_fraction: self.total.held as f64 / fs,
+            within_allowable_fraction: self.total.within as f64 / fs,
+            control_effort: self.total.effort / fs,
+            close_pairs: self.close.len() as u64,
+            radio_msgs_per_uav_s: self.radio_msgs as f64 / (self.uav_steps.max(1) as f64 * self.dt),
+            order_mean: self.order_sum / steps,
+            order_min: if self.order_min.is_finite() { self.order_min } else { 1.0 },
+            connectivity_min: if self.connectivity_min.is_finite() { self.connectivity_min } else { 1.0 },
+            alone_s_per_uav: self.total.alone as f64 * self.dt / self.followers.max(1) as f64,
+            run,
+            pass,
+            followers: self.followers,
+            max_abs_error: self.total.max_abs,
+            rms_error: rms(&self.total, steps * self.followers.max(1) as f64),
+            adjustments: self.total.adjustments,
+            alone_steps: self.total.alone,
+            per_uav: self
+                .sample
+                .iter()
+                .map(|(i, a)| UavStats {
+                    uav: *i as u32,
+                    max_abs_error: a.max_abs,
+                    rms_error: rms(a, steps),
+                    adjustments: a.adjustments,
+                    alone_steps: a.alone,
+                })
+                .collect(),
+            min_separation_m: self.min_sep.min(self.range),
+            model_error_rms,
+            duration_s,
+        }
+    }
+}
+
+#[inline]
+fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<Outcome>) {
+    acc.follower_steps += 1;
+    for k in 0..6 {
+        let a = e[k].abs();
+        if a > acc.max_abs[k] {
+            acc.max_abs[k] = a;
+        }
+        acc.sum_sq[k] += e[k] * e[k];
+    }
+    match outcome {
+        Some(Outcome::Adjusted { .. }) => acc.adjustments += 1,
+        Some(Outcome::Alone) => acc.alone += 1,
+        Some(Outcome::Held) => acc.held += 1,
+        None => {}
+    }
+}
+
+/// Followers per chunk of the (possibly parallel) metric pass; partial results are combined
+/// in chunk order, so the result does not depend on the number of threads.
+const CHUNK: usize = 4096;
+
+/// Partial sums over one chunk of UAVs.
+#[derive(Debug, Clone, Default)]
+struct Partial {
+    acc: Acc,
+    model_sq: State9,
+    model_n: u64,
+    min_sep: f64,
+    close: Vec<(u32, u32)>,
+    radio_msgs: u64,
+    active: u64,
+    heading: [f64; 3],
+}
+
+fn partial(
+    nav: usize,
+    scenario: &Scenario,
+    frame: &StepFrame<'_>,
+    reference: &State9,
+    range: std::ops::Range<usize>,
+) -> Partial {
+    let mut p = Partial { min_sep: f64::INFINITY, ..Partial::default() };
+    let allowable = scenario.allowable().as_array();
+    for i in range {
+        if !frame.active[i] {
+            continue;
+        }
+        let u = &frame.uavs[i];
+        p.min_sep = p.min_sep.min(u.nearest_m);
+        if u.nearest_m < scenario.safety_distance_m() && u.nearest_id != u32::MAX {
+            let j = u.nearest_id;
+            p.close.push(((i as u32).min(j), (i as u32).max(j)));
+        }
+        p.radio_msgs += u64::from(u.radio_msgs);
+        p.active += 1;
+        let s = &frame.states[i];
+        let speed = (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]).sqrt();
+        if speed > 0.0 {
+            for k in 0..3 {
+                p.heading[k] += s[3 + k] / speed;
+            }
+        }
+        if i == nav {
+            continue;
+        }
+        let e = formation_error_to(scenario, frame.states, reference, i);
+        accumulate(&mut p.acc, &e, u.outcome);
+        if e.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a) {
+            p.acc.within += 1;
+        }
+        p.acc.effort += f64::from(u.effort);
+        match u.outcome {
+            Some(Outcome::Adjusted { .. }) => {
+                for k in 0..P {
+                    p.model_sq[k] += f64::from(u.model_error[k]).powi(2);
+                }
+                p.model_n += 1;
+            }
+            Some(Outcome::Held) => p.model_n += 1,
+            _ => {}
+        }
+    }
+    p
+}
+
+impl Observer for RunMetrics {
+    fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        use rayon::prelude::*;
+        self.samples += 1;
+        let n = frame.states.len();
+        let nav = self.nav;
+        let reference = navigator_reference(scenario, frame.states, frame.active);
+        let parts: Vec<Partial> = if n >= crate::world::engine::PARALLEL_MIN_UAVS {
+            (0..n.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|c| partial(nav, scenario, frame, &reference, c * CHUNK..((c + 1) * CHUNK).min(n)))
+                .collect()
+        } else {
+            vec![partial(nav, scenario, frame, &reference, 0..n)]
+        };
+        let mut active = 0u64;
+        let mut heading = [0.0f64; 3];
+        for p in parts {
+            for k in 0..6 {
+                self.total.max_abs[k] = self.total.max_abs[k].max(p.acc.max_abs[k]);
+                self.total.sum_sq[k] += p.acc.sum_sq[k];
+            }
+            self.total.adjustments += p.acc.adjustments;
+            self.total.alone += p.acc.alone;
+            self.total.held += p.acc.held;
+            self.total.within += p.acc.within;
+            self.total.follower_steps += p.acc.follower_steps;
+            self.total.effort += p.acc.effort;
+            self.model_sq += p.model_sq;
+            self.model_n += p.model_n;
+            self.min_sep = self.min_sep.min(p.min_sep);
+            self.close.extend(p.close);
+            self.radio_msgs += p.radio_msgs;
+            self.uav_steps += p.active;
+            active += p.active;
+            for k in 0..3 {
+                heading[k] += p.heading[k];
+            }
+        }
+        let order = (heading[0].powi(2) + heading[1].powi(2) + heading[2].powi(2)).sqrt() / (active.max(1) as f64);
+        self.order_sum += order;
+        self.order_min = self.order_min.min(order);
+        if n <= CONNECTIVITY_EVERY_STEP_UP_TO || frame.k % CONNECTIVITY_STRIDE == 0 {
+            let c = self.connectivity(frame);
+            self.connectivity_min = self.connectivity_min.min(c);
+        }
+        for (i, acc) in self.sample.iter_mut() {
+            if !frame.active[*i] {
+                continue;
+            }
+            let e = formation_error_to(scenario, frame.states, &reference, *i);
+            accumulate(acc, &e, frame.uavs[*i].outcome);
+        }
+    }
+}

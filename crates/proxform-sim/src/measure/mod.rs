@@ -1,0 +1,7 @@
+//! Measurement: observers that watch every step of a run (formation errors, metrics,
+//! trajectories) and the statistics over runs.
+
+pub mod metrics;
+pub mod observer;
+pub mod stats;
+pub mod trajectory;

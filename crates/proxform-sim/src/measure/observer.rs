@@ -1,0 +1,116 @@
+//! Observers see every step of a run; metrics and recorders are observers.
+//!
+//! The engine calls [`Observer::on_step`] once with the initial states (k = 0, no decisions)
+//! and once after every step with the new states and the decisions that produced them.
+
+use proxform_core::state::State9;
+use proxform_core::Outcome;
+
+use proxform_scenario::Scenario;
+
+/// One step as the engine hands it to observers.
+#[derive(Debug, Clone, Copy)]
+pub struct StepFrame<'a> {
+    /// Step index k (0 = initial state).
+    pub k: u64,
+    /// Time t_k (s).
+    pub t: f64,
+    /// True states at t_k, indexed by UAV.
+    pub states: &'a [State9],
+    /// Per UAV: what its last update produced.
+    pub uavs: &'a [UavStep],
+    /// Per UAV: flying (false once removed, or before it joins).
+    pub active: &'a [bool],
+}
+
+/// What one UAV's update produced, besides its next state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UavStep {
+    /// The controller's outcome at t_{k−1} (None for the navigator and at k = 0).
+    pub outcome: Option<Outcome>,
+    /// Effect on the state of the actuation error of the last step (true minus commanded):
+    /// the model error σm of eq. 17. Kept in f32: it only feeds an RMS statistic.
+    pub model_error: [f32; 9],
+    /// Distance to its nearest neighbour within the sensing range at t_k (m; ∞ if none).
+    pub nearest_m: f64,
+    /// That neighbour (`u32::MAX` if none).
+    pub nearest_id: u32,
+    /// Radio messages it received in the step.
+    pub radio_msgs: u16,
+    /// Size of its input: the root sum of squares of each input over its per-step limit.
+    pub effort: f32,
+}
+
+impl Default for UavStep {
+    fn default() -> Self {
+        Self {
+            outcome: None,
+            model_error: [0.0; 9],
+            nearest_m: f64::INFINITY,
+            nearest_id: u32::MAX,
+            radio_msgs: 0,
+            effort: 0.0,
+        }
+    }
+}
+
+/// Something that watches a run.
+pub trait Observer {
+    /// Called for the initial state and after every step.
+    fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>);
+}
+
+impl<A: Observer, B: Observer> Observer for (A, B) {
+    fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        self.0.on_step(scenario, frame);
+        self.1.on_step(scenario, frame);
+    }
+}
+
+/// Formation errors of UAV `i` relative to the reference `nav_state` (METHOD §7):
+/// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped). W is the one
+/// the controllers use: for a formation that turns by banking (the controller's
+/// `bank_turn_feedforward`, the fixed wing) the slot's heading and bank in the turn are part of
+/// it, so a wing UAV flying along its own velocity in a coordinated turn is not counted as a
+/// yaw error.
+#[inline]
+pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &State9, i: usize) -> [f64; 6] {
+    let nav = scenario.navigator().index();
+    let f = &scenario.formation();
+    let mut slot = *nav_state;
+    if scenario.controller().bank_turn_feedforward {
+        f.add_w_turning(&f.slots[i], &f.slots[nav], nav_state, &mut slot);
+    } else {
+        f.add_w(&f.slots[i], &f.slots[nav], nav_state, &mut slot);
+    }
+    let e = proxform_core::state::difference(&states[i], &slot);
+    [e[0], e[1], e[2], e[6], e[7], e[8]]
+}
+
+/// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
+/// over flying followers of `X_i − W_i,nav` (attitudes averaged as small differences from the
+/// first follower's).
+pub fn navigator_reference(scenario: &Scenario, states: &[State9], active: &[bool]) -> State9 {
+    let nav = scenario.navigator().index();
+    if active[nav] {
+        return states[nav];
+    }
+    let f = &scenario.formation();
+    let mut sum = State9::zeros();
+    let mut base: Option<State9> = None;
+    let mut n = 0.0;
+    for (i, s) in states.iter().enumerate() {
+        if i == nav || !active[i] {
+            continue;
+        }
+        let w = f.w(&f.slots[i], &f.slots[nav], s);
+        let implied = s - w;
+        let b = *base.get_or_insert(implied);
+        sum += proxform_core::state::difference(&implied, &b);
+        n += 1.0;
+    }
+    match base {
+        Some(b) => b + sum / n,
+        None => states[nav],
+    }
+}

@@ -1,0 +1,10 @@
+//! The simulated world: the engine and what it simulates around the agents (onboard sensing,
+//! radio, wind and turbulence, per-UAV environment, faults in force).
+
+pub mod engine;
+pub mod environment;
+pub mod faults;
+pub mod options;
+pub mod radio;
+pub mod sensing;
+pub mod wind;

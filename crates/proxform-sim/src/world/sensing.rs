@@ -1,0 +1,278 @@
+//! The onboard proximity sensor: what one UAV perceives of the others at one instant.
+//!
+//! A UAV's sensors report, within the sensing range, the nearest UAV in each of its azimuth
+//! areas (METHOD §2) and the main references it tracks, each with white measurement noise.
+//! Areas are taken from the true relative geometry; the controller re-sorts the noisy reports
+//! into its own areas. Candidates come from the neighbour grid, or from every UAV for the naive
+//! all-pairs reference search.
+
+use proxform_core::azimuth::AreaClassifier;
+use proxform_core::grid::NeighbourGrid;
+use proxform_core::state::{self, State9};
+use proxform_core::{DependencySet, Observation, ObservationSource, UavId};
+use proxform_scenario::radio::RadioModel;
+use proxform_scenario::Scenario;
+
+use super::options::NeighbourSearch;
+use crate::random::{Source, StepRng, StreamKey, Ziggurat};
+
+/// What every UAV's sensors look at in one step: the true states, the neighbour index over
+/// them and how it is searched.
+#[derive(Debug, Clone, Copy)]
+pub struct Scene<'a> {
+    /// True states, indexed by UAV.
+    pub states: &'a [State9],
+    /// The grid over the active UAVs' positions (used with [`NeighbourSearch::Grid`]).
+    pub grid: &'a NeighbourGrid,
+    /// How candidates are found.
+    pub search: NeighbourSearch,
+    /// Every UAV's dependency table: its sensor tracks its main references.
+    pub dependencies: &'a [DependencySet],
+}
+
+/// The two random streams of one UAV's perception at one step.
+#[derive(Debug, Clone)]
+pub struct PerceptionDraws {
+    /// Onboard noise and dropout.
+    pub sensing: StepRng,
+    /// Radio losses.
+    pub radio: StepRng,
+}
+
+/// Per-thread working memory of the sensor.
+#[derive(Debug, Clone)]
+pub struct SensorScratch {
+    /// Nearest candidate per area: squared distance (∞ when empty) and id.
+    best_d2: Vec<f64>,
+    best_id: Vec<u32>,
+    /// Main references found in range.
+    refs: Vec<u32>,
+}
+
+impl SensorScratch {
+    /// Scratch for `m` areas.
+    pub fn new(m: usize) -> Self {
+        Self { best_d2: vec![f64::INFINITY; m], best_id: vec![0; m], refs: Vec::with_capacity(8) }
+    }
+}
+
+/// The sensor model shared by all UAVs of a scenario.
+#[derive(Debug, Clone)]
+pub struct ProximitySensor {
+    classifier: AreaClassifier,
+    range_m: f64,
+    sigma: State9,
+}
+
+impl ProximitySensor {
+    /// A sensor with `m` areas, range `range_m` and noise σ per parameter.
+    pub fn new(m: usize, range_m: f64, sigma: State9) -> Self {
+        Self { classifier: AreaClassifier::new(m), range_m, sigma }
+    }
+
+    /// Appends to `out` what UAV `i` perceives of `scene` through `link`; returns the distance
+    /// to its nearest neighbour within range (∞ if none) and that neighbour.
+    pub fn perceive(
+        &self,
+        i: usize,
+        scene: &Scene<'_>,
+        link: &Link<'_>,
+        draws: &mut PerceptionDraws,
+        scratch: &mut SensorScratch,
+        out: &mut Vec<Observation>,
+    ) -> (f64, u32) {
+        let states = scene.states;
+        let deps = &scene.dependencies[i];
+        let rng = &mut draws.sensing;
+        let start = out.len();
+        let me = &states[i];
+        let (sin_yaw, cos_yaw) = me[state::BETA].sin_cos();
+        scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
+        scratch.refs.clear();
+        let mut nearest2 = f64::INFINITY;
+        let mut nearest_id = u32::MAX;
+        let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
+            if j as usize == i {
+                return;
+            }
+            if d2 < nearest2 {
+                nearest2 = d2;
+                nearest_id = j;
+            }
+            let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
+            // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
+            let better = d2 < scratch.best_d2[a];
+            scratch.best_id[a] = if better { j } else { scratch.best_id[a] };
+            scratch.best_d2[a] = if better { d2 } else { scratch.best_d2[a] };
+        };
+        let p = [me[0], me[1], me[2]];
+        match scene.search {
+            NeighbourSearch::Grid => scene.grid.for_each_within(p, self.range_m, &mut consider),
+            NeighbourSearch::AllPairs => {
+                let r2 = self.range_m * self.range_m;
+                for (j, s) in states.iter().enumerate() {
+                    if !link.active[j] {
+                        continue;
+                    }
+                    let q = [s[0], s[1], s[2]];
+                    let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                    if d2 <= r2 {
+                        consider(j as u32, &q, d2);
+                    }
+                }
+            }
+        }
+        // Main references within range (the sensor tracks them), when onboard sensing is used.
+        let r2 = self.range_m * self.range_m;
+        let tracked = if link.onboard { deps.refs() } else { &[] };
+        for &(id, _) in tracked {
+            let Some(q) = states.get(id.index()) else { continue };
+            if !link.active[id.index()] {
+                continue;
+            }
+            let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+            if id.index() != i && d2 <= r2 {
+                scratch.refs.push(id.0);
+            }
+        }
+        // Deterministic report order: areas in order, then references by id.
+        scratch.refs.sort_unstable();
+        if !link.onboard {
+            // Only the nearest neighbour was wanted (for the separation metric).
+            scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
+        }
+        // Observations of main references are lost with their own probability.
+        let loss = |j: u32| {
+            if link.reference_dropout != link.dropout && deps.refs().iter().any(|r| r.0 .0 == j) {
+                link.reference_dropout
+            } else {
+                link.dropout
+            }
+        };
+        for a in 0..scratch.best_d2.len() {
+            if scratch.best_d2[a] < f64::INFINITY && kept(loss(scratch.best_id[a]), rng) {
+                out.push(self.observe(scratch.best_id[a], states, rng));
+            }
+        }
+        for k in 0..scratch.refs.len() {
+            let j = scratch.refs[k];
+            let picked =
+                (0..scratch.best_d2.len()).any(|a| scratch.best_d2[a] < f64::INFINITY && scratch.best_id[a] == j);
+            if !picked && kept(link.reference_dropout, rng) {
+                out.push(self.observe(j, states, rng));
+            }
+        }
+        // Messages heard over the radio (crate::radio), unless the sender is perceived onboard.
+        if let (true, Some(sent)) = (link.radio_up, link.sent) {
+            let radio = link.radio;
+            let r2 = radio.range_m * radio.range_m;
+            let n = states.len();
+            for &(j, ref state) in link.broadcasts {
+                let j = j as usize;
+                if j == i || j >= n || !link.active[j] || out[start..].iter().any(|o| o.id.index() == j) {
+                    continue;
+                }
+                let q = &sent[j];
+                let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                if d2 > r2 || !super::radio::delivered(radio, link.channel_bad, &mut draws.radio) {
+                    continue;
+                }
+                out.push(Observation {
+                    id: UavId(j as u32),
+                    state: *state,
+                    age_s: link.delay_s,
+                    source: ObservationSource::Radio,
+                });
+            }
+        }
+        (nearest2.sqrt(), nearest_id)
+    }
+
+    #[inline]
+    fn observe(&self, j: u32, states: &[State9], rng: &mut StepRng) -> Observation {
+        Observation {
+            id: UavId(j),
+            state: noisy(&states[j as usize], &self.sigma, rng),
+            age_s: 0.0,
+            source: ObservationSource::Onboard,
+        }
+    }
+}
+
+/// What the links allow this step.
+#[derive(Debug, Clone, Copy)]
+pub struct Link<'a> {
+    /// Which UAVs are flying (removed or not yet joined ones are not).
+    pub active: &'a [bool],
+    /// Probability that an onboard observation is lost.
+    pub dropout: f64,
+    /// Probability that an onboard observation of one of the receiver's main references is
+    /// lost.
+    pub reference_dropout: f64,
+    /// False during a radio blackout.
+    pub radio_up: bool,
+    /// The radio model.
+    pub radio: &'a RadioModel,
+    /// True states when the messages arriving now were sent (None before the first arrive).
+    pub sent: Option<&'a [State9]>,
+    /// The messages arriving now, in the order they are heard: each sender and the state it
+    /// sent (its own measured state then, see [`broadcasts`]).
+    pub broadcasts: &'a [(u32, State9)],
+    /// Age of a radio message on arrival (s).
+    pub delay_s: f64,
+    /// The receiver's Gilbert-Elliott channel is in its bad state.
+    pub channel_bad: bool,
+    /// Whether the receiver's controller uses onboard sensing (false: radio messages only;
+    /// the nearest neighbour is still found, for the separation metric).
+    pub onboard: bool,
+}
+
+/// Fills `out` with the messages sent at the step of `key` from the true states `sent`: the
+/// beacons first, then, when every UAV broadcasts, the others by id; each carries its
+/// sender's own measured state, drawn from the sender's own-state noise stream. Computed once
+/// per step for all receivers.
+pub fn broadcasts(sc: &Scenario, sent: &[State9], key: StreamKey, parallel: bool, out: &mut Vec<(u32, State9)>) {
+    let (radio, beacons, sigma) = (sc.radio(), sc.beacons(), sc.noise().sigma());
+    let n = sent.len();
+    let all = if radio.broadcast_all { n } else { 0 };
+    out.clear();
+    out.extend(
+        beacons
+            .iter()
+            .map(|b| b.index())
+            .chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)))
+            .filter(|&j| j < n)
+            .map(|j| (j as u32, State9::zeros())),
+    );
+    let fill = |m: &mut (u32, State9)| {
+        let j = m.0 as usize;
+        let mut own_rng = key.rng(j as u64, Source::OwnState);
+        m.1 = noisy(&sent[j], &sigma, &mut own_rng);
+    };
+    if parallel {
+        use rayon::prelude::*;
+        out.par_iter_mut().with_min_len(1024).for_each(fill);
+    } else {
+        out.iter_mut().for_each(fill);
+    }
+}
+
+/// Draws whether an observation survives a dropout of probability `p`.
+#[inline]
+fn kept(p: f64, rng: &mut StepRng) -> bool {
+    p <= 0.0 || ((rng.next_u64() >> 11) as f64) / ((1u64 << 53) as f64) >= p
+}
+
+/// `x` plus white Gaussian noise of standard deviation `sigma` per parameter.
+#[inline]
+pub fn noisy(x: &State9, sigma: &State9, rng: &mut StepRng) -> State9 {
+    let z = Ziggurat::get();
+    let mut s = *x;
+    for k in (0..8).step_by(2) {
+        let (a, b) = z.pair(rng);
+        s[k] += sigma[k] * a;
+        s[k + 1] += sigma[k + 1] * b;
+    }
+    s[8] += sigma[8] * z.sample(rng);
+    s
+}
