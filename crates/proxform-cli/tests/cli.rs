@@ -1,6 +1,6 @@
 //! The `proxform` binary as a user runs it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn proxform() -> Command {
@@ -66,10 +66,38 @@ fn run_writes_the_table_the_summary_and_the_figures() {
             assert!(std::fs::metadata(&p).map(|m| m.len() > 1000).unwrap_or(false), "{}", p.display());
         }
     }
+    // The figures draw data, not only axes: coloured curve pixels in the plot area (the
+    // middle of the picture), for the curves of the UAVs and of their errors.
+    for fig in ["fig5_y", "fig10c_plan"] {
+        let (coloured, total) = coloured_pixels(&out.join(format!("{fig}.png")));
+        assert!(coloured > total / 200, "{fig}: only {coloured} of {total} pixels in the plot area are coloured");
+    }
     let csv = std::fs::read_to_string(out.join("trajectories.csv")).expect("trajectories.csv");
     let mut lines = csv.lines();
     assert!(lines.next().is_some_and(|h| h.starts_with("t_s,uav,x_m")));
     assert_eq!(lines.count(), 6 * 1001);
+}
+
+/// Pixels of saturated colour (curves; axes, grid and text are grey) in the middle 80 % of a
+/// PNG, and the number of pixels there.
+fn coloured_pixels(path: &Path) -> (usize, usize) {
+    let decoder = png::Decoder::new(std::fs::File::open(path).expect("png"));
+    let mut reader = decoder.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    let channels = info.color_type.samples();
+    assert!(channels >= 3, "{}: not an RGB image", path.display());
+    let (w, h) = (info.width as usize, info.height as usize);
+    let (mut coloured, mut total) = (0, 0);
+    for y in h / 10..h * 9 / 10 {
+        for x in w / 10..w * 9 / 10 {
+            let p = &buf[(y * w + x) * channels..][..3];
+            let (max, min) = (p.iter().max().copied().unwrap_or(0), p.iter().min().copied().unwrap_or(0));
+            coloured += usize::from(max - min > 60);
+            total += 1;
+        }
+    }
+    (coloured, total)
 }
 
 #[test]

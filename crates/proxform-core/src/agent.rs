@@ -154,3 +154,82 @@ impl Agent {
         self.controller.heap_bytes() + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<State9>())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::controller::{ControllerParams, Outcome};
+    use crate::formation::{FormationFrame, FormationSlot};
+    use crate::observation::ObservationSource;
+    use crate::state::{VX, Y};
+    use crate::vehicle::KinematicModel;
+
+    fn setup(gain: f64) -> AgentSetup {
+        let params = ControllerParams { own_filter_gain: gain, ..ControllerParams::default() };
+        let controller =
+            ControllerSetup::new(params, VehicleModel::Kinematic(KinematicModel::default())).expect("valid");
+        let slots = vec![FormationSlot::at(0.0, 0.0, 0.0), FormationSlot::at(-100.0, 50.0, 0.0)];
+        let formation = Arc::new(Formation::new(slots, FormationFrame::World).expect("finite"));
+        let deps =
+            vec![DependencySet::default(), DependencySet::new(UavId(1), 2, vec![(UavId(0), 1.0)]).expect("valid")];
+        AgentSetup::new(Method::Proximity, UavId(0), controller, formation, deps).expect("valid")
+    }
+
+    fn leader(t: f64) -> Observation {
+        let mut s = State9::zeros();
+        s[0] = 70.0 * t;
+        s[VX] = 70.0;
+        Observation { id: UavId(0), state: s, age_s: 0.0, source: ObservationSource::Onboard }
+    }
+
+    #[test]
+    fn an_agent_in_its_slot_holds_and_one_off_its_slot_adjusts() {
+        let setup = setup(1.0);
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        let mut own = State9::zeros();
+        own[0] = -100.0;
+        own[Y] = 50.0;
+        own[VX] = 70.0;
+        for k in 0..5 {
+            let t = k as f64 * 0.1;
+            let mut me = own;
+            me[0] += 70.0 * t;
+            assert_eq!(agent.step(t, &me, &[leader(t)]).outcome, Outcome::Held, "step {k}");
+        }
+        let mut off = own;
+        off[0] += 70.0 * 0.5;
+        off[Y] += 3.0;
+        let d = agent.step(0.5, &off, &[leader(0.5)]);
+        assert!(matches!(d.outcome, Outcome::Adjusted { .. }), "{d:?}");
+        assert!(d.input[1] < 0.0, "it moves right, back toward its slot: {:?}", d.input);
+        // The leader missing for one period coasts on its track; gone for longer than
+        // `coast_s`, nothing is left: alone.
+        assert!(matches!(agent.step(0.6, &off, &[]).outcome, Outcome::Adjusted { .. }));
+        assert_eq!(agent.step(2.0, &off, &[]).outcome, Outcome::Alone);
+    }
+
+    #[test]
+    fn the_own_state_filter_blends_the_measurement_with_the_prediction() {
+        // With gain 1 the measurement is used as is; with gain 0.5 a single jump of the
+        // measurement moves the estimate half way, so the decisions differ.
+        let setup_raw = setup(1.0);
+        let setup_filtered = setup(0.5);
+        let mut raw = Agent::new(&setup_raw, UavId(1)).expect("valid");
+        let mut filtered = Agent::new(&setup_filtered, UavId(1)).expect("valid");
+        let mut own = State9::zeros();
+        own[0] = -100.0;
+        own[Y] = 50.0;
+        own[VX] = 70.0;
+        raw.step(0.0, &own, &[leader(0.0)]);
+        filtered.step(0.0, &own, &[leader(0.0)]);
+        let mut jumped = own;
+        jumped[0] += 7.0;
+        jumped[Y] += 0.4;
+        let a = raw.step(0.1, &jumped, &[leader(0.1)]);
+        let b = filtered.step(0.1, &jumped, &[leader(0.1)]);
+        assert_ne!(a.input, b.input);
+        assert!(b.input[1].abs() < a.input[1].abs(), "{:?} vs {:?}", b.input, a.input);
+        filtered.forget_own_estimate();
+        assert!(filtered.heap_bytes() > 0);
+    }
+}

@@ -280,3 +280,53 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         per_uav_adjustments: per_uav_adj,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_scenario::builtin::paper;
+
+    fn run(k: u64, max_y: f64, model: f64, pass: bool) -> RunSummary {
+        RunSummary {
+            run: k,
+            pass,
+            followers: 5,
+            max_abs_error: [0.1, max_y, 0.1, 0.001, 0.001, 0.001],
+            rms_error: [0.02; 6],
+            adjustments: 300,
+            alone_steps: 0,
+            per_uav: Vec::new(),
+            min_separation_m: 90.0 + k as f64,
+            model_error_rms: [model; 9],
+            duration_s: 60.0,
+            held_fraction: 0.5,
+            within_allowable_fraction: 1.0,
+            control_effort: 0.1,
+            close_pairs: k,
+            radio_msgs_per_uav_s: 0.0,
+            order_mean: 1.0,
+            order_min: 1.0,
+            connectivity_min: 1.0,
+            alone_s_per_uav: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_summary_aggregates_runs_and_predicts_eq_17s_band() {
+        let sc = paper();
+        // 100 runs whose largest y errors are 0.01, 0.02, … 1.00 m; half of them pass.
+        let runs: Vec<RunSummary> = (0..100).map(|k| run(k, 0.01 * (k + 1) as f64, 0.03, k % 2 == 0)).collect();
+        let s = aggregate(&sc, 7, &runs);
+        assert_eq!(s.pass_fraction, 0.5);
+        assert!((s.p99_abs_error.y_m - 0.99).abs() < 1e-12 && (s.median_abs_error.y_m - 0.5).abs() < 1e-12);
+        assert_eq!(s.worst_abs_error.y_m, 1.0);
+        assert_eq!((s.min_separation_m, s.unsafe_runs), (90.0, 0));
+        assert_eq!(s.swarm.close_pairs_max, 99);
+        // 300 adjustments by 5 followers in one minute.
+        assert!((s.adjustments_per_uav_minute - 60.0).abs() < 1e-9);
+        // eq. 17: σ = sqrt(σm² + σn²), σn the paper's 0.02 m.
+        assert!((s.predicted_sigma.x_m - (0.03f64.powi(2) + 0.02f64.powi(2)).sqrt()).abs() < 1e-12);
+        let sigma_att = (0.03f64.powi(2) + 0.01f64.to_radians().powi(2)).sqrt().to_degrees();
+        assert!((s.predicted_sigma.alpha_deg - sigma_att).abs() < 1e-9, "{:?}", s.predicted_sigma);
+    }
+}

@@ -379,3 +379,89 @@ impl Observer for RunMetrics {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::measure::observer::UavStep;
+    use proxform_core::state::{VX, X, Y};
+    use proxform_scenario::builtin::paper;
+
+    /// The paper's six UAVs in their slots around a navigator at the origin flying along x.
+    fn in_slots(sc: &Scenario) -> Vec<State9> {
+        let mut nav = State9::zeros();
+        nav[VX] = 70.0;
+        (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect()
+    }
+
+    fn frame<'a>(k: u64, states: &'a [State9], uavs: &'a [UavStep], active: &'a [bool]) -> StepFrame<'a> {
+        StepFrame { k, t: k as f64 * 0.1, states, uavs, active }
+    }
+
+    fn step(outcome: Outcome, effort: f32) -> UavStep {
+        UavStep { outcome: Some(outcome), effort, nearest_m: 100.0, nearest_id: 0, ..UavStep::default() }
+    }
+
+    #[test]
+    fn a_formation_split_in_two_is_half_connected_and_opposite_headings_have_no_order() {
+        let sc = paper();
+        let mut states = in_slots(&sc);
+        // UAVs 4-6 10 km away, flying the other way.
+        for s in &mut states[3..] {
+            s[X] += 10_000.0;
+            s[VX] = -s[VX];
+        }
+        let uavs = vec![UavStep::default(); 6];
+        let active = [true; 6];
+        let mut m = RunMetrics::new(&sc);
+        m.on_step(&sc, &frame(0, &states, &uavs, &active));
+        let r = m.finish(0, 0.1);
+        assert_eq!(r.connectivity_min, 0.5);
+        assert!(r.order_mean.abs() < 1e-12, "{}", r.order_mean);
+        // The same formation together and aligned: connected, ordered.
+        let mut m = RunMetrics::new(&sc);
+        m.on_step(&sc, &frame(0, &in_slots(&sc), &uavs, &active));
+        let r = m.finish(0, 0.1);
+        assert_eq!((r.connectivity_min, r.order_min), (1.0, 1.0));
+    }
+
+    #[test]
+    fn errors_fractions_effort_and_close_pairs_are_what_the_frames_say() {
+        let sc = paper();
+        let good = in_slots(&sc);
+        let mut off = good.clone();
+        off[2][Y] += 0.9; // UAV3 0.9 m off its slot: beyond the allowable 0.6 m
+        let active = [true; 6];
+        // Step 1: all held, no effort. Step 2: UAVs 2-6 adjusted with effort 0.5, UAV3 off,
+        // and UAV4 within 30 m of UAV5 (closer than the 50 m safety distance).
+        let mut held: Vec<UavStep> = (0..6).map(|_| step(Outcome::Held, 0.0)).collect();
+        held[0].outcome = None;
+        let mut adjusted: Vec<UavStep> = (0..6).map(|_| step(Outcome::Adjusted { normalised_sq: 1.0 }, 0.5)).collect();
+        adjusted[0].outcome = None;
+        adjusted[3].nearest_m = 30.0;
+        adjusted[3].nearest_id = 4;
+        adjusted[4].nearest_m = 30.0;
+        adjusted[4].nearest_id = 3;
+        for u in &mut adjusted[1..] {
+            u.model_error = [0.03; 9];
+        }
+        let mut m = RunMetrics::new(&sc);
+        m.on_step(&sc, &frame(1, &good, &held, &active));
+        m.on_step(&sc, &frame(2, &off, &adjusted, &active));
+        let r = m.finish(0, 0.2);
+        assert!(!r.pass);
+        assert!((r.max_abs_error[1] - 0.9).abs() < 1e-9, "{:?}", r.max_abs_error);
+        assert_eq!(r.max_abs_error[0], 0.0);
+        // 10 follower steps: 5 held, 5 adjusted, 9 within the allowable errors.
+        assert_eq!(r.held_fraction, 0.5);
+        assert_eq!(r.within_allowable_fraction, 0.9);
+        assert_eq!(r.adjustments, 5);
+        assert!((r.control_effort - 0.25).abs() < 1e-9, "{}", r.control_effort);
+        assert_eq!(r.close_pairs, 1, "UAVs 4 and 5 are one pair");
+        assert_eq!(r.min_separation_m, 30.0);
+        // σm: RMS over the held and adjusted steps of the model error (zero when held).
+        assert!((r.model_error_rms[0] - 0.03 / 2f64.sqrt()).abs() < 1e-6, "{:?}", r.model_error_rms);
+        // RMS y error over 2 steps × 5 followers: 0.9 once.
+        assert!((r.rms_error[1] - (0.81f64 / 10.0).sqrt()).abs() < 1e-9, "{:?}", r.rms_error);
+    }
+}

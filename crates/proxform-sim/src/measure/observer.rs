@@ -78,11 +78,7 @@ pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &St
     let nav = scenario.navigator().index();
     let f = &scenario.formation();
     let mut slot = *nav_state;
-    if scenario.controller().bank_turn_feedforward {
-        f.add_w_turning(&f.slots[i], &f.slots[nav], nav_state, &mut slot);
-    } else {
-        f.add_w(&f.slots[i], &f.slots[nav], nav_state, &mut slot);
-    }
+    f.add_w_with(scenario.controller().bank_turn_feedforward, &f.slots[i], &f.slots[nav], nav_state, &mut slot);
     let e = proxform_core::state::difference(&states[i], &slot);
     [e[0], e[1], e[2], e[6], e[7], e[8]]
 }
@@ -112,5 +108,36 @@ pub fn navigator_reference(scenario: &Scenario, states: &[State9], active: &[boo
     match base {
         Some(b) => b + sum / n,
         None => states[nav],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_core::state::{BETA, VX, X, Y, Z};
+    use proxform_scenario::builtin::paper;
+
+    #[test]
+    fn the_error_is_the_offset_from_the_slot_and_a_lost_navigator_is_estimated_from_the_slots() {
+        let sc = paper();
+        let mut nav = State9::zeros();
+        nav[VX] = 70.0;
+        nav[Z] = 300.0;
+        let mut states: Vec<State9> = (0..6).map(|i| sc.slot_state(i, &nav)).collect();
+        states[4][X] += 1.0;
+        states[4][Y] -= 2.0;
+        states[4][BETA] += 0.01;
+        let e = formation_error_to(&sc, &states, &nav, 4);
+        for (k, want) in [1.0, -2.0, 0.0, 0.0, 0.01, 0.0].into_iter().enumerate() {
+            assert!((e[k] - want).abs() < 1e-9, "component {k}: {} vs {want}", e[k]);
+        }
+        assert_eq!(formation_error_to(&sc, &states, &nav, 2), [0.0; 6]);
+        // Without the navigator, the reference is the mean of the followers' implied
+        // navigator states: UAV5's offset moves it by a fifth.
+        let mut active = [true; 6];
+        assert_eq!(navigator_reference(&sc, &states, &active), nav);
+        active[0] = false;
+        let r = navigator_reference(&sc, &states, &active);
+        assert!((r[X] - 0.2).abs() < 1e-9 && (r[Y] + 0.4).abs() < 1e-9 && (r[Z] - 300.0).abs() < 1e-9, "{r:?}");
     }
 }

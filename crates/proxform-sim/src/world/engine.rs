@@ -5,7 +5,7 @@
 //! 2. **index**: the neighbour grid over the active UAVs' positions;
 //! 3. **environment**: each UAV's wind, position-fix bias and radio channel over the step;
 //! 4. **radio**: the messages arriving now, drawn once for all receivers;
-//! 5. per UAV, over blocks of [`BLOCK`] UAVs: **perceive** (onboard detections and radio
+//! 5. per UAV, over blocks of [`super::phases::BLOCK`] UAVs ([`super::phases`]): **perceive** (onboard detections and radio
 //!    messages), **estimate** (its noisy measurement of its own state), **decide** (its
 //!    [`Agent::step`]), **actuate** (the actuation error), **propagate** (vehicle and wind);
 //! 6. **measure**: the observers see the new snapshot.
@@ -18,28 +18,24 @@
 //! large swarms are stepped in parallel with identical results.
 
 use std::collections::VecDeque;
-use std::ops::Range;
 
 use proxform_core::grid::NeighbourGrid;
-use proxform_core::state::{self, Input, State9};
-use proxform_core::{Agent, Decision, Observation, ObservationSource, Outcome};
+use proxform_core::state::{self, State9};
+use proxform_core::Agent;
 use proxform_scenario::faults::{self as schedule, Fault};
 use proxform_scenario::Scenario;
-use rand::RngExt;
 use rayon::prelude::*;
 
 use super::environment::{EnvStep, UavEnv};
 use super::faults::{self, FaultStep};
 use super::options::{NeighbourSearch, RunOptions};
-use super::sensing::{noisy, Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
+use super::phases::{for_each_block, Mode, StepContext};
+use super::sensing::{noisy, ProximitySensor, Scene};
 use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::{RunKey, Source, StreamKey};
 
 /// Swarms at least this large are stepped in parallel within the run.
 pub const PARALLEL_MIN_UAVS: usize = 1024;
-
-/// UAVs per block of the per-UAV phases.
-pub const BLOCK: usize = 64;
 
 /// Step counters of the warm-up draws, far from those of the flight.
 const WARMUP_STEP_BASE: u64 = 1 << 62;
@@ -255,9 +251,9 @@ impl<'s> World<'s> {
                         // estimate of it), shifted by the offset.
                         let reference = crate::measure::observer::navigator_reference(sc, &self.current, &self.active);
                         let mut s = sc.slot_state(i, &reference);
-                        s[0] += offset_m.x;
-                        s[1] += offset_m.y;
-                        s[2] += offset_m.z;
+                        s[state::X] += offset_m.x;
+                        s[state::Y] += offset_m.y;
+                        s[state::Z] += offset_m.z;
                         self.current[i] = s;
                     }
                     self.active[i] = now;
@@ -370,297 +366,63 @@ impl<'s> World<'s> {
     }
 }
 
-/// Runs `f` on every block of [`BLOCK`] UAVs (its first index and its slices of the agents,
-/// next states and per-UAV records), in parallel or in order; each block gets the scratch of
-/// the thread that runs it.
-fn for_each_block(
-    agents: &mut [Option<Agent>],
-    next: &mut [State9],
-    uavs: &mut [UavStep],
-    areas: usize,
-    parallel: bool,
-    f: impl Fn(usize, &mut Block<'_>) + Sync + Send,
-) {
-    if parallel {
-        agents
-            .par_chunks_mut(BLOCK)
-            .zip(next.par_chunks_mut(BLOCK))
-            .zip(uavs.par_chunks_mut(BLOCK))
-            .enumerate()
-            .for_each_init(
-                || BlockScratch::new(areas),
-                |scratch, (b, ((agents, next), uavs))| f(b * BLOCK, &mut Block { agents, next, uavs, scratch }),
-            );
-    } else {
-        let mut scratch = BlockScratch::new(areas);
-        let blocks = agents.chunks_mut(BLOCK).zip(next.chunks_mut(BLOCK)).zip(uavs.chunks_mut(BLOCK));
-        for (b, ((agents, next), uavs)) in blocks.enumerate() {
-            f(b * BLOCK, &mut Block { agents, next, uavs, scratch: &mut scratch });
-        }
-    }
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_core::Outcome;
+    use proxform_scenario::builtin::paper_spec;
+    use proxform_scenario::spec::{FaultSpec, SegmentSpec};
 
-/// Which pass of the per-UAV phases a step runs.
-#[derive(Debug, Clone, Copy)]
-enum Mode<'a> {
-    /// The flight: every phase, with the scenario's radio and faults.
-    Fly,
-    /// The warm-up: perceive (over an ideal radio), estimate and decide; nothing applied.
-    Warm(&'a proxform_scenario::radio::RadioModel),
-}
-
-/// One block's slices and the scratch of the thread that runs it.
-struct Block<'b> {
-    agents: &'b mut [Option<Agent>],
-    next: &'b mut [State9],
-    uavs: &'b mut [UavStep],
-    scratch: &'b mut BlockScratch,
-}
-
-/// Per-thread working memory of the block phases, allocated once per thread and step.
-#[derive(Debug, Clone)]
-struct BlockScratch {
-    sensor: SensorScratch,
-    /// What every UAV of the block perceived, one span each.
-    heard: Vec<Observation>,
-    spans: Vec<Range<usize>>,
-    /// Each UAV's measurement of its own state.
-    own: Vec<State9>,
-    /// Each follower's decision (None: navigator or inactive).
-    decisions: Vec<Option<Decision>>,
-    /// Each follower's input as applied (with the actuation error).
-    applied: Vec<Input>,
-}
-
-impl BlockScratch {
-    fn new(areas: usize) -> Self {
-        Self {
-            sensor: SensorScratch::new(areas),
-            heard: Vec::with_capacity(BLOCK * (areas + 8)),
-            spans: Vec::with_capacity(BLOCK),
-            own: Vec::with_capacity(BLOCK),
-            decisions: Vec::with_capacity(BLOCK),
-            applied: Vec::with_capacity(BLOCK),
-        }
-    }
-}
-
-/// Read-only view of one step, shared by the threads that run the blocks.
-struct StepContext<'a> {
-    scenario: &'a Scenario,
-    options: RunOptions,
-    key: StreamKey,
-    t: f64,
-    start: [f64; 3],
-    scene: Scene<'a>,
-    sensor: &'a ProximitySensor,
-    active: &'a [bool],
-    faults: &'a FaultStep,
-    /// True states when the radio messages arriving now were sent.
-    sent: Option<&'a [State9]>,
-    /// The radio messages arriving now.
-    broadcasts: &'a [(u32, State9)],
-    /// Per-UAV environment (empty when the scenario needs none).
-    env: &'a [UavEnv],
-    mode: Mode<'a>,
-}
-
-impl StepContext<'_> {
-    /// What the links allow UAV `i` this step.
-    fn link(&self, i: usize) -> Link<'_> {
-        let sc = self.scenario;
-        let (radio, dropout, reference_dropout, radio_up, channel_bad, delay_s) = match self.mode {
-            // An ideal link; observations of main references keep their own dropout when the
-            // scenario sets one (see `Scenario::reference_dropout_set`).
-            Mode::Warm(ideal) => (ideal, 0.0, sc.reference_dropout_set().unwrap_or(0.0), true, false, 0.0),
-            Mode::Fly => (
-                sc.radio(),
-                sc.dropout(),
-                sc.reference_dropout(),
-                self.faults.radio_up,
-                self.env.get(i).is_some_and(|e| e.channel_bad),
-                f64::from(sc.radio().delay_steps) * sc.dt_s(),
-            ),
-        };
-        Link {
-            active: self.active,
-            dropout,
-            reference_dropout,
-            radio_up,
-            radio,
-            sent: self.sent,
-            broadcasts: self.broadcasts,
-            delay_s,
-            channel_bad,
-            onboard: sc.method().uses_onboard_sensing(),
-        }
+    /// The paper's formation on a straight, level path with no noise and no actuation error.
+    fn straight(edit: impl FnOnce(&mut proxform_scenario::ScenarioSpec)) -> Scenario {
+        let spec = paper_spec().with(|s| {
+            s.duration_s = Some(5.0);
+            s.path = proxform_scenario::spec::PathSpec {
+                kind: Some("segments".into()),
+                speed_kmh: Some(250.0),
+                segment: vec![SegmentSpec { duration_s: Some(10.0), ..SegmentSpec::default() }],
+                ..Default::default()
+            };
+            (s.noise.position_m, s.noise.velocity_kmh, s.noise.attitude_deg) = (Some(0.0), Some(0.0), Some(0.0));
+            s.noise.actuation_error = Some(0.0);
+            edit(s);
+        });
+        Scenario::try_from(spec).expect("valid")
     }
 
-    /// Perceive: what each active UAV of the block senses onboard and hears by radio, into
-    /// `heard`; its nearest neighbour and radio count into its record.
-    fn perceive(&self, first: usize, blk: &mut Block<'_>) {
-        let s = &mut *blk.scratch;
-        s.heard.clear();
-        s.spans.clear();
-        for (b, aux) in blk.uavs.iter_mut().enumerate() {
-            let i = first + b;
-            let from = s.heard.len();
-            if self.active[i] {
-                let uk = self.key.run().uav(i as u64);
-                let mut draws = PerceptionDraws {
-                    sensing: self.key.rng_of(uk, Source::Sensing),
-                    radio: self.key.rng_of(uk, Source::Radio),
-                };
-                let link = self.link(i);
-                let nearest = self.sensor.perceive(i, &self.scene, &link, &mut draws, &mut s.sensor, &mut s.heard);
-                if matches!(self.mode, Mode::Fly) {
-                    (aux.nearest_m, aux.nearest_id) = nearest;
-                    aux.radio_msgs =
-                        s.heard[from..].iter().filter(|o| o.source == ObservationSource::Radio).count() as u16;
-                }
+    #[test]
+    fn an_exact_formation_on_a_straight_path_holds_and_the_navigator_flies_its_path() {
+        let sc = straight(|_| {});
+        let mut sim = Simulation::new(&sc, RunOptions::default(), 1, 0);
+        for k in 1..=30u64 {
+            sim.step();
+            // The engine advances the navigator from t_(k−1) by Δt.
+            let t = (k - 1) as f64 * sc.dt_s() + sc.dt_s();
+            let nav = sc.path().state_at(t, [0.0; 3]);
+            assert_eq!(sim.states()[0], nav, "the navigator flies its path exactly");
+            for i in 1..6 {
+                assert_eq!(sim.uavs[i].outcome, Some(Outcome::Held), "UAV {} at step {k}", i + 1);
+                let e = sc.slot_state(i, &nav) - sim.states()[i];
+                assert!(e.iter().all(|v| v.abs() < 1e-6), "UAV {} drifts: {e:?}", i + 1);
             }
-            s.spans.push(from..s.heard.len());
         }
     }
 
-    /// Estimate: each active follower's noisy measurement of its own state (with its
-    /// position-fix bias and sensor faults, in flight).
-    fn estimate(&self, first: usize, blk: &mut Block<'_>) {
-        let sigma = self.scenario.noise().sigma();
-        let s = &mut *blk.scratch;
-        s.own.clear();
-        for b in 0..blk.agents.len() {
-            let i = first + b;
-            let mut own = self.scene.states[i];
-            if self.active[i] && blk.agents[b].is_some() {
-                own = noisy(&own, &sigma, &mut self.key.rng(i as u64, Source::OwnState));
-                if let (Mode::Fly, Some(e)) = (self.mode, self.env.get(i)) {
-                    for k in 0..3 {
-                        own[k] += e.gnss_bias[k];
-                    }
-                }
-                if matches!(self.mode, Mode::Fly) {
-                    self.faults.corrupt(i, &mut own);
-                }
-            }
-            s.own.push(own);
-        }
-    }
-
-    /// Decide: each active follower's agent steps on its measurement and what it perceived.
-    fn decide(&self, blk: &mut Block<'_>, first: usize) {
-        let s = &mut *blk.scratch;
-        s.decisions.clear();
-        for (b, agent) in blk.agents.iter_mut().enumerate() {
-            let decision = match agent {
-                Some(a) if self.active[first + b] => Some(a.step(self.t, &s.own[b], &s.heard[s.spans[b].clone()])),
-                _ => None,
-            };
-            s.decisions.push(decision);
-        }
-    }
-
-    /// Actuate: the input each follower applies, its command scaled by `1 + ε` per component
-    /// (the actuation error) when it adjusted.
-    fn actuate(&self, first: usize, blk: &mut Block<'_>) {
-        let sc = self.scenario;
-        let s = &mut *blk.scratch;
-        s.applied.clear();
-        for (b, d) in s.decisions.iter().enumerate() {
-            let commanded = match d {
-                Some(d) if self.options.adjustment_enabled => d.input,
-                _ => Input::zeros(),
-            };
-            let adjusted = d.is_some_and(|d| matches!(d.outcome, Outcome::Adjusted { .. }));
-            let applied = if adjusted && sc.actuation_error() > 0.0 {
-                let mut rng = self.key.rng((first + b) as u64, Source::Actuation);
-                commanded.map(|u| u * (1.0 + sc.actuation_error() * rng.random_range(-1.0..=1.0)))
-            } else {
-                commanded
-            };
-            s.applied.push(applied);
-        }
-    }
-
-    /// Propagate: each UAV's next state (the navigator along its path, a follower through its
-    /// vehicle and the wind), and what its update produced.
-    fn propagate(&self, first: usize, blk: &mut Block<'_>) {
-        let sc = self.scenario;
-        let dt = sc.dt_s();
-        let s = &*blk.scratch;
-        for b in 0..blk.agents.len() {
-            let i = first + b;
-            let (next, aux) = (&mut blk.next[b], &mut blk.uavs[b]);
-            let me = &self.scene.states[i];
-            if !self.active[i] {
-                *next = *me;
-                *aux = UavStep::default();
-                continue;
-            }
-            let (Some(agent), Some(decision)) = (&blk.agents[b], s.decisions[b]) else {
-                *next = sc.path().state_at(self.t + dt, self.start);
-                aux.outcome = None;
-                aux.model_error = [0.0; 9];
-                continue;
-            };
-            let applied = s.applied[b];
-            let commanded = if self.options.adjustment_enabled { decision.input } else { Input::zeros() };
-            // The model error is zero when the input was applied as commanded: the plant is
-            // then propagated once.
-            let exact = applied == commanded;
-            let vehicle = sc.vehicle();
-            let model_error = if sc.wind().is_calm() {
-                *next = vehicle.propagate(me, &applied, dt);
-                if exact {
-                    State9::zeros()
-                } else {
-                    state::difference(next, &vehicle.propagate(me, &commanded, dt))
-                }
-            } else {
-                // The vehicle moves through the air; the wind carries it.
-                let e = self.env.get(i).copied().unwrap_or_default();
-                let (w_now, w_next) = (e.wind_now, e.wind_next);
-                let mut air = *me;
-                for k in 0..3 {
-                    air[3 + k] -= w_now[k];
-                }
-                let carry = |mut x: State9| {
-                    for k in 0..3 {
-                        x[3 + k] += w_next[k];
-                        x[k] += 0.5 * dt * (w_now[k] + w_next[k]);
-                    }
-                    x
-                };
-                *next = carry(vehicle.propagate(&air, &applied, dt));
-                if exact {
-                    State9::zeros()
-                } else {
-                    state::difference(next, &carry(vehicle.propagate(&air, &commanded, dt)))
-                }
-            };
-            aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
-            aux.outcome = Some(decision.outcome);
-            let scale = agent.vehicle().input_scale(dt);
-            aux.effort = (0..agent.vehicle().n_inputs())
-                .map(|j| if scale[j] > 0.0 { (decision.input[j] / scale[j]).powi(2) } else { 0.0 })
-                .sum::<f64>()
-                .sqrt() as f32;
-        }
-    }
-
-    /// A flight step of the block starting at UAV `first`: every per-UAV phase.
-    fn fly(&self, first: usize, blk: &mut Block<'_>) {
-        self.perceive(first, blk);
-        self.estimate(first, blk);
-        self.decide(blk, first);
-        self.actuate(first, blk);
-        self.propagate(first, blk);
-    }
-
-    /// A warm-up step of the block: perceive, estimate, decide; nothing applied.
-    fn warm(&self, first: usize, blk: &mut Block<'_>) {
-        self.perceive(first, blk);
-        self.estimate(first, blk);
-        self.decide(blk, first);
+    #[test]
+    fn a_uav_off_its_slot_adjusts_and_a_removed_uav_stays_where_it_vanished() {
+        let sc = straight(|s| s.fault = vec![FaultSpec::remove(6, 0.0)]);
+        let mut sim = Simulation::new(&sc, RunOptions::default(), 1, 0);
+        sim.world.current[2][1] += 3.0; // UAV3 3 m left of its slot
+        let gone = sim.states()[5];
+        sim.step();
+        assert!(matches!(sim.uavs[2].outcome, Some(Outcome::Adjusted { .. })), "{:?}", sim.uavs[2].outcome);
+        assert_eq!(sim.uavs[0].outcome, None, "the navigator runs no controller");
+        assert_eq!((sim.states()[5], sim.uavs[5].outcome), (gone, None));
+        // With the adjustment switched off, the same UAV decides but does not move toward it.
+        let mut off = Simulation::new(&sc, RunOptions { adjustment_enabled: false, ..RunOptions::default() }, 1, 0);
+        off.world.current[2][1] += 3.0;
+        off.step();
+        sim.step();
+        assert!(off.states()[2][1] > sim.states()[2][1], "{} vs {}", off.states()[2][1], sim.states()[2][1]);
     }
 }

@@ -5,6 +5,7 @@ pub mod engine;
 pub mod environment;
 pub mod faults;
 pub mod options;
+pub mod phases;
 pub mod radio;
 pub mod sensing;
 pub mod wind;

@@ -276,3 +276,83 @@ pub fn noisy(x: &State9, sigma: &State9, rng: &mut StepRng) -> State9 {
     s[8] += sigma[8] * z.sample(rng);
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_core::state::{BETA, VX};
+    use proxform_core::UavId;
+    use proxform_scenario::radio::RadioModel;
+
+    /// UAV 0 at the origin flying along x; UAVs 1 and 2 ahead in the same area (1 nearer),
+    /// UAV 3 behind, UAV 4 out of range ahead; UAV 0 leans on UAV 2.
+    fn setup() -> (Vec<State9>, Vec<DependencySet>) {
+        let at = |x: f64, y: f64| {
+            let mut s = State9::zeros();
+            s[0] = x;
+            s[1] = y;
+            s[VX] = 50.0;
+            s
+        };
+        let states = vec![at(0.0, 0.0), at(100.0, 1.0), at(200.0, 2.0), at(-150.0, 0.0), at(400.0, 0.0)];
+        let mut deps = vec![DependencySet::default(); 5];
+        deps[0] = DependencySet::new(UavId(0), 5, vec![(UavId(2), 1.0)]).expect("valid");
+        (states, deps)
+    }
+
+    fn perceive(
+        states: &[State9],
+        deps: &[DependencySet],
+        dropout: f64,
+        broadcasts: &[(u32, State9)],
+    ) -> Vec<Observation> {
+        let sensor = ProximitySensor::new(8, 250.0, State9::zeros());
+        let mut grid = NeighbourGrid::new();
+        grid.rebuild(states.iter().map(|s| [s[0], s[1], s[2]]), 250.0);
+        let scene = Scene { states, grid: &grid, search: NeighbourSearch::Grid, dependencies: deps };
+        let radio = RadioModel::default();
+        let active = vec![true; states.len()];
+        let link = Link {
+            active: &active,
+            dropout,
+            reference_dropout: dropout,
+            radio_up: true,
+            radio: &radio,
+            sent: Some(states),
+            broadcasts,
+            delay_s: 0.0,
+            channel_bad: false,
+            onboard: true,
+        };
+        let key = crate::random::RunKey::new(1, 0).at(0);
+        let mut draws = PerceptionDraws { sensing: key.rng(0, Source::Sensing), radio: key.rng(0, Source::Radio) };
+        let mut out =
+            vec![Observation { id: UavId(99), state: State9::zeros(), age_s: 0.0, source: ObservationSource::Onboard }];
+        let (nearest, id) = sensor.perceive(0, &scene, &link, &mut draws, &mut SensorScratch::new(8), &mut out);
+        assert_eq!(out[0].id, UavId(99), "perception appends");
+        assert!((nearest - 100.0f64.hypot(1.0)).abs() < 1e-9 && id == 1, "{nearest} {id}");
+        out.split_off(1)
+    }
+
+    #[test]
+    fn it_sees_the_nearest_per_area_and_its_references_within_range() {
+        let (states, deps) = setup();
+        let seen = perceive(&states, &deps, 0.0, &[]);
+        let ids: Vec<u32> = seen.iter().map(|o| o.id.0).collect();
+        // Areas in order, counted clockwise from the nose (3 behind in area 4, 1 just left of
+        // the nose in area 7), then the reference 2; never 4 (out of range).
+        assert_eq!(ids, vec![3, 1, 2]);
+        assert!(seen.iter().all(|o| o.source == ObservationSource::Onboard && o.state == states[o.id.index()]));
+        // A radio message of a UAV seen onboard is not counted twice; one of a UAV out of
+        // range is heard.
+        let heard = perceive(&states, &deps, 0.0, &[(1, states[1]), (4, states[4])]);
+        let radio: Vec<u32> = heard.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
+        assert_eq!(radio, vec![4]);
+        // Everything onboard lost: only the radio is left.
+        assert!(perceive(&states, &deps, 1.0, &[]).is_empty());
+        // Turned around, the same neighbours fall in other areas.
+        let mut turned = states.clone();
+        turned[0][BETA] = std::f64::consts::PI;
+        assert_eq!(perceive(&turned, &deps, 0.0, &[]).len(), 3);
+    }
+}
