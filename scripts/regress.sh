@@ -14,6 +14,7 @@ run paper-noadjust --no-adjust
 run paper-h3 --horizon 3 --runs 2
 run paper-cv --predictor constant-velocity --runs 2
 run swarm --scenario swarm --uavs 300 --duration-s 20
+run swarm-parallel --scenario swarm --uavs 3000 --duration-s 3
 run fwv --scenario fixed-wing-v --runs 20
 for f in "$here"/scenarios/*.toml; do
   b=$(basename "$f" .toml)

@@ -13,6 +13,7 @@
 
 pub mod batch;
 pub mod measure;
+pub mod parallel;
 pub mod random;
 pub mod world;
 

@@ -326,19 +326,12 @@ fn partial(
 
 impl Observer for RunMetrics {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
-        use rayon::prelude::*;
         self.samples += 1;
         let n = frame.states.len();
         let nav = self.nav;
         let reference = navigator_reference(scenario, frame.states, frame.active);
-        let parts: Vec<Partial> = if n >= crate::world::engine::PARALLEL_MIN_UAVS {
-            (0..n.div_ceil(CHUNK))
-                .into_par_iter()
-                .map(|c| partial(nav, scenario, frame, &reference, c * CHUNK..((c + 1) * CHUNK).min(n)))
-                .collect()
-        } else {
-            vec![partial(nav, scenario, frame, &reference, 0..n)]
-        };
+        let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
+        let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| partial(nav, scenario, frame, &reference, r));
         let mut active = 0u64;
         let mut heading = [0.0f64; 3];
         for p in parts {

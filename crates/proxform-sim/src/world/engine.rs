@@ -24,7 +24,6 @@ use proxform_core::state::{self, State9};
 use proxform_core::Agent;
 use proxform_scenario::faults::{self as schedule, Fault};
 use proxform_scenario::Scenario;
-use rayon::prelude::*;
 
 use super::environment::{EnvStep, UavEnv};
 use super::faults::{self, FaultStep};
@@ -287,16 +286,11 @@ impl<'s> World<'s> {
         }
         let step = EnvStep::new(self.scenario, &self.run, self.k, self.t());
         let (current, active) = (&self.current, &self.active);
-        let adv = |(i, e): (usize, &mut UavEnv)| {
+        crate::parallel::for_each_mut(&mut self.env, self.parallel, |i, e| {
             if active[i] {
                 step.advance(i, &current[i], e);
             }
-        };
-        if self.parallel {
-            self.env.par_iter_mut().enumerate().with_min_len(1024).for_each(adv);
-        } else {
-            self.env.iter_mut().enumerate().for_each(adv);
-        }
+        });
     }
 
     /// Keeps the true states of the last `delay + 1` steps (a delayed radio sends from them).

@@ -244,17 +244,11 @@ pub fn broadcasts(sc: &Scenario, sent: &[State9], key: StreamKey, parallel: bool
             .filter(|&j| j < n)
             .map(|j| (j as u32, State9::zeros())),
     );
-    let fill = |m: &mut (u32, State9)| {
+    crate::parallel::for_each_mut(out, parallel, |_, m| {
         let j = m.0 as usize;
         let mut own_rng = key.rng(j as u64, Source::OwnState);
         m.1 = noisy(&sent[j], &sigma, &mut own_rng);
-    };
-    if parallel {
-        use rayon::prelude::*;
-        out.par_iter_mut().with_min_len(1024).for_each(fill);
-    } else {
-        out.iter_mut().for_each(fill);
-    }
+    });
 }
 
 /// Draws whether an observation survives a dropout of probability `p`.
