@@ -111,9 +111,127 @@ fn closest_pair_within(slots: &[FormationSlot], limit: f64) -> Option<(usize, us
     found
 }
 
-/// Refuses a navigator path that the followers' vehicle cannot fly: its velocity or attitude
-/// leaves the vehicle's limits at some instant (the followers would be held at the limit and
-/// fall behind, silently). Checked every update period, at most 200 000 instants.
+/// One limit of the followers' vehicle, on the navigator's state or on its rate of change.
+struct Limit {
+    /// The key of `[vehicle]` that sets it.
+    key: &'static str,
+    /// What it bounds, in words.
+    what: &'static str,
+    /// The bound (SI).
+    bound: f64,
+    /// True for a lower bound.
+    below: bool,
+    /// True when the value is a rate of change (needs two instants).
+    rate: bool,
+    /// Report units per SI unit (3.6 for km/h, degrees per radian), and the unit.
+    scale: f64,
+    unit: &'static str,
+    /// The value from (previous state, state, seconds between them).
+    value: Reading,
+}
+
+/// Reads a value from (previous state, state, seconds between them).
+type Reading = Box<dyn Fn(&State9, &State9, f64) -> f64>;
+
+const DEG: f64 = 180.0 / std::f64::consts::PI;
+
+fn airspeed(x: &State9) -> f64 {
+    (x[state::VX] * x[state::VX] + x[state::VY] * x[state::VY] + x[state::VZ] * x[state::VZ]).sqrt()
+}
+
+fn limits(vehicle: &VehicleModel) -> Vec<Limit> {
+    let of = |k: usize| move |_: &State9, x: &State9, _: f64| x[k];
+    let abs = |k: usize| move |_: &State9, x: &State9, _: f64| wrap_pi(x[k]).abs();
+    let rate = |k: usize| move |a: &State9, b: &State9, h: f64| (wrap_pi(b[k] - a[k]) / h).abs();
+    let accel = |k: usize| move |a: &State9, b: &State9, h: f64| ((b[k] - a[k]) / h).abs();
+    let kmh = (3.6, " km/h");
+    let kmh_s = (3.6, " km/h per s");
+    let degrees = (DEG, "°");
+    let deg_s = (DEG, "°/s");
+    let limit = |key, what, bound, below, rate, (scale, unit): (f64, &'static str), value: Reading| Limit {
+        key,
+        what,
+        bound,
+        below,
+        rate,
+        scale,
+        unit,
+        value,
+    };
+    match vehicle {
+        VehicleModel::Kinematic(m) => {
+            let l = &m.limits;
+            let mut out = vec![
+                limit("vx_min_kmh", "vx", l.vx_min_mps, true, false, kmh, Box::new(of(state::VX))),
+                limit("vx_max_kmh", "vx", l.vx_max_mps, false, false, kmh, Box::new(of(state::VX))),
+                limit("vy_max_kmh", "|vy|", l.vy_max_mps, false, false, kmh, Box::new(abs(state::VY))),
+                limit("vz_max_kmh", "|vz|", l.vz_max_mps, false, false, kmh, Box::new(abs(state::VZ))),
+            ];
+            const ANGLE: [&str; 3] = ["attitude_max_deg[1]", "attitude_max_deg[2]", "attitude_max_deg[3]"];
+            const RATE: [&str; 3] = ["attitude_rate_deg_s[1]", "attitude_rate_deg_s[2]", "attitude_rate_deg_s[3]"];
+            const ACCEL: [&str; 3] = ["accel_kmh_s[1]", "accel_kmh_s[2]", "accel_kmh_s[3]"];
+            for a in 0..3 {
+                let k = state::ALPHA + a;
+                let (angle, rate_of, change) = (
+                    ["|pitch|", "|yaw|", "|roll|"][a],
+                    ["pitch rate", "yaw rate", "roll rate"][a],
+                    ["change of vx", "change of vy", "change of vz"][a],
+                );
+                out.push(limit(ANGLE[a], angle, l.attitude_max_rad[a], false, false, degrees, Box::new(abs(k))));
+                out.push(limit(RATE[a], rate_of, l.attitude_rate_max_radps[a], false, true, deg_s, Box::new(rate(k))));
+                out.push(limit(
+                    ACCEL[a],
+                    change,
+                    l.accel_max_mps2[a],
+                    false,
+                    true,
+                    kmh_s,
+                    Box::new(accel(state::VX + a)),
+                ));
+            }
+            out
+        }
+        VehicleModel::FixedWing(m) => vec![
+            limit("stall_speed_kmh", "airspeed", m.stall_speed_mps, true, false, kmh, Box::new(|_, x, _| airspeed(x))),
+            limit("max_speed_kmh", "airspeed", m.max_speed_mps, false, false, kmh, Box::new(|_, x, _| airspeed(x))),
+            limit("bank_max_deg", "|bank|", m.bank_max_rad, false, false, degrees, Box::new(abs(state::GAMMA))),
+            limit("pitch_max_deg", "|pitch|", m.pitch_max_rad, false, false, degrees, Box::new(abs(state::ALPHA))),
+            limit(
+                "roll_rate_max_deg_s",
+                "roll rate",
+                m.roll_rate_max_radps,
+                false,
+                true,
+                deg_s,
+                Box::new(rate(state::GAMMA)),
+            ),
+            limit(
+                "pitch_rate_max_deg_s",
+                "pitch rate",
+                m.pitch_rate_max_radps,
+                false,
+                true,
+                deg_s,
+                Box::new(rate(state::ALPHA)),
+            ),
+            limit(
+                "throttle_accel_kmh_s",
+                "change of airspeed",
+                m.accel_max_mps2,
+                false,
+                true,
+                kmh_s,
+                Box::new(|a, b, h| ((airspeed(b) - airspeed(a)) / h).abs()),
+            ),
+        ],
+    }
+}
+
+/// Refuses a navigator path that the followers' vehicle cannot fly: at some instant its
+/// velocity or attitude leaves the vehicle's limits, or changes faster than the vehicle's
+/// adjusting rates (the followers would be held at the limit and fall behind, silently).
+/// Checked at every update period (at most 200 000 instants), naming the limit, the value and
+/// the time.
 pub fn path_within_vehicle(
     path: &NavigatorPath,
     vehicle: &VehicleModel,
@@ -122,72 +240,51 @@ pub fn path_within_vehicle(
 ) -> Result<(), SpecError> {
     let steps = (duration_s / dt_s).ceil().max(1.0);
     let samples = steps.min(200_000.0) as u64;
-    let tol = 1e-6;
+    let limits = limits(vehicle);
+    // The worst excess of each limit: (excess over the bound in bounds, value, time).
+    let mut worst: Vec<Option<(f64, f64, f64)>> = vec![None; limits.len()];
+    let mut prev = path.state_at(0.0, [0.0; 3]);
+    let h = duration_s / samples as f64;
     for k in 0..=samples {
         let t = duration_s * k as f64 / samples as f64;
         let x = path.state_at(t, [0.0; 3]);
-        let mut out: Option<(&str, String, f64, f64)> = None;
-        match vehicle {
-            VehicleModel::Kinematic(m) => {
-                let l = &m.limits;
-                if x[state::VX] < l.vx_min_mps - tol || x[state::VX] > l.vx_max_mps + tol {
-                    let key = if x[state::VX] < l.vx_min_mps { "vx_min_kmh" } else { "vx_max_kmh" };
-                    out = Some((
-                        key,
-                        "vx".into(),
-                        x[state::VX] * 3.6,
-                        if x[state::VX] < l.vx_min_mps { l.vx_min_mps } else { l.vx_max_mps } * 3.6,
-                    ));
-                } else if x[state::VY].abs() > l.vy_max_mps + tol {
-                    out = Some(("vy_max_kmh", "|vy|".into(), x[state::VY].abs() * 3.6, l.vy_max_mps * 3.6));
-                } else if x[state::VZ].abs() > l.vz_max_mps + tol {
-                    out = Some(("vz_max_kmh", "|vz|".into(), x[state::VZ].abs() * 3.6, l.vz_max_mps * 3.6));
-                } else {
-                    for (a, name) in ["pitch", "yaw", "roll"].iter().enumerate() {
-                        let angle = wrap_pi(x[state::ALPHA + a]).abs();
-                        if angle > l.attitude_max_rad[a] + tol {
-                            out = Some((
-                                ["attitude_max_deg[1]", "attitude_max_deg[2]", "attitude_max_deg[3]"][a],
-                                format!("|{name}|"),
-                                angle.to_degrees(),
-                                l.attitude_max_rad[a].to_degrees(),
-                            ));
-                            break;
-                        }
-                    }
-                }
-            }
-            VehicleModel::FixedWing(m) => {
-                let (v, vmin, vmax) = (vehicle.forward_speed(&x), m.stall_speed_mps, m.max_speed_mps);
-                if v < vmin - tol || v > vmax + tol {
-                    let key = if v < vmin { "stall_speed_kmh" } else { "max_speed_kmh" };
-                    out = Some((key, "airspeed".into(), v * 3.6, if v < vmin { vmin } else { vmax } * 3.6));
-                } else if x[state::GAMMA].abs() > m.bank_max_rad + tol {
-                    out = Some((
-                        "bank_max_deg",
-                        "|bank|".into(),
-                        x[state::GAMMA].abs().to_degrees(),
-                        m.bank_max_rad.to_degrees(),
-                    ));
-                }
+        for (l, w) in limits.iter().zip(worst.iter_mut()).filter(|(l, _)| k > 0 || !l.rate) {
+            let v = (l.value)(&prev, &x, h);
+            // A tolerance keeps rounding from refusing a path that flies at a limit.
+            let excess = if l.below { l.bound - v } else { v - l.bound } / l.bound.abs().max(1e-9);
+            if excess > 1e-6 && w.is_none_or(|(e, _, _)| excess > e) {
+                *w = Some((excess, v, t));
             }
         }
-        if let Some((key, what, found, limit)) = out {
-            let unit = if key.contains("_deg") { "°" } else { " km/h" };
-            let hint = if matches!(vehicle, VehicleModel::Kinematic(_)) {
-                " (the kinematic vehicle's limits are on the world axes and on its attitude: a path that \
-                 turns far from +x leaves them; turn less, raise the limits, or fly model = \"fixed_wing\")"
-            } else {
-                ""
-            };
-            return Err(err(
-                "path",
-                format!(
-                    "the navigator reaches {what} {found:.1}{unit} at t = {t:.1} s, beyond vehicle.{key} = \
-                     {limit:.1}{unit}: the followers fly the same vehicle and could not keep their slots{hint}"
-                ),
-            ));
-        }
+        prev = x;
     }
-    Ok(())
+    let Some((l, (_, v, t))) =
+        limits.iter().zip(worst).filter_map(|(l, w)| w.map(|w| (l, w))).max_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
+    else {
+        return Ok(());
+    };
+    let hint = match (vehicle, l.rate) {
+        (_, true) => {
+            " (a longer path.transition_s, a larger path.turn_radius_m or gentler segments ask less of the \
+             followers)"
+        }
+        (VehicleModel::Kinematic(_), false) => {
+            " (the kinematic vehicle's limits are on the world axes and on its attitude: a path that turns far \
+             from +x leaves them; turn less, raise the limits, or fly model = \"fixed_wing\")"
+        }
+        _ => "",
+    };
+    Err(err(
+        "path",
+        format!(
+            "the navigator's {} reaches {:.1}{unit} at t = {t:.1} s, {} vehicle.{} = {:.1}{unit}: the followers fly \
+             the same vehicle and could not keep their slots{hint}",
+            l.what,
+            v * l.scale,
+            if l.below { "below" } else { "beyond" },
+            l.key,
+            l.bound * l.scale,
+            unit = l.unit,
+        ),
+    ))
 }

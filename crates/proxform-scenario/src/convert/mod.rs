@@ -56,7 +56,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             formation::dependencies(&spec.formation, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
         let formation = Arc::new(Formation { slots, frame });
 
-        let path = path::path(&spec.path, duration_s)?;
+        let path = path::path(&spec.path)?;
         let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
 

@@ -16,7 +16,7 @@ fn paper_keys(p: &PathSpec) -> bool {
 }
 
 /// The navigator's path, covering the flight.
-pub fn path(p: &PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> {
+pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
     match p.kind.as_deref() {
         None | Some("paper") => {
             if p.speed_kmh.is_some()
@@ -57,10 +57,16 @@ pub fn path(p: &PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> {
                 if let Some(v) = s.speed_kmh {
                     speed = kmh(positive(&format!("{key}.speed_kmh"), v)?);
                 }
-                segments.push(Segment { duration_s: d, turn_rate_radps: w, climb_mps: c, end_speed_mps: speed });
+                segments.push(Segment {
+                    duration_s: d,
+                    turn_rate_radps: w,
+                    climb_mps: c,
+                    end_speed_mps: speed,
+                    start_blend_s: None,
+                });
             }
             let transition = positive("path.transition_s", p.transition_s.unwrap_or(defaults::PATH_TRANSITION_S))?;
-            Ok(NavigatorPath::Segments(SegmentsPath::new(v0, course, segments, transition, duration_s + 1.0)))
+            Ok(NavigatorPath::Segments(SegmentsPath::new(v0, course, segments, transition)))
         }
         Some("waypoints") => {
             if !p.segment.is_empty() {
@@ -77,7 +83,7 @@ pub fn path(p: &PathSpec, duration_s: f64) -> Result<NavigatorPath, SpecError> {
                 err(e.point.map_or("path.points_m".into(), |k| format!("path.points_m[{k}]")), e.message)
             })?;
             let course = segments.1;
-            Ok(NavigatorPath::Segments(SegmentsPath::new(v, course, segments.0, transition, duration_s + 1.0)))
+            Ok(NavigatorPath::Segments(SegmentsPath::new(v, course, segments.0, transition)))
         }
         Some(o) => {
             Err(err("path.kind", format!("unknown path \"{o}\" (expected \"paper\", \"segments\" or \"waypoints\")")))

@@ -9,8 +9,8 @@ use std::f64::consts::{PI, TAU};
 
 use proxform_core::angle::{deg, kmh};
 use proxform_core::state::{self, State9};
-use proxform_core::vehicle::G;
 
+pub mod segments;
 pub mod waypoints;
 
 /// A cosine ramp from `from` to `to` over `[t0, t1]` (s).
@@ -141,146 +141,12 @@ pub struct Segment {
     pub climb_mps: f64,
     /// Horizontal speed at the end of the segment (m/s), reached by a cosine ramp.
     pub end_speed_mps: f64,
+    /// Width of the rate blend centred on this segment's start (s); `None`: the path's
+    /// transition, limited by this segment and the one before. Never wider than either.
+    pub start_blend_s: Option<f64>,
 }
 
-/// A path of segments: turns, climbs and descents at constant rates, speed changes. Each
-/// segment's turn and climb rates are reached from the previous ones by a cosine blend over
-/// its first `transition_s` (at most half the segment), so bank and pitch change smoothly;
-/// speed changes by a cosine ramp over the whole segment. After the last segment the
-/// navigator holds its last rates' end state and flies straight and level. Its attitude
-/// follows the path: yaw along the course, pitch along the flight-path angle, roll at the
-/// coordinated-turn bank `atan(v·ω/g)`. Positions are integrated once at construction
-/// (0.01 s steps, midpoint rule).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SegmentsPath {
-    /// Initial horizontal speed (m/s).
-    pub start_speed_mps: f64,
-    /// Initial course (rad).
-    pub start_course_rad: f64,
-    /// The segments.
-    pub segments: Vec<Segment>,
-    /// Blend time of turn and climb rates at each segment start (s).
-    pub transition_s: f64,
-    #[serde(skip)]
-    table: Vec<[f64; 3]>,
-}
-
-/// `∫₀^τ ½(1 − cos(πu/T)) du` for τ ≥ 0 (the cosine blend's integral; 1 after T).
-fn blend_integral(tau: f64, t: f64) -> f64 {
-    if t <= 0.0 {
-        return tau;
-    }
-    if tau <= t {
-        0.5 * tau - t / (2.0 * PI) * (PI * tau / t).sin()
-    } else {
-        0.5 * t + (tau - t)
-    }
-}
-
-/// `½(1 − cos(πτ/T))`, 1 after T.
-fn blend(tau: f64, t: f64) -> f64 {
-    if t <= 0.0 || tau >= t {
-        1.0
-    } else {
-        0.5 * (1.0 - (PI * tau.max(0.0) / t).cos())
-    }
-}
-
-/// Integration step of the segment path's positions (s).
-const PATH_STEP_S: f64 = 0.01;
-
-impl SegmentsPath {
-    /// A path covering at least `horizon_s` seconds.
-    pub fn new(
-        start_speed_mps: f64,
-        start_course_rad: f64,
-        segments: Vec<Segment>,
-        transition_s: f64,
-        horizon_s: f64,
-    ) -> Self {
-        let mut p = Self { start_speed_mps, start_course_rad, segments, transition_s, table: Vec::new() };
-        let n = (horizon_s.max(0.0) / PATH_STEP_S).ceil() as usize + 2;
-        let mut pos = [0.0f64; 3];
-        p.table.reserve(n);
-        p.table.push(pos);
-        for k in 1..n {
-            let tm = (k as f64 - 0.5) * PATH_STEP_S;
-            let v = p.velocity_at(tm);
-            for a in 0..3 {
-                pos[a] += PATH_STEP_S * v[a];
-            }
-            p.table.push(pos);
-        }
-        p
-    }
-
-    /// Speed, course, turn rate and climb rate at `t`.
-    fn kinematics(&self, t: f64) -> (f64, f64, f64, f64) {
-        let (mut t0, mut speed, mut course) = (0.0, self.start_speed_mps, self.start_course_rad);
-        let (mut turn, mut climb) = (0.0, 0.0);
-        for s in &self.segments {
-            let t1 = t0 + s.duration_s;
-            let blend_t = self.transition_s.min(0.5 * s.duration_s);
-            if t < t1 {
-                let tau = t - t0;
-                let u = (tau / s.duration_s).clamp(0.0, 1.0);
-                let v = speed + (s.end_speed_mps - speed) * 0.5 * (1.0 - (PI * u).cos());
-                let b = blend(tau, blend_t);
-                let w = turn + (s.turn_rate_radps - turn) * b;
-                let c = climb + (s.climb_mps - climb) * b;
-                let heading = course + turn * tau + (s.turn_rate_radps - turn) * blend_integral(tau, blend_t);
-                return (v, heading, w, c);
-            }
-            course += turn * s.duration_s + (s.turn_rate_radps - turn) * blend_integral(s.duration_s, blend_t);
-            speed = s.end_speed_mps;
-            turn = s.turn_rate_radps;
-            climb = s.climb_mps;
-            t0 = t1;
-        }
-        // After the last segment: its rates blend back to straight and level.
-        let tau = t - t0;
-        let b = blend(tau, self.transition_s);
-        (
-            speed,
-            course + turn * tau - turn * blend_integral(tau, self.transition_s),
-            turn * (1.0 - b),
-            climb * (1.0 - b),
-        )
-    }
-
-    fn velocity_at(&self, t: f64) -> [f64; 3] {
-        let (v, course, _, climb) = self.kinematics(t);
-        [v * course.cos(), v * course.sin(), climb]
-    }
-
-    /// The navigator's state at `t` from `start`.
-    pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
-        let (v, course, turn, climb) = self.kinematics(t.max(0.0));
-        if t < 0.0 {
-            // Before the path starts: straight on at the initial state.
-            let mut s = self.state_at(0.0, start);
-            for k in 0..3 {
-                s[k] += t * s[k + 3];
-            }
-            return s;
-        }
-        let x = t / PATH_STEP_S;
-        let k = (x.floor().max(0.0) as usize).min(self.table.len().saturating_sub(2));
-        let f = (x - k as f64).clamp(0.0, 1.0);
-        let (a, b) = (self.table[k], self.table[(k + 1).min(self.table.len() - 1)]);
-        let mut s = State9::zeros();
-        for i in 0..3 {
-            s[i] = start[i] + a[i] + f * (b[i] - a[i]);
-        }
-        s[state::VX] = v * course.cos();
-        s[state::VY] = v * course.sin();
-        s[state::VZ] = climb;
-        s[state::ALPHA] = climb.atan2(v);
-        s[state::BETA] = proxform_core::angle::wrap_pi(course);
-        s[state::GAMMA] = -(v * turn / G).atan(); // right wing down is positive: a left turn banks left
-        s
-    }
-}
+pub use segments::SegmentsPath;
 
 /// How the navigator flies.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -338,41 +204,6 @@ mod tests {
                 assert_relative_eq!((b[k] - a[k]) / (2.0 * h), s[k + 3], epsilon = 1e-5);
             }
         }
-    }
-
-    #[test]
-    fn segments_turn_climb_and_change_speed() {
-        let seg = |d, w: f64, c, v| Segment {
-            duration_s: d,
-            turn_rate_radps: w.to_radians(),
-            climb_mps: c,
-            end_speed_mps: v,
-        };
-        // A 36 s turn at 5 °/s, blended in and out over 4 s each: 180° in all.
-        let p = SegmentsPath::new(
-            60.0,
-            0.0,
-            vec![seg(10.0, 0.0, 0.0, 60.0), seg(36.0, 5.0, 2.0, 70.0), seg(10.0, 0.0, 0.0, 70.0)],
-            4.0,
-            70.0,
-        );
-        // Straight for 10 s: 600 m along x.
-        let s10 = p.state_at(10.0, [0.0; 3]);
-        assert_relative_eq!(s10[0], 600.0, epsilon = 1e-6);
-        // After the turn the course points along −x: 5°/s · (36 − 4/2 + 4/2) s = 180°.
-        let s56 = p.state_at(56.0, [0.0; 3]);
-        assert_relative_eq!(s56[state::VX], -70.0, epsilon = 1e-9);
-        assert_relative_eq!(s56[state::VZ], 0.0, epsilon = 1e-12);
-        // Positions integrate velocities.
-        let h = 0.05;
-        for &t in &[5.0, 11.0, 17.3, 33.0, 45.0, 47.0] {
-            let (a, b, s) = (p.state_at(t - h, [0.0; 3]), p.state_at(t + h, [0.0; 3]), p.state_at(t, [0.0; 3]));
-            for k in 0..3 {
-                assert_relative_eq!((b[k] - a[k]) / (2.0 * h), s[k + 3], epsilon = 2e-2);
-            }
-        }
-        // Banked into the (left) turn.
-        assert!(p.state_at(20.0, [0.0; 3])[state::GAMMA] < 0.0);
     }
 
     #[test]
