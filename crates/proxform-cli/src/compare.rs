@@ -20,7 +20,7 @@ pub struct CompareArgs {
     /// Comparison file (TOML); without it, the built-in comparison (scenarios/compare-paper.toml).
     file: Option<PathBuf>,
     /// Seeds per cell, overriding the file's.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=proxform_scenario::comparison::MAX_SEEDS))]
     seeds: Option<u64>,
     /// Flight duration override (s), for quick looks.
     #[arg(long)]
@@ -28,8 +28,8 @@ pub struct CompareArgs {
     /// Output directory [default: out/<comparison name>].
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Worker threads (0 = all cores). Results do not depend on it.
-    #[arg(long, default_value_t = 0)]
+    /// Worker threads (0 = all cores, at most 256). Results do not depend on it.
+    #[arg(long, default_value_t = 0, value_parser = crate::run::threads)]
     threads: usize,
     /// Skip the plots.
     #[arg(long)]
@@ -44,7 +44,7 @@ pub struct CompareArgs {
 fn load(args: &CompareArgs) -> Result<Comparison> {
     let (text, name, dir) = match &args.file {
         Some(p) => (
-            std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,
+            crate::files::read_input(p, "comparison file")?,
             p.display().to_string(),
             p.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
@@ -65,7 +65,13 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
         }
         Ok(spec)
     };
-    let parsed = Comparison::parse(&text, &name, resolve);
+    // The command line's seeds are written into the spec, so the file's limits apply to them.
+    let parsed = Comparison::parse_spec(&text, &name).and_then(|mut spec| {
+        if let Some(seeds) = args.seeds {
+            spec.seeds = seeds;
+        }
+        Comparison::from_spec(spec, &text, &name, resolve)
+    });
     if parsed.is_err() && crate::scenarios::kind_of(&text) == Some(crate::scenarios::FileKind::Scenario) {
         return parsed.with_context(|| {
             format!(
@@ -74,17 +80,13 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
             )
         });
     }
-    let mut cmp = parsed?;
-    if let Some(s) = args.seeds {
-        cmp.seeds = s;
-    }
-    Ok(cmp)
+    Ok(parsed?)
 }
 
 /// Runs the command. Exit code 0 once everything ran (the comparison has no pass criterion).
 pub fn run(args: &CompareArgs) -> Result<ExitCode> {
     let cmp = load(args)?;
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&cmp.name));
+    let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(&cmp.name));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
@@ -169,9 +171,9 @@ fn print(
         for cell in cells.iter().filter(|x| x.condition == c.name) {
             writeln!(
                 w,
-                "  {:width$}  {:>5.0}%  {:>10} {:>11} {:>10}  {:>9.1}  {:>9.1}  {:>9.1}  {:>9.1}  {:>7.3}",
+                "  {:width$}  {:>5}%  {:>10} {:>11} {:>10}  {:>9.1}  {:>9.1}  {:>9.1}  {:>9.1}  {:>7.3}",
                 cell.method,
-                100.0 * cell.pass_fraction,
+                crate::report::percent(cell.pass_fraction),
                 metres(cell.max_error_m_median),
                 metres(cell.max_error_m_p95),
                 metres(cell.error_ratio_p95),

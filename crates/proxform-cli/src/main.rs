@@ -3,6 +3,7 @@
 mod bench;
 mod compare;
 mod figures;
+mod files;
 mod memory;
 mod output;
 mod report;

@@ -6,7 +6,8 @@ use std::io::BufWriter;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use proxform_sim::{AxisErrors, RunSummary, Summary, Trajectory};
+use proxform_sim::measure::trajectory::RowSink;
+use proxform_sim::{AxisErrors, RunSummary, Summary, TrajectoryRow};
 
 /// Writes the batch summary as pretty JSON.
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
@@ -19,7 +20,7 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     let mut w = csv::Writer::from_writer(BufWriter::new(f));
     const AXES: [&str; 6] = ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"];
-    let mut header: Vec<String> = ["seed", "run", "pass"].iter().map(|s| s.to_string()).collect();
+    let mut header: Vec<String> = ["seed", "run", "pass", "judged_steps"].iter().map(|s| s.to_string()).collect();
     header.extend(AXES.iter().map(|a| format!("max_err_{a}")));
     header.extend(AXES.iter().map(|a| format!("rms_err_{a}")));
     header.extend(
@@ -30,7 +31,8 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
             "held_fraction",
             "within_allowable_fraction",
             "control_effort",
-            "radio_msgs_per_uav_s",
+            "radio_sent_per_uav_s",
+            "radio_used_per_uav_s",
             "order_mean",
             "order_min",
             "connectivity_min",
@@ -42,7 +44,8 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     w.write_record(&header)?;
     // Errors in the report's units: metres, and degrees for the attitudes.
     for r in runs {
-        let mut rec = vec![seed.to_string(), r.run.to_string(), u8::from(r.pass).to_string()];
+        let mut rec =
+            vec![seed.to_string(), r.run.to_string(), u8::from(r.pass).to_string(), r.judged_steps.to_string()];
         let (max, rms) = (AxisErrors::from_si(r.max_abs_error).as_array(), AxisErrors::from_si(r.rms_error).as_array());
         rec.extend(max.iter().chain(&rms).map(|v| format!("{v:.6}")));
         rec.extend([
@@ -52,7 +55,8 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
             format!("{:.6}", r.held_fraction),
             format!("{:.6}", r.within_allowable_fraction),
             format!("{:.6}", r.control_effort),
-            format!("{:.3}", r.radio_msgs_per_uav_s),
+            format!("{:.3}", r.radio_sent_per_uav_s),
+            format!("{:.3}", r.radio_used_per_uav_s),
             format!("{:.6}", r.order_mean),
             format!("{:.6}", r.order_min),
             format!("{:.6}", r.connectivity_min),
@@ -64,36 +68,57 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     Ok(())
 }
 
-/// Writes one row per UAV per step.
-pub fn write_trajectories(path: &Path, traj: &Trajectory) -> Result<()> {
-    let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut w = csv::Writer::from_writer(BufWriter::new(f));
-    w.write_record([
-        "t_s",
-        "uav",
-        "x_m",
-        "y_m",
-        "z_m",
-        "vx_mps",
-        "vy_mps",
-        "vz_mps",
-        "alpha_rad",
-        "beta_rad",
-        "gamma_rad",
-        "err_x_m",
-        "err_y_m",
-        "err_z_m",
-        "err_alpha_deg",
-        "err_beta_deg",
-        "err_gamma_deg",
-        "in_envelope",
-        "within_allowable",
-        "outcome",
-    ])?;
-    let mut rec: Vec<String> = Vec::with_capacity(20);
-    for r in &traj.rows {
+/// `trajectories.csv`, written row by row as the flight goes: one row per recorded UAV per
+/// step (every step up to 10^6 steps, evenly decimated beyond).
+pub struct TrajectoryCsv {
+    path: std::path::PathBuf,
+    writer: csv::Writer<BufWriter<File>>,
+    /// Decimals of the time column: enough for the update period.
+    time_decimals: usize,
+    record: Vec<String>,
+    error: Option<String>,
+}
+
+impl TrajectoryCsv {
+    /// Creates the file and writes its header; `dt_s` sets the time column's decimals.
+    pub fn create(path: &Path, dt_s: f64) -> Result<Self> {
+        let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let mut writer = csv::Writer::from_writer(BufWriter::new(f));
+        writer.write_record([
+            "t_s",
+            "uav",
+            "x_m",
+            "y_m",
+            "z_m",
+            "vx_mps",
+            "vy_mps",
+            "vz_mps",
+            "alpha_rad",
+            "beta_rad",
+            "gamma_rad",
+            "err_x_m",
+            "err_y_m",
+            "err_z_m",
+            "err_alpha_deg",
+            "err_beta_deg",
+            "err_gamma_deg",
+            "in_envelope",
+            "within_allowable",
+            "outcome",
+        ])?;
+        let time_decimals = (-dt_s.log10()).ceil().clamp(1.0, 9.0) as usize;
+        Ok(Self { path: path.into(), writer, time_decimals, record: Vec::with_capacity(20), error: None })
+    }
+}
+
+impl RowSink for TrajectoryCsv {
+    fn row(&mut self, r: &TrajectoryRow) {
+        if self.error.is_some() {
+            return;
+        }
+        let rec = &mut self.record;
         rec.clear();
-        rec.push(format!("{:.1}", r.t));
+        rec.push(format!("{:.*}", self.time_decimals, r.t));
         rec.push((r.uav + 1).to_string());
         rec.extend(r.state.iter().map(|v| format!("{v:.6}")));
         rec.extend(r.error[..3].iter().map(|v| format!("{v:.6}")));
@@ -101,8 +126,15 @@ pub fn write_trajectories(path: &Path, traj: &Trajectory) -> Result<()> {
         rec.push(u8::from(r.in_envelope).to_string());
         rec.push(u8::from(r.within_allowable).to_string());
         rec.push(r.outcome.to_string());
-        w.write_record(&rec)?;
+        if let Err(e) = self.writer.write_record(&*rec) {
+            self.error = Some(format!("cannot write {}: {e}", self.path.display()));
+        }
     }
-    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+
+    fn finish(&mut self) -> std::result::Result<(), String> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        self.writer.flush().map_err(|e| format!("cannot write {}: {e}", self.path.display()))
+    }
 }

@@ -36,7 +36,7 @@ pub fn print(
     writeln!(out, "{:>14}{:>8}", "adjust/run", "result")?;
     write!(out, "{:<8}", "allowed")?;
     for a in allow {
-        write!(out, "{a:>10.3}")?;
+        write!(out, "{:>10}", number(a))?;
     }
     writeln!(out)?;
     let shown = s.per_uav.len().min(MAX_ROWS);
@@ -60,36 +60,44 @@ pub fn print(
     row(out, "RMS measured", &s.rms_error.as_array())?;
     row(out, "eq.17 σ", &s.predicted_sigma.as_array())?;
     writeln!(out)?;
+    let passed = result.runs.iter().filter(|r| r.pass).count();
+    writeln!(out, "pass fraction            {} ({passed} of {} runs)", fraction(s.pass_fraction), s.runs)?;
+    if s.unjudged_runs > 0 {
+        writeln!(
+            out,
+            "nothing to judge         in {} run(s) no follower flew: those runs do not pass",
+            s.unjudged_runs
+        )?;
+    }
     writeln!(
         out,
-        "pass fraction            {:.4} ({} of {} runs)",
-        s.pass_fraction,
-        result.runs.iter().filter(|r| r.pass).count(),
-        s.runs
-    )?;
-    writeln!(
-        out,
-        "min separation           {:.1} m (safety distance {:.1} m, {} run(s) closer)",
-        s.min_separation_m, s.safety_distance_m, s.unsafe_runs
+        "min separation           {} m (safety distance {} m, {} run(s) closer; true positions)",
+        number(s.min_separation_m),
+        number(s.safety_distance_m),
+        s.unsafe_runs
     )?;
     writeln!(out, "adjustments per UAV-min  {:.1}", s.adjustments_per_uav_minute)?;
     let m = &s.swarm;
     writeln!(
         out,
-        "inside envelope          {:.1} % of follower steps held; {:.1} % within the allowable errors",
-        100.0 * m.held_fraction,
-        100.0 * m.within_allowable_fraction
+        "inside envelope          {} % of follower steps held; {} % within the allowable errors",
+        percent(m.held_fraction),
+        percent(m.within_allowable_fraction)
     )?;
     writeln!(out, "control effort           {:.3} (inputs over their per-step limits, RSS, mean)", m.control_effort)?;
     writeln!(out, "pairs closer than safety {:.2} per run (max {})", m.close_pairs_mean, m.close_pairs_max)?;
     writeln!(
         out,
-        "order, connectivity      order mean {:.4}, min {:.4}; largest connected group ≥ {:.1} %",
+        "order, connectivity      order mean {:.4}, min {:.4}; largest connected group ≥ {} %",
         m.order_mean,
         m.order_min,
-        100.0 * m.connectivity_min
+        percent(m.connectivity_min)
     )?;
-    writeln!(out, "radio                    {:.1} messages per UAV per second", m.radio_msgs_per_uav_s)?;
+    writeln!(
+        out,
+        "radio                    {:.1} messages sent and {:.1} used per UAV per second",
+        m.radio_sent_per_uav_s, m.radio_used_per_uav_s
+    )?;
     if m.alone_s_per_uav > 0.0 {
         writeln!(out, "flown alone              {:.2} s per follower (nothing perceived)", m.alone_s_per_uav)?;
     }
@@ -105,9 +113,9 @@ fn uav_row(out: &mut impl Write, label: &str, worst: &[f64; 6], adjustments: f64
     let ok = worst.iter().zip(allow).all(|(e, a)| e <= a);
     write!(out, "{label:<8}")?;
     for e in worst {
-        write!(out, "{e:>10.3}")?;
+        write!(out, "{:>10}", number(*e))?;
     }
-    writeln!(out, "{:>14.1}{:>8}", adjustments, if ok { "PASS" } else { "FAIL" })?;
+    writeln!(out, "{:>14}{:>8}", number(adjustments), if ok { "PASS" } else { "FAIL" })?;
     Ok(())
 }
 
@@ -118,8 +126,70 @@ fn row(out: &mut impl Write, label: &str, v: &[f64; 6]) -> io::Result<()> {
         write!(out, "{:<8}", "")?;
     }
     for e in v {
-        write!(out, "{e:>10.3}")?;
+        write!(out, "{:>10}", number(*e))?;
     }
     writeln!(out)?;
     Ok(())
+}
+
+/// A number in at most 9 characters, so that columns stay aligned for any value: three
+/// decimals in the usual range, scientific notation far outside it.
+pub fn number(v: f64) -> String {
+    let a = v.abs();
+    if !v.is_finite() {
+        if v.is_nan() {
+            "—".into()
+        } else if v > 0.0 {
+            "∞".into()
+        } else {
+            "−∞".into()
+        }
+    } else if a == 0.0 || (1e-3..1e5).contains(&a) {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+/// A fraction as a percentage that never rounds a shortfall away: 99.98 % is not shown as
+/// 100.0, nor 0.02 % as 0.0.
+pub fn percent(f: f64) -> String {
+    honest(100.0 * f, 100.0, 1)
+}
+
+/// A fraction in [0, 1] with four decimals, or more where four would round it to 0 or 1.
+pub fn fraction(f: f64) -> String {
+    honest(f, 1.0, 4)
+}
+
+/// `v` in [0, top] with at least `decimals` decimals, and as many more (up to 8) as it takes
+/// not to show a value below `top` as `top` or one above 0 as 0.
+fn honest(v: f64, top: f64, decimals: usize) -> String {
+    for d in decimals..=8 {
+        let s = format!("{v:.d$}");
+        let shown: f64 = s.parse().unwrap_or(v);
+        if (shown < top || v >= top) && (shown > 0.0 || v <= 0.0) {
+            return s;
+        }
+    }
+    format!("{v:.8}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_fit_their_columns_and_rounding_hides_no_failure() {
+        for v in [0.0, 0.123456, 1e308, -1e308, 12345.678, 1e-9, f64::INFINITY, f64::NAN, -0.5] {
+            assert!(number(v).chars().count() <= 9, "{v}: {}", number(v));
+        }
+        assert_eq!(percent(0.9998), "99.98");
+        assert_eq!(percent(1.0), "100.0");
+        assert_eq!(percent(0.0002), "0.02");
+        assert_eq!(percent(0.5), "50.0");
+        assert_eq!(fraction(0.99999), "0.99999");
+        assert_eq!(fraction(1.0), "1.0000");
+        assert_eq!(fraction(0.95), "0.9500");
+    }
 }

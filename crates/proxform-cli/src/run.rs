@@ -11,7 +11,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use proxform_core::controller::MAX_HORIZON;
 use proxform_core::Method;
 use proxform_scenario::ScenarioSpec;
-use proxform_sim::{run_batch, RunOptions};
+use proxform_sim::measure::trajectory::RowSink;
+use proxform_sim::{run_batch, RunOptions, Trajectory};
 
 use crate::{figures, output, report};
 
@@ -38,8 +39,8 @@ pub struct RunArgs {
     /// Output directory [default: out/<scenario>].
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Worker threads (0 = all cores). Results do not depend on it.
-    #[arg(long, default_value_t = 0)]
+    /// Worker threads (0 = all cores, at most 256). Results do not depend on it.
+    #[arg(long, default_value_t = 0, value_parser = threads)]
     threads: usize,
     /// Skip the figures (PNG and SVG).
     #[arg(long)]
@@ -75,6 +76,15 @@ pub struct RunArgs {
     /// Print the scenario as it runs, every default filled in (TOML), and exit.
     #[arg(long)]
     print_scenario: bool,
+}
+
+/// Parses `--threads`: 0 (all cores) to [`crate::files::MAX_THREADS`].
+pub fn threads(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
+    if n > crate::files::MAX_THREADS {
+        return Err(format!("{n} threads: at most {} (0 uses every core)", crate::files::MAX_THREADS));
+    }
+    Ok(n)
 }
 
 /// Neighbour predictors selectable from the command line.
@@ -149,19 +159,20 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
             None => crate::scenarios::check(spec, &source)?,
         },
     };
+    crate::scenarios::warn(&scenario, &source);
     if args.print_scenario {
         print!("{}", proxform_scenario::resolved::to_toml(&scenario).context("cannot write the scenario as TOML")?);
         return Ok(ExitCode::SUCCESS);
     }
     let options = RunOptions { adjustment_enabled: !args.no_adjust, ..RunOptions::default() };
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(scenario.name()));
+    let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(scenario.name()));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
 
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
     // One bar tick per run, or per step for a single run (a long flight of a large swarm).
     let (len, unit) = if args.runs > 1 { (args.runs, "runs") } else { (scenario.steps(), "steps") };
-    let show = !args.quiet && (args.runs > 1 || scenario.len() >= 1000);
+    let show = !args.quiet && (args.runs > 1 || scenario.len() >= 1000 || scenario.steps() >= 100_000);
     let bar = if show { ProgressBar::new(len) } else { ProgressBar::hidden() };
     bar.set_style(
         ProgressStyle::with_template(&format!(
@@ -169,9 +180,16 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         ))
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let record = !(args.no_figures && args.no_trajectories);
+    // The first run's trajectory streams to its file as it flies; a decimated copy stays in
+    // memory for the figures.
+    let csv = out.join("trajectories.csv");
+    let sink: Option<Box<dyn RowSink>> = match args.no_trajectories {
+        true => None,
+        false => Some(Box::new(output::TrajectoryCsv::create(&csv, scenario.dt_s())?)),
+    };
+    let record = (!(args.no_figures && args.no_trajectories)).then(|| Trajectory::for_flight(scenario.steps(), sink));
     let started = Instant::now();
-    let result = pool.install(|| run_batch(&scenario, options, args.seed, args.runs, record, &|| bar.inc(1)));
+    let mut result = pool.install(|| run_batch(&scenario, options, args.seed, args.runs, record, &|| bar.inc(1)));
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 
@@ -179,11 +197,10 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     output::write_summary(&out.join("summary.json"), &result.summary)?;
     output::write_runs(&out.join("runs.csv"), args.seed, &result.runs)?;
     let mut written = vec![out.join("summary.json"), out.join("runs.csv")];
-    if let Some(traj) = &result.first_trajectory {
-        if !args.no_trajectories {
-            let p = out.join("trajectories.csv");
-            output::write_trajectories(&p, traj)?;
-            written.push(p);
+    if let Some(traj) = &mut result.first_trajectory {
+        if let Some(mut sink) = traj.take_sink() {
+            sink.finish().map_err(anyhow::Error::msg)?;
+            written.push(csv);
         }
         if !args.no_figures {
             written.extend(figures::write_all(&out, &scenario, traj)?);

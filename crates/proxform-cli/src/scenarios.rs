@@ -31,14 +31,26 @@ pub fn built_in_spec(name: &str, uavs: Option<u64>) -> Result<ScenarioSpec> {
 
 /// Reads a scenario file into its spec; errors name the file and line.
 pub fn load_spec(path: &Path) -> Result<(ScenarioSpec, Source)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read scenario file {}", path.display()))?;
+    let text = crate::files::read_input(path, "scenario file")?;
     let name = path.display().to_string();
     match load::parse_spec(&text, &name) {
         Ok(spec) => Ok((spec, Source::File { name, text })),
         Err(e) if kind_of(&text) == Some(FileKind::Comparison) => Err(anyhow::Error::new(e)
             .context(format!("{name} is a comparison file: run it with `proxform compare {name}`"))),
         Err(e) => Err(e.into()),
+    }
+}
+
+/// Prints the scenario's warnings to standard error, located in its file when it has one.
+pub fn warn(scenario: &Scenario, source: &Source) {
+    for w in scenario.warnings() {
+        match source {
+            Source::File { name, text } => match load::locate(text, &w.key) {
+                Some(line) => eprintln!("warning: {name}:{line}: {w}"),
+                None => eprintln!("warning: {name}: {w}"),
+            },
+            Source::BuiltIn => eprintln!("warning: {w}"),
+        }
     }
 }
 

@@ -294,5 +294,5 @@ fn compare_writes_rows_cells_and_plots_and_refuses_bad_files() {
     let o = proxform().args(["compare", "-q"]).arg(&bad).output().expect("runs");
     assert_eq!(o.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("condition[0].radio_loss") && stderr.contains("bad.toml"), "{stderr}");
+    assert!(stderr.contains("bad.toml:7: condition[1].radio_loss"), "{stderr}");
 }

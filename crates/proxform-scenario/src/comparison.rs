@@ -12,30 +12,17 @@ use proxform_core::{Method, UavId};
 
 use crate::convert::{method_from, SpecError};
 use crate::defaults;
+use crate::load::{locate, syntax_error, LoadError};
 use crate::scenario::Scenario;
 use crate::spec::{FaultSpec, ScenarioSpec};
 
-/// Why a comparison is invalid or could not run.
+/// Why a comparison is invalid.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CompareError {
-    /// The file is not valid TOML or has unknown keys / wrong types.
-    #[error("{file}: {message}")]
-    Parse {
-        /// The file's name.
-        file: String,
-        /// The parser's message (with line and key).
-        message: String,
-    },
-    /// A value outside its domain.
-    #[error("{file}: {key}: {message}")]
-    Value {
-        /// The file's name.
-        file: String,
-        /// Key path of the value.
-        key: String,
-        /// What is wrong.
-        message: String,
-    },
+    /// A problem with the file: its syntax, a key's type, or a value; located by file, line
+    /// and key (indices from 1, as in scenario files).
+    #[error(transparent)]
+    File(#[from] LoadError),
     /// A condition made the base scenario invalid.
     #[error("condition '{condition}', method '{method}': {source}")]
     Scenario {
@@ -46,6 +33,16 @@ pub enum CompareError {
         /// The scenario's complaint.
         source: SpecError,
     },
+}
+
+/// Most seeds per cell, in a file or from the command line.
+pub const MAX_SEEDS: u64 = 1_000_000;
+/// Most runs of a comparison (methods × conditions × seeds): every run's row is kept.
+pub const MAX_RUNS: u64 = 2_000_000;
+
+/// A value error at `key` of comparison file `file` (the line is found by the caller).
+fn value_error(file: &str, key: &str, message: String) -> CompareError {
+    CompareError::File(LoadError { source_name: file.into(), line: None, key: Some(key.into()), message })
 }
 
 /// A method entry of a comparison file: a label, or a table with options.
@@ -229,30 +226,51 @@ impl Comparison {
         file: &str,
         resolve: impl FnOnce(&str) -> Result<ScenarioSpec, String>,
     ) -> Result<Self, CompareError> {
-        let spec = Self::parse_spec(text, file)?;
-        let base = resolve(&spec.scenario).map_err(|message| CompareError::Value {
-            file: file.into(),
-            key: "scenario".into(),
-            message,
-        })?;
-        Self::check(spec, base, file)
+        Self::from_spec(Self::parse_spec(text, file)?, text, file, resolve)
     }
 
-    /// Parses a comparison file's text into its spec.
+    /// Parses a comparison file's text into its spec (syntax and types only).
     pub fn parse_spec(text: &str, file: &str) -> Result<ComparisonSpec, CompareError> {
-        toml::from_str(text).map_err(|e| CompareError::Parse { file: file.into(), message: e.to_string() })
+        toml::from_str(text).map_err(|e| syntax_error(text, file, &e).into())
+    }
+
+    /// Checks a comparison spec read from `text` (and perhaps edited since, like `seeds` from
+    /// the command line); errors name the file, the line and the key.
+    pub fn from_spec(
+        spec: ComparisonSpec,
+        text: &str,
+        file: &str,
+        resolve: impl FnOnce(&str) -> Result<ScenarioSpec, String>,
+    ) -> Result<Self, CompareError> {
+        let located = |e: CompareError| match e {
+            CompareError::File(mut l) if l.line.is_none() => {
+                l.line = l.key.as_deref().and_then(|k| locate(text, k));
+                CompareError::File(l)
+            }
+            other => other,
+        };
+        let base = resolve(&spec.scenario).map_err(|message| located(value_error(file, "scenario", message)))?;
+        Self::check(spec, base, file).map_err(located)
     }
 
     /// Checks a parsed specification against its base scenario's spec.
     pub fn check(spec: ComparisonSpec, base_spec: ScenarioSpec, file: &str) -> Result<Self, CompareError> {
-        let base = Scenario::try_from(base_spec.clone()).map_err(|e| CompareError::Value {
-            file: file.into(),
-            key: "scenario".into(),
-            message: e.to_string(),
-        })?;
-        let bad = |key: String, message: String| CompareError::Value { file: file.into(), key, message };
-        if spec.seeds == 0 {
-            return Err(bad("seeds".into(), "must be at least 1".into()));
+        let base = Scenario::try_from(base_spec.clone()).map_err(|e| value_error(file, "scenario", e.to_string()))?;
+        let bad = |key: String, message: String| value_error(file, &key, message);
+        if !(1..=MAX_SEEDS).contains(&spec.seeds) {
+            return Err(bad("seeds".into(), format!("must be 1 to {MAX_SEEDS}, found {}", spec.seeds)));
+        }
+        let runs = (spec.methods.len() as u64).saturating_mul(spec.conditions.len() as u64).saturating_mul(spec.seeds);
+        if runs > MAX_RUNS {
+            return Err(bad(
+                "seeds".into(),
+                format!(
+                    "{} methods × {} conditions × {} seeds = {runs} runs, more than the {MAX_RUNS} a comparison may have",
+                    spec.methods.len(),
+                    spec.conditions.len(),
+                    spec.seeds
+                ),
+            ));
         }
         if spec.methods.is_empty() {
             return Err(bad("methods".into(), "name at least one method".into()));
@@ -268,7 +286,7 @@ impl Comparison {
                     (method.as_str(), name.clone(), *horizon, gains.clone())
                 }
             };
-            let key = format!("methods[{k}]");
+            let key = format!("methods[{}]", k + 1);
             let method = method_from(label, gains.as_ref())
                 .map_err(|(sub, message)| bad(if sub { format!("{key}.gains") } else { key.clone() }, message))?;
             let horizon = horizon.unwrap_or(1);
@@ -287,7 +305,7 @@ impl Comparison {
         }
         let mut conditions: Vec<Condition> = Vec::new();
         for (k, c) in spec.conditions.iter().enumerate() {
-            let key = |f: &str| format!("condition[{k}].{f}");
+            let key = |f: &str| format!("condition[{}].{f}", k + 1);
             let probability = |f: &str, v: Option<f64>| match v {
                 Some(p) if !(0.0..=1.0).contains(&p) => {
                     Err(bad(key(f), format!("must be a probability in [0, 1], found {p}")))
@@ -388,25 +406,25 @@ mod tests {
     fn bad_comparisons_name_the_key() {
         let head = "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = ['proximity']\n";
         let cases = [
-            (format!("{head}[[condition]]\nname = 'a'\nradio_loss = 1.5\n"), "condition[0].radio_loss"),
-            (format!("{head}[[condition]]\nname = 'a'\nradio_delay_s = 0.05\n"), "condition[0].radio_delay_s"),
-            (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 9\n"), "condition[0].fail_uav"),
+            (format!("{head}[[condition]]\nname = 'a'\nradio_loss = 1.5\n"), "condition[1].radio_loss"),
+            (format!("{head}[[condition]]\nname = 'a'\nradio_delay_s = 0.05\n"), "condition[1].radio_delay_s"),
+            (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 9\n"), "condition[1].fail_uav"),
             (format!("{head}[[condition]]\nname = 'a'\nwind = 3\n"), "wind"),
             (
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
                  methods = [{ method = 'consensus', gains = { leader_share = -1.0 } }]\n[[condition]]\nname = 'a'\n"
                     .into(),
-                "methods[0].gains",
+                "methods[1].gains",
             ),
             (
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
                  methods = [{ method = 'flocking', gains = { c3 = 1.0 } }]\n[[condition]]\nname = 'a'\n"
                     .into(),
-                "methods[0].gains",
+                "methods[1].gains",
             ),
             (
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = ['pid']\n[[condition]]\nname = 'a'\n".into(),
-                "methods[0]",
+                "methods[1]",
             ),
             (
                 "name = 'x'\nscenario = 'moon'\nseeds = 2\nmethods = ['proximity']\n[[condition]]\nname = 'a'\n".into(),
@@ -416,7 +434,21 @@ mod tests {
         for (text, key) in cases {
             let e = parse(&text).expect_err(key).to_string();
             assert!(e.contains(key), "{e} should name {key}");
+            // Located: `test.toml:LINE: key: …`.
+            let line =
+                e.strip_prefix("test.toml:").and_then(|r| r.split(':').next()).and_then(|l| l.parse::<usize>().ok());
+            assert!(line.is_some(), "{e} has no line");
         }
+        // Seeds beyond the bound, and a product of cells that would not fit in memory.
+        let e = parse(&format!("{head}[[condition]]\nname = 'a'\n").replace("seeds = 2", "seeds = 4294967296"))
+            .expect_err("too many seeds")
+            .to_string();
+        assert!(e.contains("test.toml:3: seeds: must be 1 to 1000000"), "{e}");
+        let many =
+            "name = 'x'\nscenario = 'paper'\nseeds = 1000000\nmethods = ['proximity', 'consensus', 'flocking']\n\
+                    [[condition]]\nname = 'a'\n[[condition]]\nname = 'b'\n";
+        let e = parse(many).expect_err("too many runs").to_string();
+        assert!(e.contains("6000000 runs, more than the 2000000"), "{e}");
     }
 
     #[test]

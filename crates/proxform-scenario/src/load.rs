@@ -40,10 +40,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scenario, LoadError> {
 /// Parses a scenario file's text into its spec (TOML syntax, known keys, value types only);
 /// the name defaults to the file's stem.
 pub fn parse_spec(text: &str, source_name: &str) -> Result<ScenarioSpec, LoadError> {
-    let spec: ScenarioSpec = toml::from_str(text).map_err(|e| {
-        let line = e.span().map(|s| line_of(text, s.start));
-        LoadError { source_name: source_name.into(), line, key: None, message: e.message().trim().replace('\n', " ") }
-    })?;
+    let spec: ScenarioSpec = toml::from_str(text).map_err(|e| syntax_error(text, source_name, &e))?;
     let default_name =
         std::path::Path::new(source_name).file_stem().and_then(|s| s.to_str()).unwrap_or("scenario").to_string();
     Ok(ScenarioSpec { name: spec.name.clone().or(Some(default_name)), ..spec })
@@ -67,6 +64,78 @@ pub fn check(spec: ScenarioSpec, text: &str, source_name: &str) -> Result<Scenar
         }
         LoadError { source_name: source_name.into(), line, key: Some(e.key.clone()), message: e.message }
     })
+}
+
+/// A TOML or type error located in `text`: its line, the key that line assigns, and the
+/// message in the user's words.
+pub fn syntax_error(text: &str, source_name: &str, e: &toml::de::Error) -> LoadError {
+    let line = e.span().map(|s| line_of(text, s.start));
+    let key = line.and_then(|l| key_at(text, l));
+    LoadError { source_name: source_name.into(), line, key, message: plain_words(e.message()) }
+}
+
+/// Serde's and TOML's words for types, in the words of a file's author.
+pub fn plain_words(message: &str) -> String {
+    let mut m = message.trim().replace('\n', " ");
+    const WORDS: [(&str, &str); 18] = [
+        ("expected f64", "expected a number"),
+        ("expected u32", "expected a whole number ≥ 0"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected i64", "expected a whole number"),
+        ("expected a boolean", "expected true or false"),
+        ("expected a string", "expected text in quotes"),
+        ("expected a sequence", "expected a list [ … ]"),
+        ("expected a map", "expected a table"),
+        ("expected an array of length 3", "expected a list of 3 numbers"),
+        ("invalid type: string", "found the text"),
+        ("invalid type: floating point", "found the number"),
+        ("invalid type: integer", "found the whole number"),
+        ("invalid type: boolean", "found"),
+        ("invalid type: sequence", "found a list"),
+        ("invalid type: map", "found a table"),
+        ("invalid value: integer", "found"),
+        ("invalid length", "found a list of length"),
+        ("unknown field", "unknown key"),
+    ];
+    for (rust, plain) in WORDS {
+        m = m.replace(rust, plain);
+    }
+    // "expected struct FooSpec" and "expected one of `a`, `b`".
+    if let Some(i) = m.find("expected struct ") {
+        let end = m[i + 16..].find(|c: char| !c.is_alphanumeric()).map_or(m.len(), |e| i + 16 + e);
+        m.replace_range(i..end, "expected a table");
+    }
+    m.replace("missing field", "missing key").replace('`', "")
+}
+
+/// The key path that line `line` (from 1) of `text` assigns, as `locate` reads it:
+/// `controller.lambda`, `fault[2].at_s`; the table's own path on a header line.
+pub fn key_at(text: &str, line: usize) -> Option<String> {
+    let mut header: Vec<String> = Vec::new();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for (n, raw) in text.lines().enumerate() {
+        let l = raw.split('#').next().unwrap_or("").trim();
+        let here = n + 1 == line;
+        if let Some(h) = l.strip_prefix("[[").and_then(|x| x.strip_suffix("]]")) {
+            let name = h.trim().to_string();
+            let k = *counts.entry(name.clone()).and_modify(|c| *c += 1).or_insert(1);
+            header = name.split('.').map(|s| s.trim().to_string()).collect();
+            if let Some(last) = header.last_mut() {
+                *last = format!("{last}[{k}]");
+            }
+        } else if let Some(h) = l.strip_prefix('[').and_then(|x| x.strip_suffix(']')) {
+            header = h.split('.').map(|s| s.trim().to_string()).collect();
+        } else if here {
+            let key = l.split_once('=').map(|(k, _)| k.trim().trim_matches('"').to_string());
+            let mut path = header.clone();
+            path.extend(key);
+            return (!path.is_empty()).then(|| path.join("."));
+        }
+        if here {
+            return (!header.is_empty()).then(|| header.join("."));
+        }
+    }
+    None
 }
 
 fn line_of(text: &str, offset: usize) -> usize {
@@ -183,5 +252,29 @@ mod tests {
         assert_eq!(locate(text, "fault[1].at_s"), Some(8));
         assert_eq!(locate(text, "name"), Some(1));
         assert_eq!(locate(text, "controller"), Some(2));
+        assert_eq!(key_at(text, 4).as_deref(), Some("controller.lambda"));
+        assert_eq!(key_at(text, 11).as_deref(), Some("fault[2].at_s"));
+        assert_eq!(key_at(text, 1).as_deref(), Some("name"));
+    }
+
+    #[test]
+    fn type_errors_name_the_key_in_the_users_words() {
+        let cases = [
+            ("[controller]\nlambda = \"x\"\n", "controller.lambda", "expected a number"),
+            ("[vehicle]\nattitude_max_deg = [1.0, 2.0]\n", "vehicle.attitude_max_deg", "a list of 3 numbers"),
+            ("[controller]\nareas = 8.5\n", "controller.areas", "expected a whole number"),
+            ("navigator = -1\n", "navigator", "a whole number ≥ 0"),
+            ("formation = 3\n", "formation", "expected a table"),
+            ("[[fault]]\nkind = \"remove\"\n[[fault]]\nat_s = true\n", "fault[2].at_s", "found true"),
+            ("[controller]\nlamda = 0.5\n", "controller.lamda", "unknown key lamda"),
+        ];
+        for (text, key, words) in cases {
+            let e = parse(text, "t.toml").expect_err(key);
+            assert_eq!(e.key.as_deref(), Some(key), "{e}");
+            assert!(e.message.contains(words), "{e} should say «{words}»");
+            for rust in ["f64", "u32", "i64", "sequence", "struct", "`"] {
+                assert!(!e.message.contains(rust), "{e} speaks Rust ({rust})");
+            }
+        }
     }
 }

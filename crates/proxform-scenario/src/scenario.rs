@@ -9,6 +9,7 @@ use std::sync::Arc;
 use proxform_core::state::State9;
 use proxform_core::{Agent, AgentSetup, ControllerParams, DependencySet, Formation, Method, UavId, VehicleModel};
 
+use crate::convert::SpecError;
 use crate::faults::Fault;
 use crate::path::NavigatorPath;
 use crate::radio::RadioModel;
@@ -83,9 +84,16 @@ pub struct Scenario {
     pub(crate) beacons: Vec<UavId>,
     pub(crate) wind: Wind,
     pub(crate) radio: RadioModel,
+    pub(crate) warnings: Vec<SpecError>,
 }
 
 impl Scenario {
+    /// What the scenario allows but probably did not mean (a fault after the flight, UAVs whose
+    /// references never lead to the navigator), each naming its key.
+    pub fn warnings(&self) -> &[SpecError] {
+        &self.warnings
+    }
+
     /// The spec this scenario was converted from, as given (defaults not filled in); edit a
     /// clone and convert it again to change the scenario. [`crate::resolved`] gives the spec
     /// with every default filled in.

@@ -13,7 +13,7 @@ fn paper_with(label: &str, edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
 }
 
 fn batch(s: &Scenario, options: RunOptions, seed: u64, runs: u64) -> Summary {
-    run_batch(s, options, seed, runs, false, &|| {}).summary
+    run_batch(s, options, seed, runs, None, &|| {}).summary
 }
 
 #[test]
@@ -22,7 +22,7 @@ fn every_baseline_holds_the_paper_formation_over_an_ideal_radio() {
         let s = paper_with(label, |_| {});
         let sum = batch(&s, RunOptions::default(), 1, 20);
         assert_eq!(sum.pass_fraction, 1.0, "{label}: {:?}", sum.p99_abs_error);
-        assert!(sum.swarm.radio_msgs_per_uav_s > 1.0, "{label} hears the radio");
+        assert!(sum.swarm.radio_used_per_uav_s > 1.0, "{label} hears the radio");
         // Switching the adjustment off breaks every one of them: the check can fail.
         let off = batch(&s, RunOptions { adjustment_enabled: false, ..RunOptions::default() }, 1, 3);
         assert_eq!(off.pass_fraction, 0.0, "{label} without adjustment");
@@ -53,7 +53,7 @@ fn radio_based_methods_read_only_the_radio() {
     });
     let (run, _) = run_one(&s, RunOptions::default(), 3, 0, false);
     assert!(run.alone_s_per_uav > 4.0, "{}", run.alone_s_per_uav);
-    assert_eq!(run.radio_msgs_per_uav_s, 0.0);
+    assert_eq!(run.radio_used_per_uav_s, 0.0);
 }
 
 #[test]
@@ -64,9 +64,10 @@ fn a_longer_horizon_flies_the_formation_through_the_qp() {
             s.duration_s = Some(40.0);
         })
     };
-    let h5 = run_batch(&with_horizon(5), RunOptions::default(), 2, 4, true, &|| {});
+    let h5 =
+        run_batch(&with_horizon(5), RunOptions::default(), 2, 4, Some(proxform_sim::Trajectory::default()), &|| {});
     assert_eq!(h5.summary.pass_fraction, 1.0, "{:?}", h5.summary.p99_abs_error);
-    let h1 = run_batch(&with_horizon(1), RunOptions::default(), 2, 4, false, &|| {});
+    let h1 = run_batch(&with_horizon(1), RunOptions::default(), 2, 4, None, &|| {});
     // The QP is really used: the flights differ.
     assert_ne!(h5.runs[0].max_abs_error, h1.runs[0].max_abs_error);
     assert!(h5.runs[0].adjustments > 0);

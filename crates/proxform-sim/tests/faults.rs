@@ -10,7 +10,7 @@ fn paper(edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
 }
 
 fn batch(s: &Scenario, seed: u64, runs: u64) -> Summary {
-    run_batch(s, RunOptions::default(), seed, runs, false, &|| {}).summary
+    run_batch(s, RunOptions::default(), seed, runs, None, &|| {}).summary
 }
 
 fn one(s: &Scenario, seed: u64) -> RunSummary {
@@ -145,6 +145,6 @@ fn under_30_percent_dropout_the_losses_that_matter_are_those_of_the_main_referen
     assert!(refs_lost.pass_fraction < 0.95, "{}", refs_lost.pass_fraction);
     // And the method is what holds it: without adjustment nothing passes.
     let off = RunOptions { adjustment_enabled: false, ..RunOptions::default() };
-    let off = run_batch(&with(0.3, 0.1), off, 17, 20, false, &|| {}).summary;
+    let off = run_batch(&with(0.3, 0.1), off, 17, 20, None, &|| {}).summary;
     assert_eq!(off.pass_fraction, 0.0);
 }

@@ -14,7 +14,7 @@ fn edited(edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
 }
 
 fn run_batch(s: &Scenario, seed: u64, runs: u64) -> proxform_sim::BatchResult {
-    proxform_sim::run_batch(s, RunOptions::default(), seed, runs, false, &|| {})
+    proxform_sim::run_batch(s, RunOptions::default(), seed, runs, None, &|| {})
 }
 
 fn run_one(s: &Scenario, seed: u64, run: u64) -> RunSummary {

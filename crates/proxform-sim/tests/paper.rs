@@ -13,7 +13,7 @@ fn batch_with(
     threads: usize,
 ) -> proxform_sim::BatchResult {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
-    pool.install(|| run_batch(scenario, options, seed, runs, false, &|| {}))
+    pool.install(|| run_batch(scenario, options, seed, runs, None, &|| {}))
 }
 
 fn batch(scenario: &Scenario, seed: u64, runs: u64, threads: usize) -> proxform_sim::BatchResult {

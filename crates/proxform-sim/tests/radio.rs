@@ -14,14 +14,16 @@ fn radio_only(edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
 }
 
 fn batch(s: &Scenario, seed: u64, runs: u64) -> Summary {
-    run_batch(s, RunOptions::default(), seed, runs, false, &|| {}).summary
+    run_batch(s, RunOptions::default(), seed, runs, None, &|| {}).summary
 }
 
 #[test]
 fn an_ideal_radio_keeps_the_formation_and_a_blackout_loses_it() {
     let ideal = batch(&radio_only(|_| {}), 4, 30);
     assert!(ideal.pass_fraction >= 0.95, "{}", ideal.pass_fraction);
-    assert!(ideal.swarm.radio_msgs_per_uav_s > 40.0, "{}", ideal.swarm.radio_msgs_per_uav_s);
+    assert!(ideal.swarm.radio_used_per_uav_s > 40.0, "{}", ideal.swarm.radio_used_per_uav_s);
+    // Every UAV broadcasts every period: 10 messages sent per UAV per second, whatever is used.
+    assert!((ideal.swarm.radio_sent_per_uav_s - 10.0).abs() < 1e-9, "{}", ideal.swarm.radio_sent_per_uav_s);
     let dark = batch(&radio_only(|s| s.fault = vec![FaultSpec::radio_blackout(20.0, 80.0)]), 4, 10);
     assert_eq!(dark.pass_fraction, 0.0);
     assert!(dark.swarm.alone_s_per_uav > 70.0, "{}", dark.swarm.alone_s_per_uav);
@@ -41,6 +43,6 @@ fn delay_and_bursty_loss_cost_accuracy() {
         8,
         20,
     );
-    assert!(bursty.swarm.radio_msgs_per_uav_s < 0.9 * base.swarm.radio_msgs_per_uav_s);
+    assert!(bursty.swarm.radio_used_per_uav_s < 0.9 * base.swarm.radio_used_per_uav_s);
     assert!(bursty.p99_abs_error.y_m > base.p99_abs_error.y_m);
 }

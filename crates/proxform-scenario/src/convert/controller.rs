@@ -5,7 +5,7 @@ use proxform_core::controller::MAX_HORIZON;
 use proxform_core::state;
 use proxform_core::{ControllerParams, Envelope, Method, PredictorKind};
 
-use super::values::{err, finite, non_negative, positive, probability, SpecError};
+use super::values::{distance, err, finite, non_negative, positive, probability, SpecError};
 use crate::spec::ControllerSpec;
 
 /// A threshold's state index, key, value as written and unit conversion.
@@ -39,19 +39,19 @@ pub fn params(
         p.areas.areas = m as usize;
     }
     if let Some(v) = c.sensing_range_m {
-        p.areas.sensing_range_m = positive("controller.sensing_range_m", v)?;
+        p.areas.sensing_range_m = distance("controller.sensing_range_m", positive("controller.sensing_range_m", v)?)?;
     }
     if let Some(v) = c.lambda {
         let v = finite("controller.lambda", v)?;
         if !(0.0..=1.0).contains(&v) {
-            return Err(err("controller.lambda", format!("λ must be in [0, 1], found {v}")));
+            return Err(err("controller.lambda", format!("λ must be in [0, 1], found {}", super::values::show(v))));
         }
         p.lambda = v;
     }
     if let Some(v) = c.rho {
         let v = positive("controller.rho", v)?;
         if v > 1.0 {
-            return Err(err("controller.rho", format!("ρ must be in (0, 1], found {v}")));
+            return Err(err("controller.rho", format!("ρ must be in (0, 1], found {}", super::values::show(v))));
         }
         p.envelope.rho = v;
     }
@@ -81,12 +81,15 @@ pub fn params(
         p.horizon = v as u32;
     }
     if let Some(v) = c.separation_m {
-        p.separation_m = Some(non_negative("controller.separation_m", v)?);
+        p.separation_m = Some(distance("controller.separation_m", non_negative("controller.separation_m", v)?)?);
     }
     if let Some(v) = c.own_filter_gain {
         let v = positive("controller.own_filter_gain", v)?;
         if v > 1.0 {
-            return Err(err("controller.own_filter_gain", format!("must be in (0, 1], found {v}")));
+            return Err(err(
+                "controller.own_filter_gain",
+                format!("must be in (0, 1], found {}", super::values::show(v)),
+            ));
         }
         p.own_filter_gain = v;
     }

@@ -38,7 +38,7 @@ pub fn initial_states(
 ) -> Result<Vec<State9>, SpecError> {
     let nav0 = path.state_at(0.0, [0.0; 3]);
     let speed = match spec.initial.speed_kmh {
-        Some(v) => Some(kmh(positive("initial.speed_kmh", v)?)),
+        Some(v) => Some(kmh(super::values::speed_kmh("initial.speed_kmh", positive("initial.speed_kmh", v)?)?)),
         None => None,
     };
     let mut initial = in_slots(formation, navigator, &nav0);

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 use proxform_core::angle::deg;
 use proxform_core::{DependencySet, FormationFrame, FormationSlot, UavId};
 
-use super::values::{err, finite, positive, probability, required, uav, vec3, SpecError};
+use super::values::{distance, err, finite, positive, probability, required, uav, vec3, SpecError, MAX_DISTANCE_M};
 use super::MAX_UAVS;
 use crate::defaults;
 use crate::formation::lattice::default_levels;
@@ -53,6 +53,20 @@ fn slots_of(f: &FormationSpec) -> Result<SlotsAndRefs, SpecError> {
         (None, true) => Err(err("formation", "needs [[formation.slot]] entries or a [formation.shape]")),
         (Some(shape), true) => {
             let slots = shape_of(shape)?.slots();
+            // A shape of many UAVs at a large spacing can span more than the models mean.
+            if let Some(far) =
+                slots.iter().map(|s| s.offset_m.amax()).max_by(f64::total_cmp).filter(|d| *d > MAX_DISTANCE_M)
+            {
+                return Err(err(
+                    "formation.shape.spacing_m",
+                    format!(
+                        "the shape reaches {} m from UAV 1, beyond ±{} m: the models are for formations and flights of \
+                         up to 1000 km",
+                        super::values::show(far),
+                        super::values::show(MAX_DISTANCE_M)
+                    ),
+                ));
+            }
             let n = slots.len();
             Ok((slots, vec![None; n]))
         }
@@ -74,6 +88,9 @@ fn slots_of(f: &FormationSpec) -> Result<SlotsAndRefs, SpecError> {
                     return Err(err(format!("{key}.id"), format!("duplicate id {id}")));
                 }
                 let offset = vec3(&format!("{key}.offset_m"), required(&format!("{key}.offset_m"), s.offset_m)?)?;
+                for k in 0..3 {
+                    distance(&format!("{key}.offset_m[{}]", k + 1), offset[k])?;
+                }
                 let att = match s.attitude_offset_deg {
                     Some(a) => vec3(&format!("{key}.attitude_offset_deg"), a)?.map(deg),
                     None => Vector3::zeros(),
@@ -96,7 +113,10 @@ fn shape_of(s: &ShapeSpec) -> Result<Shape, SpecError> {
         }
         Ok(n)
     };
-    let spacing = || positive("formation.shape.spacing_m", required("formation.shape.spacing_m", s.spacing_m)?);
+    let spacing = || {
+        let v = positive("formation.shape.spacing_m", required("formation.shape.spacing_m", s.spacing_m)?)?;
+        distance("formation.shape.spacing_m", v)
+    };
     let angle = || -> Result<f64, SpecError> {
         let a = finite("formation.shape.angle_deg", s.angle_deg.unwrap_or(defaults::SHAPE_ANGLE_DEG))?;
         if a <= 0.0 || a >= 90.0 {
@@ -104,7 +124,9 @@ fn shape_of(s: &ShapeSpec) -> Result<Shape, SpecError> {
         }
         Ok(deg(a))
     };
-    let level = || finite("formation.shape.level_step_m", s.level_step_m.unwrap_or(0.0));
+    let level = || {
+        distance("formation.shape.level_step_m", finite("formation.shape.level_step_m", s.level_step_m.unwrap_or(0.0))?)
+    };
     Ok(match kind.as_str() {
         "triangle" => {
             let rows = required("formation.shape.rows", s.rows)? as usize;
@@ -198,4 +220,61 @@ pub fn dependencies(
             None => Ok(derived[i].clone()),
         })
         .collect()
+}
+
+/// Warnings for UAVs whose main references never lead, however far followed, to the navigator:
+/// they lean only on each other (or on nobody) and can drift away together.
+pub fn drifting_groups(deps: &[DependencySet], navigator: UavId, f: &FormationSpec) -> Vec<SpecError> {
+    let n = deps.len();
+    // Who leans on whom, reversed: from the navigator, follow the UAVs that name each UAV
+    // reached (compressed rows: O(N·k) in time and memory).
+    let mut start = vec![0u32; n + 1];
+    for d in deps {
+        for (j, _) in d.refs() {
+            start[j.index() + 1] += 1;
+        }
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut leaners = vec![0u32; start[n] as usize];
+    for (i, d) in deps.iter().enumerate() {
+        for (j, _) in d.refs() {
+            leaners[fill[j.index()] as usize] = i as u32;
+            fill[j.index()] += 1;
+        }
+    }
+    let mut reached = vec![false; n];
+    let mut queue = vec![navigator.0];
+    reached[navigator.index()] = true;
+    while let Some(j) = queue.pop() {
+        for &i in &leaners[start[j as usize] as usize..start[j as usize + 1] as usize] {
+            if !reached[i as usize] {
+                reached[i as usize] = true;
+                queue.push(i);
+            }
+        }
+    }
+    let adrift: Vec<usize> = (0..n).filter(|&i| !reached[i]).collect();
+    if adrift.is_empty() {
+        return Vec::new();
+    }
+    let first = adrift[0];
+    let key = if f.slot.is_empty() {
+        "formation.dependencies".to_string()
+    } else {
+        format!("formation.slot[{}].depends_on", first + 1)
+    };
+    let shown: Vec<String> = adrift.iter().take(8).map(|i| (i + 1).to_string()).collect();
+    let more = if adrift.len() > 8 { format!(" and {} more", adrift.len() - 8) } else { String::new() };
+    vec![err(
+        key,
+        format!(
+            "UAVs {}{more} never lean, through their main references, on the navigator (UAV {}): they can drift \
+             away together; name a UAV that leads to it, or set formation.dependencies.navigator_degree",
+            shown.join(", "),
+            navigator.0 + 1
+        ),
+    )]
 }

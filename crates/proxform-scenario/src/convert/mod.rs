@@ -28,6 +28,10 @@ use values::{err, non_negative, or_default, positive, uav};
 
 /// Longest flight accepted, in update periods.
 pub const MAX_STEPS: f64 = 1e8;
+/// Shortest and longest update period accepted (s).
+pub const MIN_DT_S: f64 = 1e-3;
+/// See [`MIN_DT_S`].
+pub const MAX_DT_S: f64 = 1.0;
 /// Most UAVs a scenario may have.
 pub const MAX_UAVS: usize = 10_000_000;
 
@@ -37,12 +41,35 @@ impl TryFrom<ScenarioSpec> for Scenario {
     fn try_from(spec: ScenarioSpec) -> Result<Self, SpecError> {
         let name = spec.name.clone().unwrap_or_else(|| "scenario".into());
         let dt_s = or_default("dt_s", spec.dt_s, defaults::DT_S, positive)?;
+        if !(MIN_DT_S..=MAX_DT_S).contains(&dt_s) {
+            return Err(err(
+                "dt_s",
+                format!(
+                    "{} s is outside {MIN_DT_S} to {MAX_DT_S} s: the vehicle models advance one update period at a \
+                     time and the controllers act once a period, which holds for periods of milliseconds to a second",
+                    values::show(dt_s)
+                ),
+            ));
+        }
         let duration_s = or_default("duration_s", spec.duration_s, defaults::DURATION_S, positive)?;
         if duration_s / dt_s > MAX_STEPS {
-            return Err(err("duration_s", format!("{duration_s} s at Δt = {dt_s} s is more than {MAX_STEPS:e} steps")));
+            return Err(err(
+                "duration_s",
+                format!("{} s at Δt = {dt_s} s is more than {MAX_STEPS:e} steps", values::show(duration_s)),
+            ));
+        }
+        if (duration_s / dt_s).round() < 1.0 {
+            return Err(err(
+                "duration_s",
+                format!(
+                    "{} s is shorter than one update period (dt_s = {dt_s} s): nothing would fly",
+                    values::show(duration_s)
+                ),
+            ));
         }
         let safety_distance_m =
             or_default("safety_distance_m", spec.safety_distance_m, defaults::SAFETY_DISTANCE_M, positive)?;
+        values::distance("safety_distance_m", safety_distance_m)?;
         let warmup_s = or_default("warmup_s", spec.warmup_s, defaults::WARMUP_S, non_negative)?;
         let vehicle = vehicle::vehicle(&spec.vehicle)?;
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
@@ -79,6 +106,8 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
         let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
+        let mut warnings = world::faults_after(&faults, duration_s);
+        warnings.extend(formation::drifting_groups(&dependencies, navigator, &spec.formation));
         let agents = AgentSetup::new(method, navigator, setup, formation, dependencies)
             .map_err(|e| err("controller.method", e.to_string()))?;
         Ok(Scenario {
@@ -101,6 +130,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             beacons,
             wind,
             radio,
+            warnings,
         })
     }
 }

@@ -2,7 +2,7 @@
 
 use proxform_core::angle::{deg, kmh};
 
-use super::values::{err, finite, non_negative, positive, required, vec3, SpecError};
+use super::values::{distance, err, finite, non_negative, positive, required, speed_kmh, vec3, SpecError};
 use crate::defaults;
 use crate::path::waypoints::waypoint_segments;
 use crate::path::{NavigatorPath, PaperPath, Segment, SegmentsPath};
@@ -45,7 +45,10 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
             Err(err("path", "amplitudes apply to the paper path only (kind = \"paper\")"))
         }
         Some("segments") => {
-            let v0 = kmh(positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?);
+            let v0 = kmh(speed_kmh(
+                "path.speed_kmh",
+                positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?,
+            )?);
             let course = deg(finite("path.course_deg", p.course_deg.unwrap_or(0.0))?);
             let mut speed = v0;
             let mut segments = Vec::new();
@@ -55,7 +58,7 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
                 let w = deg(finite(&format!("{key}.turn_rate_deg_s"), s.turn_rate_deg_s.unwrap_or(0.0))?);
                 let c = kmh(finite(&format!("{key}.climb_kmh"), s.climb_kmh.unwrap_or(0.0))?);
                 if let Some(v) = s.speed_kmh {
-                    speed = kmh(positive(&format!("{key}.speed_kmh"), v)?);
+                    speed = kmh(speed_kmh(&format!("{key}.speed_kmh"), positive(&format!("{key}.speed_kmh"), v)?)?);
                 }
                 segments.push(Segment {
                     duration_s: d,
@@ -72,12 +75,21 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
             if !p.segment.is_empty() {
                 return Err(err("path.segment", "a waypoints path takes points_m, not segments"));
             }
-            let v = kmh(positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?);
-            let r = positive("path.turn_radius_m", required("path.turn_radius_m", p.turn_radius_m)?)?;
+            let v = kmh(speed_kmh(
+                "path.speed_kmh",
+                positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?,
+            )?);
+            let r = distance(
+                "path.turn_radius_m",
+                positive("path.turn_radius_m", required("path.turn_radius_m", p.turn_radius_m)?)?,
+            )?;
             let points = required("path.points_m", p.points_m.clone())?;
             let transition = positive("path.transition_s", p.transition_s.unwrap_or(defaults::PATH_TRANSITION_S))?;
             for (k, pt) in points.iter().enumerate() {
-                vec3(&format!("path.points_m[{}]", k + 1), *pt)?;
+                let q = vec3(&format!("path.points_m[{}]", k + 1), *pt)?;
+                for a in 0..3 {
+                    distance(&format!("path.points_m[{}]", k + 1), q[a])?;
+                }
             }
             let segments = waypoint_segments(&points, v, r, transition).map_err(|e| {
                 err(e.point.map_or("path.points_m".into(), |k| format!("path.points_m[{k}]")), e.message)

@@ -18,6 +18,17 @@ pub fn err(key: impl Into<String>, message: impl Into<String>) -> SpecError {
     SpecError { key: key.into(), message: message.into() }
 }
 
+/// A number as a message shows it: plainly in the usual range, in scientific notation far
+/// outside it (`1e308`, not 309 digits).
+pub fn show(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-4..1e9).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// A finite number.
 pub fn finite(key: &str, v: f64) -> Result<f64, SpecError> {
     if v.is_finite() {
@@ -33,7 +44,7 @@ pub fn positive(key: &str, v: f64) -> Result<f64, SpecError> {
     if v > 0.0 {
         Ok(v)
     } else {
-        Err(err(key, format!("must be > 0, found {v}")))
+        Err(err(key, format!("must be > 0, found {}", show(v))))
     }
 }
 
@@ -43,7 +54,7 @@ pub fn non_negative(key: &str, v: f64) -> Result<f64, SpecError> {
     if v >= 0.0 {
         Ok(v)
     } else {
-        Err(err(key, format!("must be ≥ 0, found {v}")))
+        Err(err(key, format!("must be ≥ 0, found {}", show(v))))
     }
 }
 
@@ -53,7 +64,7 @@ pub fn probability(key: &str, v: f64) -> Result<f64, SpecError> {
     if (0.0..=1.0).contains(&v) {
         Ok(v)
     } else {
-        Err(err(key, format!("must be a probability in [0, 1], found {v}")))
+        Err(err(key, format!("must be a probability in [0, 1], found {}", show(v))))
     }
 }
 
@@ -96,4 +107,29 @@ pub fn or_default(
     check: fn(&str, f64) -> Result<f64, SpecError>,
 ) -> Result<f64, SpecError> {
     v.map_or(Ok(default), |v| check(key, v))
+}
+
+/// Farthest distance a formation, path or sensor may span (m): beyond it the flat-earth
+/// models mean nothing (and numbers overflow when squared).
+pub const MAX_DISTANCE_M: f64 = 1e6;
+/// Fastest speed a vehicle or path may have (km/h).
+pub const MAX_SPEED_KMH: f64 = 3000.0;
+
+/// A value no larger in magnitude than `max` (`unit` and `meaning` explain the bound).
+pub fn within(key: &str, v: f64, max: f64, unit: &str, meaning: &str) -> Result<f64, SpecError> {
+    if v.abs() <= max {
+        Ok(v)
+    } else {
+        Err(err(key, format!("{} {unit} is beyond ±{} {unit}: {meaning}", show(v), show(max))))
+    }
+}
+
+/// A distance within [`MAX_DISTANCE_M`].
+pub fn distance(key: &str, v: f64) -> Result<f64, SpecError> {
+    within(key, v, MAX_DISTANCE_M, "m", "the models are for formations and flights of up to 1000 km")
+}
+
+/// A speed within [`MAX_SPEED_KMH`].
+pub fn speed_kmh(key: &str, v: f64) -> Result<f64, SpecError> {
+    within(key, v, MAX_SPEED_KMH, "km/h", "faster than any vehicle the models describe")
 }

@@ -3,7 +3,7 @@
 use proxform_core::angle::{deg, kmh};
 use proxform_core::{FixedWingModel, KinematicLimits, KinematicModel, VehicleModel};
 
-use super::values::{err, positive, positive3, SpecError};
+use super::values::{err, positive, positive3, speed_kmh, SpecError};
 use crate::spec::VehicleSpec;
 
 /// The vehicle model; keys of the other model are refused.
@@ -51,6 +51,9 @@ pub fn vehicle(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
             Ok(())
         };
         set("stall_speed_kmh", v.stall_speed_kmh, kmh, &mut m.stall_speed_mps)?;
+        if let Some(x) = v.max_speed_kmh {
+            speed_kmh("vehicle.max_speed_kmh", x)?;
+        }
         set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
         set("bank_max_deg", v.bank_max_deg, deg, &mut m.bank_max_rad)?;
         set("load_factor_max", v.load_factor_max, |x| x, &mut m.load_factor_max)?;
@@ -72,7 +75,7 @@ pub fn vehicle(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
         l.vx_min_mps = kmh(positive("vehicle.vx_min_kmh", x)?);
     }
     if let Some(x) = v.vx_max_kmh {
-        l.vx_max_mps = kmh(positive("vehicle.vx_max_kmh", x)?);
+        l.vx_max_mps = kmh(speed_kmh("vehicle.vx_max_kmh", positive("vehicle.vx_max_kmh", x)?)?);
     }
     if l.vx_min_mps >= l.vx_max_mps {
         return Err(err("vehicle.vx_min_kmh", "must be below vehicle.vx_max_kmh"));

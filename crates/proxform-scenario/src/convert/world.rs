@@ -115,7 +115,7 @@ pub fn radio(r: &RadioSpec, dt_s: f64, n: usize) -> Result<(RadioModel, Vec<UavI
     };
     let mut m = RadioModel { broadcast_all: r.broadcast_all.unwrap_or(false), ..Default::default() };
     if let Some(v) = r.range_m {
-        m.range_m = positive("radio.range_m", v)?;
+        m.range_m = super::values::distance("radio.range_m", positive("radio.range_m", v)?)?;
     }
     if let Some(v) = r.delay_s {
         let v = non_negative("radio.delay_s", v)?;
@@ -175,4 +175,29 @@ fn fault(k: usize, f: &FaultSpec, n: usize) -> Result<Fault, SpecError> {
             ))
         }
     })
+}
+
+/// Warnings for faults that start after the flight ends: they never happen.
+pub fn faults_after(faults: &[Fault], duration_s: f64) -> Vec<SpecError> {
+    faults
+        .iter()
+        .enumerate()
+        .filter_map(|(k, f)| {
+            let at = match *f {
+                Fault::Remove { at_s, .. }
+                | Fault::Join { at_s, .. }
+                | Fault::Glitch { at_s, .. }
+                | Fault::StuckSensor { at_s, .. }
+                | Fault::RadioBlackout { at_s, .. } => at_s,
+            };
+            (at >= duration_s).then(|| {
+                err(
+                    format!("fault[{}].at_s", k + 1),
+                    format!(
+                        "{at} s is not before the end of the flight (duration_s = {duration_s} s): it never happens"
+                    ),
+                )
+            })
+        })
+        .collect()
 }

@@ -38,7 +38,7 @@ pub struct CompareRow {
     pub min_separation_m: f64,
     /// Adjustments per follower per minute.
     pub adjustments_per_uav_min: f64,
-    /// Radio messages received per UAV per minute.
+    /// Radio messages used (received from UAVs not perceived onboard) per UAV per minute.
     pub messages_per_uav_min: f64,
     /// Mean control effort (inputs over their per-step limits, RSS).
     pub control_effort: f64,
@@ -104,7 +104,7 @@ pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<
                         .sqrt(),
                     min_separation_m: s.min_separation_m,
                     adjustments_per_uav_min: s.adjustments as f64 / s.followers.max(1) as f64 * per_min,
-                    messages_per_uav_min: s.radio_msgs_per_uav_s * 60.0,
+                    messages_per_uav_min: s.radio_used_per_uav_s * 60.0,
                     control_effort: s.control_effort,
                     alone_s_per_uav: s.alone_s_per_uav,
                 }

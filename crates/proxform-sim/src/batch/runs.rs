@@ -62,8 +62,11 @@ pub struct Summary {
     pub runs: u64,
     /// Base seed.
     pub seed: u64,
-    /// Fraction of runs in which every follower stayed within every allowable error.
+    /// Fraction of runs in which every follower stayed within every allowable error (a run in
+    /// which no follower flew does not pass).
     pub pass_fraction: f64,
+    /// Runs in which no follower flew: nothing to judge.
+    pub unjudged_runs: u64,
     /// Largest |error| over all runs and followers.
     pub worst_abs_error: AxisErrors,
     /// 99th percentile (nearest rank) over runs of each run's largest |error|.
@@ -109,8 +112,10 @@ pub struct SwarmMetrics {
     pub close_pairs_mean: f64,
     /// The same, largest run.
     pub close_pairs_max: u64,
-    /// Radio messages received per UAV per second.
-    pub radio_msgs_per_uav_s: f64,
+    /// Radio messages sent per UAV per second.
+    pub radio_sent_per_uav_s: f64,
+    /// Radio messages used (received from UAVs not perceived onboard) per UAV per second.
+    pub radio_used_per_uav_s: f64,
     /// Order (polarisation), mean over the flight.
     pub order_mean: f64,
     /// Order, smallest over all runs and steps.
@@ -123,7 +128,7 @@ pub struct SwarmMetrics {
 }
 
 /// A batch's results.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct BatchResult {
     /// Every run's summary, in run order.
     pub runs: Vec<RunSummary>,
@@ -133,7 +138,8 @@ pub struct BatchResult {
     pub first_trajectory: Option<Trajectory>,
 }
 
-/// Runs one flight and returns its summary (and its trajectory when `record`).
+/// Runs one flight and returns its summary (and its trajectory, kept in memory, when
+/// `record`).
 pub fn run_one(
     scenario: &Scenario,
     options: RunOptions,
@@ -141,7 +147,8 @@ pub fn run_one(
     run: u64,
     record: bool,
 ) -> (RunSummary, Option<Trajectory>) {
-    run_one_ticking(scenario, options, (seed, run), record, &|| {})
+    let recording = record.then(|| Trajectory::for_flight(scenario.steps(), None));
+    run_one_ticking(scenario, options, (seed, run), recording, &|| {})
 }
 
 /// Observer that calls a function after every step (a progress bar's tick).
@@ -155,18 +162,19 @@ impl Observer for Ticker<'_> {
     }
 }
 
-/// [`run_one`] of `(seed, run)`, calling `tick` after every step.
+/// [`run_one`] of `(seed, run)` recording into `record` (if any), calling `tick` after every
+/// step.
 pub fn run_one_ticking(
     scenario: &Scenario,
     options: RunOptions,
     (seed, run): (u64, u64),
-    record: bool,
+    record: Option<Trajectory>,
     tick: &(dyn Fn() + Sync),
 ) -> (RunSummary, Option<Trajectory>) {
     let sim = Simulation::new(scenario, options, seed, run);
     let metrics = RunMetrics::new(scenario);
-    if record {
-        let mut obs = ((metrics, Trajectory::default()), Ticker(tick));
+    if let Some(trajectory) = record {
+        let mut obs = ((metrics, trajectory), Ticker(tick));
         sim.run(&mut obs);
         (obs.0 .0.finish(run, scenario.duration_s()), Some(obs.0 .1))
     } else {
@@ -178,22 +186,24 @@ pub fn run_one_ticking(
 
 /// Runs `runs` flights of `scenario` with seed `seed` on the current rayon pool, calling
 /// `progress` after each finished run, or after each step when there is a single run (a long
-/// flight of a large swarm). The first run's trajectory is kept when `record_first`.
+/// flight of a large swarm). The first run is recorded into `record_first`, if given.
 pub fn run_batch(
     scenario: &Scenario,
     options: RunOptions,
     seed: u64,
     runs: u64,
-    record_first: bool,
+    record_first: Option<Trajectory>,
     progress: &(dyn Fn() + Sync),
 ) -> BatchResult {
     let results: Vec<(RunSummary, Option<Trajectory>)> = if runs == 1 {
         vec![run_one_ticking(scenario, options, (seed, 0), record_first, progress)]
     } else {
+        let first = std::sync::Mutex::new(record_first);
         (0..runs)
             .into_par_iter()
             .map(|r| {
-                let out = run_one(scenario, options, seed, r, record_first && r == 0);
+                let record = if r == 0 { first.lock().ok().and_then(|mut f| f.take()) } else { None };
+                let out = run_one_ticking(scenario, options, (seed, r), record, &|| {});
                 progress();
                 out
             })
@@ -253,6 +263,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         runs: runs.len() as u64,
         seed,
         pass_fraction: runs.iter().filter(|r| r.pass).count() as f64 / n,
+        unjudged_runs: runs.iter().filter(|r| r.judged_steps == 0).count() as u64,
         worst_abs_error: AxisErrors::from_si(worst),
         p99_abs_error: AxisErrors::from_si(p99),
         median_abs_error: AxisErrors::from_si(median),
@@ -269,7 +280,8 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
             control_effort: runs.iter().map(|r| r.control_effort).sum::<f64>() / n,
             close_pairs_mean: runs.iter().map(|r| r.close_pairs as f64).sum::<f64>() / n,
             close_pairs_max: runs.iter().map(|r| r.close_pairs).max().unwrap_or(0),
-            radio_msgs_per_uav_s: runs.iter().map(|r| r.radio_msgs_per_uav_s).sum::<f64>() / n,
+            radio_sent_per_uav_s: runs.iter().map(|r| r.radio_sent_per_uav_s).sum::<f64>() / n,
+            radio_used_per_uav_s: runs.iter().map(|r| r.radio_used_per_uav_s).sum::<f64>() / n,
             order_mean: runs.iter().map(|r| r.order_mean).sum::<f64>() / n,
             order_min: runs.iter().map(|r| r.order_min).fold(1.0, f64::min),
             connectivity_min: runs.iter().map(|r| r.connectivity_min).fold(1.0, f64::min),
@@ -303,7 +315,9 @@ mod tests {
             within_allowable_fraction: 1.0,
             control_effort: 0.1,
             close_pairs: k,
-            radio_msgs_per_uav_s: 0.0,
+            radio_sent_per_uav_s: 0.0,
+            radio_used_per_uav_s: 0.0,
+            judged_steps: 100,
             order_mean: 1.0,
             order_min: 1.0,
             connectivity_min: 1.0,

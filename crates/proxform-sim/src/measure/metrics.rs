@@ -47,8 +47,8 @@ pub struct RunSummary {
     pub alone_steps: u64,
     /// Per-UAV detail for the first followers.
     pub per_uav: Vec<UavStats>,
-    /// Smallest distance between any two UAVs (m); separations beyond the sensing range are
-    /// not tracked and count as the sensing range.
+    /// Smallest distance between any two flying UAVs over the flight, from their true
+    /// positions (m; ∞ when fewer than two flew).
     pub min_separation_m: f64,
     /// RMS model error σm per state parameter over all follower steps.
     pub model_error_rms: [f64; P],
@@ -61,10 +61,15 @@ pub struct RunSummary {
     /// Mean control effort per follower step: root sum of squares of the inputs, each over its
     /// per-step limit.
     pub control_effort: f64,
-    /// Distinct pairs ever closer than the safety distance (as nearest neighbours).
+    /// Distinct pairs ever closer than the safety distance.
     pub close_pairs: u64,
-    /// Radio messages received per UAV per second.
-    pub radio_msgs_per_uav_s: f64,
+    /// Radio messages sent per UAV per second (every broadcasting UAV sends one a period).
+    pub radio_sent_per_uav_s: f64,
+    /// Received radio messages a UAV used (of UAVs it did not perceive onboard), per UAV per
+    /// second.
+    pub radio_used_per_uav_s: f64,
+    /// Follower steps measured: 0 when no follower flew (nothing to judge: not a pass).
+    pub judged_steps: u64,
     /// Order (polarisation) |Σ v_i/|v_i|| / N: mean over the flight.
     pub order_mean: f64,
     /// Order: smallest over the flight.
@@ -103,13 +108,13 @@ pub struct RunMetrics {
     sample: Vec<(usize, Acc)>,
     samples: u64,
     followers: u64,
-    min_sep: f64,
+    separation: super::separation::Separation,
     range: f64,
     model_sq: State9,
     model_n: u64,
     allowable: [f64; 6],
-    close: std::collections::BTreeSet<(u32, u32)>,
-    radio_msgs: u64,
+    radio_sent: u64,
+    radio_used: u64,
     uav_steps: u64,
     order_sum: f64,
     order_min: f64,
@@ -135,13 +140,13 @@ impl RunMetrics {
             sample,
             samples: 0,
             followers: scenario.len() as u64 - 1,
-            min_sep: f64::INFINITY,
+            separation: super::separation::Separation::new(scenario.safety_distance_m()),
             range: scenario.controller().areas.sensing_range_m,
             model_sq: State9::zeros(),
             model_n: 0,
             allowable: scenario.allowable().as_array(),
-            close: std::collections::BTreeSet::new(),
-            radio_msgs: 0,
+            radio_sent: 0,
+            radio_used: 0,
             uav_steps: 0,
             order_sum: 0.0,
             order_min: f64::INFINITY,
@@ -196,7 +201,9 @@ impl RunMetrics {
     pub fn finish(self, run: u64, duration_s: f64) -> RunSummary {
         let steps = self.samples.max(1) as f64;
         let rms = |a: &Acc, n: f64| a.sum_sq.map(|v| (v / n).sqrt());
-        let pass = self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a);
+        // A run in which no follower flew has nothing to judge: it does not pass.
+        let pass = self.total.follower_steps > 0 && self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a);
+        let uav_s = self.uav_steps.max(1) as f64 * self.dt;
         let mn = self.model_n.max(1) as f64;
         let mut model_error_rms = [0.0; P];
         for (k, v) in model_error_rms.iter_mut().enumerate() {
@@ -207,8 +214,10 @@ impl RunMetrics {
             held_fraction: self.total.held as f64 / fs,
             within_allowable_fraction: self.total.within as f64 / fs,
             control_effort: self.total.effort / fs,
-            close_pairs: self.close.len() as u64,
-            radio_msgs_per_uav_s: self.radio_msgs as f64 / (self.uav_steps.max(1) as f64 * self.dt),
+            close_pairs: self.separation.close_pairs() as u64,
+            radio_sent_per_uav_s: self.radio_sent as f64 / uav_s,
+            radio_used_per_uav_s: self.radio_used as f64 / uav_s,
+            judged_steps: self.total.follower_steps,
             order_mean: self.order_sum / steps,
             order_min: if self.order_min.is_finite() { self.order_min } else { 1.0 },
             connectivity_min: if self.connectivity_min.is_finite() { self.connectivity_min } else { 1.0 },
@@ -231,7 +240,7 @@ impl RunMetrics {
                     alone_steps: a.alone,
                 })
                 .collect(),
-            min_separation_m: self.min_sep.min(self.range),
+            min_separation_m: self.separation.min_m(),
             model_error_rms,
             duration_s,
         }
@@ -266,9 +275,7 @@ struct Partial {
     acc: Acc,
     model_sq: State9,
     model_n: u64,
-    min_sep: f64,
-    close: Vec<(u32, u32)>,
-    radio_msgs: u64,
+    radio_used: u64,
     active: u64,
     heading: [f64; 3],
 }
@@ -280,19 +287,14 @@ fn partial(
     reference: &State9,
     range: std::ops::Range<usize>,
 ) -> Partial {
-    let mut p = Partial { min_sep: f64::INFINITY, ..Partial::default() };
+    let mut p = Partial::default();
     let allowable = scenario.allowable().as_array();
     for i in range {
         if !frame.active[i] {
             continue;
         }
         let u = &frame.uavs[i];
-        p.min_sep = p.min_sep.min(u.nearest_m);
-        if u.nearest_m < scenario.safety_distance_m() && u.nearest_id != u32::MAX {
-            let j = u.nearest_id;
-            p.close.push(((i as u32).min(j), (i as u32).max(j)));
-        }
-        p.radio_msgs += u64::from(u.radio_msgs);
+        p.radio_used += u64::from(u.radio_used);
         p.active += 1;
         let s = &frame.states[i];
         let speed = (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]).sqrt();
@@ -330,6 +332,8 @@ impl Observer for RunMetrics {
         let n = frame.states.len();
         let nav = self.nav;
         let reference = navigator_reference(scenario, frame.states, frame.active);
+        self.separation.observe(frame.states, frame.active);
+        self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
         let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| partial(nav, scenario, frame, &reference, r));
         let mut active = 0u64;
@@ -347,9 +351,7 @@ impl Observer for RunMetrics {
             self.total.effort += p.acc.effort;
             self.model_sq += p.model_sq;
             self.model_n += p.model_n;
-            self.min_sep = self.min_sep.min(p.min_sep);
-            self.close.extend(p.close);
-            self.radio_msgs += p.radio_msgs;
+            self.radio_used += p.radio_used;
             self.uav_steps += p.active;
             active += p.active;
             for k in 0..3 {
@@ -388,11 +390,25 @@ mod tests {
     }
 
     fn frame<'a>(k: u64, states: &'a [State9], uavs: &'a [UavStep], active: &'a [bool]) -> StepFrame<'a> {
-        StepFrame { k, t: k as f64 * 0.1, states, uavs, active }
+        StepFrame { k, t: k as f64 * 0.1, states, uavs, active, radio_sent: 2 }
     }
 
     fn step(outcome: Outcome, effort: f32) -> UavStep {
-        UavStep { outcome: Some(outcome), effort, nearest_m: 100.0, nearest_id: 0, ..UavStep::default() }
+        UavStep { outcome: Some(outcome), effort, radio_used: 1, ..UavStep::default() }
+    }
+
+    #[test]
+    fn a_run_in_which_no_follower_flew_does_not_pass() {
+        let sc = paper();
+        let states = in_slots(&sc);
+        let uavs = vec![UavStep::default(); 6];
+        let mut m = RunMetrics::new(&sc);
+        for k in 0..10 {
+            m.on_step(&sc, &frame(k, &states, &uavs, &[true, false, false, false, false, false]));
+        }
+        let r = m.finish(0, 1.0);
+        assert_eq!(r.judged_steps, 0);
+        assert!(!r.pass, "nothing was judged");
     }
 
     #[test]
@@ -424,6 +440,9 @@ mod tests {
         let good = in_slots(&sc);
         let mut off = good.clone();
         off[2][Y] += 0.9; // UAV3 0.9 m off its slot: beyond the allowable 0.6 m
+                          // UAV5 30 m from UAV4 (closer than the 50 m safety distance): it is 173 m behind UAV1
+                          // and 100 m right of UAV4 in the layout.
+        off[4][Y] = off[3][Y] - 30.0;
         let active = [true; 6];
         // Step 1: all held, no effort. Step 2: UAVs 2-6 adjusted with effort 0.5, UAV3 off,
         // and UAV4 within 30 m of UAV5 (closer than the 50 m safety distance).
@@ -431,30 +450,36 @@ mod tests {
         held[0].outcome = None;
         let mut adjusted: Vec<UavStep> = (0..6).map(|_| step(Outcome::Adjusted { normalised_sq: 1.0 }, 0.5)).collect();
         adjusted[0].outcome = None;
-        adjusted[3].nearest_m = 30.0;
-        adjusted[3].nearest_id = 4;
-        adjusted[4].nearest_m = 30.0;
-        adjusted[4].nearest_id = 3;
         for u in &mut adjusted[1..] {
             u.model_error = [0.03; 9];
         }
         let mut m = RunMetrics::new(&sc);
+        // One more frame with every follower removed is not judged.
+        let gone = [true, false, false, false, false, false];
+        m.on_step(&sc, &frame(0, &good, &held, &gone));
         m.on_step(&sc, &frame(1, &good, &held, &active));
         m.on_step(&sc, &frame(2, &off, &adjusted, &active));
         let r = m.finish(0, 0.2);
         assert!(!r.pass);
-        assert!((r.max_abs_error[1] - 0.9).abs() < 1e-9, "{:?}", r.max_abs_error);
+        assert!((r.max_abs_error[1] - 70.0).abs() < 1e-9, "{:?}", r.max_abs_error);
         assert_eq!(r.max_abs_error[0], 0.0);
-        // 10 follower steps: 5 held, 5 adjusted, 9 within the allowable errors.
+        // 10 follower steps: 5 held, 5 adjusted, 8 within the allowable errors (UAVs 3 and 5
+        // off at the second step).
         assert_eq!(r.held_fraction, 0.5);
-        assert_eq!(r.within_allowable_fraction, 0.9);
+        assert_eq!(r.within_allowable_fraction, 0.8);
+        assert_eq!(r.judged_steps, 10);
         assert_eq!(r.adjustments, 5);
         assert!((r.control_effort - 0.25).abs() < 1e-9, "{}", r.control_effort);
         assert_eq!(r.close_pairs, 1, "UAVs 4 and 5 are one pair");
-        assert_eq!(r.min_separation_m, 30.0);
+        assert!((r.min_separation_m - 30.0).abs() < 1e-9, "{}", r.min_separation_m);
+        // Radio: 2 messages sent a step over 3 steps, by 1 + 6 + 6 flying UAV-steps of 0.1 s;
+        // each flying UAV used 1 a step.
+        assert!((r.radio_sent_per_uav_s - 6.0 / 1.3).abs() < 1e-9, "{}", r.radio_sent_per_uav_s);
+        assert!((r.radio_used_per_uav_s - 10.0).abs() < 1e-9, "{}", r.radio_used_per_uav_s);
         // σm: RMS over the held and adjusted steps of the model error (zero when held).
         assert!((r.model_error_rms[0] - 0.03 / 2f64.sqrt()).abs() < 1e-6, "{:?}", r.model_error_rms);
-        // RMS y error over 2 steps × 5 followers: 0.9 once.
-        assert!((r.rms_error[1] - (0.81f64 / 10.0).sqrt()).abs() < 1e-9, "{:?}", r.rms_error);
+        // RMS y error over 3 steps × 5 followers: 0.9 once, 70 once (UAV5 moved 70 m right of
+        // its slot).
+        assert!((r.rms_error[1] - ((0.81f64 + 4900.0) / 15.0).sqrt()).abs() < 1e-6, "{:?}", r.rms_error);
     }
 }

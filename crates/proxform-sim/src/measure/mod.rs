@@ -3,5 +3,6 @@
 
 pub mod metrics;
 pub mod observer;
+pub mod separation;
 pub mod stats;
 pub mod trajectory;

@@ -21,37 +21,23 @@ pub struct StepFrame<'a> {
     pub uavs: &'a [UavStep],
     /// Per UAV: flying (false once removed, or before it joins).
     pub active: &'a [bool],
+    /// Radio messages sent in the step that led here (one per broadcasting UAV).
+    pub radio_sent: usize,
 }
 
 /// What one UAV's update produced, besides its next state.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct UavStep {
     /// The controller's outcome at t_{k−1} (None for the navigator and at k = 0).
     pub outcome: Option<Outcome>,
     /// Effect on the state of the actuation error of the last step (true minus commanded):
     /// the model error σm of eq. 17. Kept in f32: it only feeds an RMS statistic.
     pub model_error: [f32; 9],
-    /// Distance to its nearest neighbour within the sensing range at t_k (m; ∞ if none).
-    pub nearest_m: f64,
-    /// That neighbour (`u32::MAX` if none).
-    pub nearest_id: u32,
-    /// Radio messages it received in the step.
-    pub radio_msgs: u16,
+    /// Radio messages it used in the step: they reached it (in range, not lost) from UAVs it
+    /// did not perceive onboard.
+    pub radio_used: u16,
     /// Size of its input: the root sum of squares of each input over its per-step limit.
     pub effort: f32,
-}
-
-impl Default for UavStep {
-    fn default() -> Self {
-        Self {
-            outcome: None,
-            model_error: [0.0; 9],
-            nearest_m: f64::INFINITY,
-            nearest_id: u32::MAX,
-            radio_msgs: 0,
-            effort: 0.0,
-        }
-    }
 }
 
 /// Something that watches a run.

@@ -28,24 +28,80 @@ pub struct TrajectoryRow {
 
 /// UAVs recorded by default: all of a small formation, the first ones of a large swarm.
 pub const DEFAULT_SAMPLE: usize = 64;
+/// Most steps streamed to the sink: a longer flight is streamed every n-th step.
+pub const MAX_STREAMED_STEPS: u64 = 1_000_000;
+/// Most steps kept in memory (for figures): a longer flight keeps every n-th step.
+pub const MAX_KEPT_STEPS: u64 = 5_000;
 
-/// Observer collecting the rows of a run for the first `sample` UAVs.
-#[derive(Debug, Clone)]
+/// Where the rows of a run go as it flies (a file, in the binary): the simulator writes none.
+pub trait RowSink: Send {
+    /// One row.
+    fn row(&mut self, row: &TrajectoryRow);
+    /// After the last row: flush, and report the first error met (as text).
+    fn finish(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// Observer recording the rows of a run for the first `sample` UAVs: every `stream_every`-th
+/// step to its sink as the flight goes, and every `keep_every`-th step in memory, so memory
+/// stays bounded whatever the duration.
 pub struct Trajectory {
-    /// Rows in time order, then UAV order.
+    /// Rows kept in memory, in time order, then UAV order.
     pub rows: Vec<TrajectoryRow>,
     /// Number of UAVs recorded (the first ones).
     pub sample: usize,
+    /// Steps between rows kept in memory.
+    pub keep_every: u64,
+    /// Steps between rows streamed to the sink.
+    pub stream_every: u64,
+    sink: Option<Box<dyn RowSink>>,
+}
+
+impl std::fmt::Debug for Trajectory {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Trajectory")
+            .field("rows", &self.rows.len())
+            .field("sample", &self.sample)
+            .field("keep_every", &self.keep_every)
+            .field("stream_every", &self.stream_every)
+            .field("sink", &self.sink.is_some())
+            .finish()
+    }
 }
 
 impl Default for Trajectory {
     fn default() -> Self {
-        Self { rows: Vec::new(), sample: DEFAULT_SAMPLE }
+        Self { rows: Vec::new(), sample: DEFAULT_SAMPLE, keep_every: 1, stream_every: 1, sink: None }
+    }
+}
+
+impl Trajectory {
+    /// A recording of a flight of `steps` steps: every step kept up to [`MAX_KEPT_STEPS`],
+    /// evenly decimated beyond; streamed to `sink` (if any) every step up to
+    /// [`MAX_STREAMED_STEPS`], evenly decimated beyond.
+    pub fn for_flight(steps: u64, sink: Option<Box<dyn RowSink>>) -> Self {
+        Self {
+            keep_every: steps.div_ceil(MAX_KEPT_STEPS).max(1),
+            stream_every: steps.div_ceil(MAX_STREAMED_STEPS).max(1),
+            sink,
+            ..Self::default()
+        }
+    }
+
+    /// Takes the sink back (to finish writing).
+    pub fn take_sink(&mut self) -> Option<Box<dyn RowSink>> {
+        self.sink.take()
     }
 }
 
 impl Observer for Trajectory {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        let keep = frame.k % self.keep_every == 0;
+        let stream = self.sink.is_some() && frame.k % self.stream_every == 0;
+        if !keep && !stream {
+            return;
+        }
         let nav = scenario.navigator().index();
         let allowable = scenario.allowable().as_array();
         let reference = navigator_reference(scenario, frame.states, frame.active);
@@ -60,15 +116,16 @@ impl Observer for Trajectory {
                 None => ("initial", false),
             };
             let within_allowable = error.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a);
-            self.rows.push(TrajectoryRow {
-                t: frame.t,
-                uav: i as u32,
-                state: *s,
-                error,
-                outcome,
-                in_envelope,
-                within_allowable,
-            });
+            let row =
+                TrajectoryRow { t: frame.t, uav: i as u32, state: *s, error, outcome, in_envelope, within_allowable };
+            if stream {
+                if let Some(sink) = self.sink.as_mut() {
+                    sink.row(&row);
+                }
+            }
+            if keep {
+                self.rows.push(row);
+            }
         }
     }
 }

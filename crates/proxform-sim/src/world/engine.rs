@@ -27,6 +27,7 @@ use proxform_scenario::Scenario;
 
 use super::environment::{EnvStep, UavEnv};
 use super::faults::{self, FaultStep};
+use super::measurement::{self, Message, OwnSensors};
 use super::options::{NeighbourSearch, RunOptions};
 use super::phases::{for_each_block, Mode, StepContext};
 use super::sensing::{noisy, ProximitySensor, Scene};
@@ -62,11 +63,12 @@ struct World<'s> {
     grid: NeighbourGrid,
     /// Per-UAV environment (wind, position-fix bias, radio channel), empty when not needed.
     env: Vec<UavEnv>,
-    /// The radio messages arriving this step (sender, state sent), computed once for all
-    /// receivers.
-    broadcasts: Vec<(u32, State9)>,
-    /// True states of the last `delay + 1` steps, oldest first (radio with delay only).
-    history: VecDeque<Vec<State9>>,
+    /// The radio messages arriving this step, composed once for all receivers.
+    arriving: Vec<Message>,
+    /// Messages sent in the last `delay + 1` steps, oldest first (radio with delay only).
+    history: VecDeque<Vec<Message>>,
+    /// Messages sent this step.
+    sent_now: usize,
     active: Vec<bool>,
     faults: FaultStep,
     sensor: ProximitySensor,
@@ -90,8 +92,9 @@ impl<'s> Simulation<'s> {
             current: scenario.initial().to_vec(),
             env: super::environment::initial(scenario),
             grid: NeighbourGrid::new(),
-            broadcasts: Vec::new(),
+            arriving: Vec::new(),
             history: VecDeque::new(),
+            sent_now: 0,
             active: (0..n).map(|i| schedule::is_active(scenario.faults(), i, 0.0)).collect(),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
             sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma()),
@@ -130,15 +133,18 @@ impl<'s> Simulation<'s> {
             }
             self.world.index_positions();
             let key = self.world.run.at(WARMUP_STEP_BASE + w);
-            self.world.send_radio(Some((0, key)));
+            self.world.send_radio(key, 0, false);
             let world = &self.world;
-            let ctx = world.context(key, t, Some(&world.current), Mode::Warm(&ideal));
+            let ctx = world.context(key, t, Mode::Warm(&ideal));
             let parallel = world.parallel;
             for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| {
                 ctx.warm(b, blk)
             });
         }
         std::mem::swap(&mut self.world.current, &mut self.next);
+        // The flight's radio starts afresh: nothing of the warm-up is on the air.
+        self.world.history.clear();
+        self.world.arriving.clear();
         for a in self.agents.iter_mut().flatten() {
             a.forget_own_estimate();
         }
@@ -175,7 +181,7 @@ impl<'s> Simulation<'s> {
 
     fn frame(&self) -> StepFrame<'_> {
         let w = &self.world;
-        StepFrame { k: w.k, t: w.t(), states: &w.current, uavs: &self.uavs, active: &w.active }
+        StepFrame { k: w.k, t: w.t(), states: &w.current, uavs: &self.uavs, active: &w.active, radio_sent: w.sent_now }
     }
 
     /// Advances one update period.
@@ -186,17 +192,10 @@ impl<'s> Simulation<'s> {
             w.index_positions();
         }
         w.advance_environment();
-        let delay = u64::from(w.scenario.radio().delay_steps);
-        w.remember_sent_states(delay);
-        let sent_step = if delay == 0 || w.history.len() as u64 == delay + 1 { Some(w.k - delay) } else { None };
-        w.send_radio(sent_step.map(|s| (delay, w.run.at(s))));
+        let delay = w.scenario.radio().delay_steps as usize;
+        w.send_radio(w.run.at(w.k), delay, true);
         let w = &self.world;
-        let sent = match (delay, sent_step) {
-            (_, None) => None,
-            (0, Some(_)) => Some(&w.current[..]),
-            (_, Some(_)) => w.history.front().map(|h| &h[..]),
-        };
-        let ctx = w.context(w.run.at(w.k), w.t(), sent, Mode::Fly);
+        let ctx = w.context(w.run.at(w.k), w.t(), Mode::Fly);
         let (areas, parallel) = (w.scenario.controller().areas.areas, w.parallel);
         for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| ctx.fly(b, blk));
         std::mem::swap(&mut self.world.current, &mut self.next);
@@ -214,7 +213,6 @@ impl<'s> Simulation<'s> {
     pub fn run_steps(mut self, steps: u64, observer: &mut impl Observer) {
         let sc = self.world.scenario;
         if self.world.k == 0 {
-            self.world.perceive_initial(&mut self.uavs);
             observer.on_step(sc, &self.frame());
         }
         let end = (self.world.k + steps).min(sc.steps());
@@ -293,31 +291,36 @@ impl<'s> World<'s> {
         });
     }
 
-    /// Keeps the true states of the last `delay + 1` steps (a delayed radio sends from them).
-    fn remember_sent_states(&mut self, delay: u64) {
+    /// Phase 4, radio: every broadcasting UAV sends its own measurement (in flight with its
+    /// position-fix bias and sensor faults); the messages sent `delay` steps ago arrive now
+    /// (none before the first arrive).
+    fn send_radio(&mut self, key: StreamKey, delay: usize, flight: bool) {
+        let sensors = OwnSensors {
+            sigma: self.scenario.noise().sigma(),
+            key,
+            env: &self.env,
+            faults: flight.then_some(&self.faults),
+        };
+        let mut now = if self.history.len() > delay { self.history.pop_front() } else { None }.unwrap_or_default();
+        measurement::compose(self.scenario, &self.current, &sensors, self.parallel, &mut now);
+        self.sent_now = now.len();
         if delay == 0 {
+            std::mem::swap(&mut self.arriving, &mut now);
+            self.history.push_back(now);
+            self.history.truncate(1);
             return;
         }
-        let mut old =
-            if self.history.len() as u64 > delay { self.history.pop_front() } else { None }.unwrap_or_default();
-        old.clear();
-        old.extend_from_slice(&self.current);
-        self.history.push_back(old);
-    }
-
-    /// Phase 4, radio: the messages arriving now, sent `delay` steps ago at the step of `key`
-    /// (none before the first arrives).
-    fn send_radio(&mut self, sent: Option<(u64, StreamKey)>) {
-        let Some((delay, key)) = sent else {
-            self.broadcasts.clear();
-            return;
-        };
-        let states = if delay == 0 { &self.current[..] } else { self.history.front().map_or(&[][..], |h| &h[..]) };
-        super::sensing::broadcasts(self.scenario, states, key, self.parallel, &mut self.broadcasts);
+        self.history.push_back(now);
+        self.arriving.clear();
+        if self.history.len() == delay + 1 {
+            if let Some(front) = self.history.front() {
+                self.arriving.extend_from_slice(front);
+            }
+        }
     }
 
     /// The read-only view of this step that the block phases share.
-    fn context<'a>(&'a self, key: StreamKey, t: f64, sent: Option<&'a [State9]>, mode: Mode<'a>) -> StepContext<'a> {
+    fn context<'a>(&'a self, key: StreamKey, t: f64, mode: Mode<'a>) -> StepContext<'a> {
         StepContext {
             scenario: self.scenario,
             options: self.options,
@@ -333,29 +336,9 @@ impl<'s> World<'s> {
             sensor: &self.sensor,
             active: &self.active,
             faults: &self.faults,
-            sent,
-            broadcasts: &self.broadcasts,
+            messages: &self.arriving,
             env: &self.env,
             mode,
-        }
-    }
-
-    /// Nearest-neighbour distances of the initial state, for the separation metric.
-    fn perceive_initial(&mut self, uavs: &mut [UavStep]) {
-        let range = self.scenario.controller().areas.sensing_range_m;
-        self.index_positions();
-        for (i, s) in self.current.iter().enumerate() {
-            if !self.active[i] {
-                continue;
-            }
-            let mut best = (f64::INFINITY, u32::MAX);
-            self.grid.for_each_within([s[0], s[1], s[2]], range, |j, _, d2| {
-                if j as usize != i && d2 < best.0 {
-                    best = (d2, j);
-                }
-            });
-            uavs[i].nearest_m = best.0.sqrt();
-            uavs[i].nearest_id = best.1;
         }
     }
 }

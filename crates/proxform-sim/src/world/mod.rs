@@ -4,6 +4,7 @@
 pub mod engine;
 pub mod environment;
 pub mod faults;
+pub mod measurement;
 pub mod options;
 pub mod phases;
 pub mod radio;

@@ -15,8 +15,9 @@ use rayon::prelude::*;
 
 use super::environment::UavEnv;
 use super::faults::FaultStep;
+use super::measurement::{Message, OwnSensors};
 use super::options::RunOptions;
-use super::sensing::{noisy, Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
+use super::sensing::{Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
 use crate::measure::observer::UavStep;
 use crate::random::{Source, StreamKey};
 
@@ -109,10 +110,8 @@ pub(super) struct StepContext<'a> {
     pub sensor: &'a ProximitySensor,
     pub active: &'a [bool],
     pub faults: &'a FaultStep,
-    /// True states when the radio messages arriving now were sent.
-    pub sent: Option<&'a [State9]>,
     /// The radio messages arriving now.
-    pub broadcasts: &'a [(u32, State9)],
+    pub messages: &'a [Message],
     /// Per-UAV environment (empty when the scenario needs none).
     pub env: &'a [UavEnv],
     /// Flight or warm-up.
@@ -142,8 +141,7 @@ impl StepContext<'_> {
             reference_dropout,
             radio_up,
             radio,
-            sent: self.sent,
-            broadcasts: self.broadcasts,
+            messages: self.messages,
             delay_s,
             channel_bad,
             onboard: sc.method().uses_onboard_sensing(),
@@ -151,7 +149,7 @@ impl StepContext<'_> {
     }
 
     /// Perceive: what each active UAV of the block senses onboard and hears by radio, into
-    /// `heard`; its nearest neighbour and radio count into its record.
+    /// `heard`; how many radio messages it used into its record.
     fn perceive(&self, first: usize, blk: &mut Block<'_>) {
         let s = &mut *blk.scratch;
         s.heard.clear();
@@ -166,10 +164,9 @@ impl StepContext<'_> {
                     radio: self.key.rng_of(uk, Source::Radio),
                 };
                 let link = self.link(i);
-                let nearest = self.sensor.perceive(i, &self.scene, &link, &mut draws, &mut s.sensor, &mut s.heard);
+                self.sensor.perceive(i, &self.scene, &link, &mut draws, &mut s.sensor, &mut s.heard);
                 if matches!(self.mode, Mode::Fly) {
-                    (aux.nearest_m, aux.nearest_id) = nearest;
-                    aux.radio_msgs =
+                    aux.radio_used =
                         s.heard[from..].iter().filter(|o| o.source == ObservationSource::Radio).count() as u16;
                 }
             }
@@ -180,24 +177,18 @@ impl StepContext<'_> {
     /// Estimate: each active follower's noisy measurement of its own state (with its
     /// position-fix bias and sensor faults, in flight).
     fn estimate(&self, first: usize, blk: &mut Block<'_>) {
-        let sigma = self.scenario.noise().sigma();
+        let sensors = OwnSensors {
+            sigma: self.scenario.noise().sigma(),
+            key: self.key,
+            env: self.env,
+            faults: matches!(self.mode, Mode::Fly).then_some(self.faults),
+        };
         let s = &mut *blk.scratch;
         s.own.clear();
         for b in 0..blk.agents.len() {
             let i = first + b;
-            let mut own = self.scene.states[i];
-            if self.active[i] && blk.agents[b].is_some() {
-                own = noisy(&own, &sigma, &mut self.key.rng(i as u64, Source::OwnState));
-                if let (Mode::Fly, Some(e)) = (self.mode, self.env.get(i)) {
-                    for k in 0..3 {
-                        own[state::X + k] += e.gnss_bias[k];
-                    }
-                }
-                if matches!(self.mode, Mode::Fly) {
-                    self.faults.corrupt(i, &mut own);
-                }
-            }
-            s.own.push(own);
+            let truth = &self.scene.states[i];
+            s.own.push(if self.active[i] && blk.agents[b].is_some() { sensors.measure(i, truth) } else { *truth });
         }
     }
 

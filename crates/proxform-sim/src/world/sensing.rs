@@ -11,10 +11,10 @@ use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
 use proxform_core::{DependencySet, Observation, ObservationSource, UavId};
 use proxform_scenario::radio::RadioModel;
-use proxform_scenario::Scenario;
 
+use super::measurement::Message;
 use super::options::NeighbourSearch;
-use crate::random::{Source, StepRng, StreamKey, Ziggurat};
+use crate::random::{StepRng, Ziggurat};
 
 /// What every UAV's sensors look at in one step: the true states, the neighbour index over
 /// them and how it is searched.
@@ -70,8 +70,7 @@ impl ProximitySensor {
         Self { classifier: AreaClassifier::new(m), range_m, sigma }
     }
 
-    /// Appends to `out` what UAV `i` perceives of `scene` through `link`; returns the distance
-    /// to its nearest neighbour within range (∞ if none) and that neighbour.
+    /// Appends to `out` what UAV `i` perceives of `scene` through `link`.
     pub fn perceive(
         &self,
         i: usize,
@@ -80,7 +79,7 @@ impl ProximitySensor {
         draws: &mut PerceptionDraws,
         scratch: &mut SensorScratch,
         out: &mut Vec<Observation>,
-    ) -> (f64, u32) {
+    ) {
         let states = scene.states;
         let deps = &scene.dependencies[i];
         let rng = &mut draws.sensing;
@@ -89,15 +88,9 @@ impl ProximitySensor {
         let (sin_yaw, cos_yaw) = me[state::BETA].sin_cos();
         scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
         scratch.refs.clear();
-        let mut nearest2 = f64::INFINITY;
-        let mut nearest_id = u32::MAX;
         let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
             if j as usize == i {
                 return;
-            }
-            if d2 < nearest2 {
-                nearest2 = d2;
-                nearest_id = j;
             }
             let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
             // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
@@ -107,6 +100,8 @@ impl ProximitySensor {
         };
         let p = [me[0], me[1], me[2]];
         match scene.search {
+            // A method that reads the radio only scans no neighbours.
+            _ if !link.onboard => {}
             NeighbourSearch::Grid => scene.grid.for_each_within(p, self.range_m, &mut consider),
             NeighbourSearch::AllPairs => {
                 let r2 = self.range_m * self.range_m;
@@ -137,10 +132,6 @@ impl ProximitySensor {
         }
         // Deterministic report order: areas in order, then references by id.
         scratch.refs.sort_unstable();
-        if !link.onboard {
-            // Only the nearest neighbour was wanted (for the separation metric).
-            scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
-        }
         // Observations of main references are lost with their own probability.
         let loss = |j: u32| {
             if link.reference_dropout != link.dropout && deps.refs().iter().any(|r| r.0 .0 == j) {
@@ -163,29 +154,28 @@ impl ProximitySensor {
             }
         }
         // Messages heard over the radio (crate::radio), unless the sender is perceived onboard.
-        if let (true, Some(sent)) = (link.radio_up, link.sent) {
+        if link.radio_up {
             let radio = link.radio;
             let r2 = radio.range_m * radio.range_m;
             let n = states.len();
-            for &(j, ref state) in link.broadcasts {
-                let j = j as usize;
+            for m in link.messages {
+                let j = m.sender as usize;
                 if j == i || j >= n || !link.active[j] || out[start..].iter().any(|o| o.id.index() == j) {
                     continue;
                 }
-                let q = &sent[j];
+                let q = &m.at;
                 let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
                 if d2 > r2 || !super::radio::delivered(radio, link.channel_bad, &mut draws.radio) {
                     continue;
                 }
                 out.push(Observation {
                     id: UavId(j as u32),
-                    state: *state,
+                    state: m.state,
                     age_s: link.delay_s,
                     source: ObservationSource::Radio,
                 });
             }
         }
-        (nearest2.sqrt(), nearest_id)
     }
 
     #[inline]
@@ -213,11 +203,9 @@ pub struct Link<'a> {
     pub radio_up: bool,
     /// The radio model.
     pub radio: &'a RadioModel,
-    /// True states when the messages arriving now were sent (None before the first arrive).
-    pub sent: Option<&'a [State9]>,
-    /// The messages arriving now, in the order they are heard: each sender and the state it
-    /// sent (its own measured state then, see [`broadcasts`]).
-    pub broadcasts: &'a [(u32, State9)],
+
+    /// The messages arriving now, in the order they are heard.
+    pub messages: &'a [Message],
     /// Age of a radio message on arrival (s).
     pub delay_s: f64,
     /// The receiver's Gilbert-Elliott channel is in its bad state.
@@ -225,30 +213,6 @@ pub struct Link<'a> {
     /// Whether the receiver's controller uses onboard sensing (false: radio messages only;
     /// the nearest neighbour is still found, for the separation metric).
     pub onboard: bool,
-}
-
-/// Fills `out` with the messages sent at the step of `key` from the true states `sent`: the
-/// beacons first, then, when every UAV broadcasts, the others by id; each carries its
-/// sender's own measured state, drawn from the sender's own-state noise stream. Computed once
-/// per step for all receivers.
-pub fn broadcasts(sc: &Scenario, sent: &[State9], key: StreamKey, parallel: bool, out: &mut Vec<(u32, State9)>) {
-    let (radio, beacons, sigma) = (sc.radio(), sc.beacons(), sc.noise().sigma());
-    let n = sent.len();
-    let all = if radio.broadcast_all { n } else { 0 };
-    out.clear();
-    out.extend(
-        beacons
-            .iter()
-            .map(|b| b.index())
-            .chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)))
-            .filter(|&j| j < n)
-            .map(|j| (j as u32, State9::zeros())),
-    );
-    crate::parallel::for_each_mut(out, parallel, |_, m| {
-        let j = m.0 as usize;
-        let mut own_rng = key.rng(j as u64, Source::OwnState);
-        m.1 = noisy(&sent[j], &sigma, &mut own_rng);
-    });
 }
 
 /// Draws whether an observation survives a dropout of probability `p`.
@@ -294,12 +258,7 @@ mod tests {
         (states, deps)
     }
 
-    fn perceive(
-        states: &[State9],
-        deps: &[DependencySet],
-        dropout: f64,
-        broadcasts: &[(u32, State9)],
-    ) -> Vec<Observation> {
+    fn perceive(states: &[State9], deps: &[DependencySet], dropout: f64, messages: &[Message]) -> Vec<Observation> {
         let sensor = ProximitySensor::new(8, 250.0, State9::zeros());
         let mut grid = NeighbourGrid::new();
         grid.rebuild(states.iter().map(|s| [s[0], s[1], s[2]]), 250.0);
@@ -312,19 +271,20 @@ mod tests {
             reference_dropout: dropout,
             radio_up: true,
             radio: &radio,
-            sent: Some(states),
-            broadcasts,
+            messages,
             delay_s: 0.0,
             channel_bad: false,
             onboard: true,
         };
         let key = crate::random::RunKey::new(1, 0).at(0);
-        let mut draws = PerceptionDraws { sensing: key.rng(0, Source::Sensing), radio: key.rng(0, Source::Radio) };
+        let mut draws = PerceptionDraws {
+            sensing: key.rng(0, crate::random::Source::Sensing),
+            radio: key.rng(0, crate::random::Source::Radio),
+        };
         let mut out =
             vec![Observation { id: UavId(99), state: State9::zeros(), age_s: 0.0, source: ObservationSource::Onboard }];
-        let (nearest, id) = sensor.perceive(0, &scene, &link, &mut draws, &mut SensorScratch::new(8), &mut out);
+        sensor.perceive(0, &scene, &link, &mut draws, &mut SensorScratch::new(8), &mut out);
         assert_eq!(out[0].id, UavId(99), "perception appends");
-        assert!((nearest - 100.0f64.hypot(1.0)).abs() < 1e-9 && id == 1, "{nearest} {id}");
         out.split_off(1)
     }
 
@@ -339,7 +299,8 @@ mod tests {
         assert!(seen.iter().all(|o| o.source == ObservationSource::Onboard && o.state == states[o.id.index()]));
         // A radio message of a UAV seen onboard is not counted twice; one of a UAV out of
         // range is heard.
-        let heard = perceive(&states, &deps, 0.0, &[(1, states[1]), (4, states[4])]);
+        let message = |j: usize| Message { sender: j as u32, state: states[j], at: [states[j][0], states[j][1], 0.0] };
+        let heard = perceive(&states, &deps, 0.0, &[message(1), message(4)]);
         let radio: Vec<u32> = heard.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
         assert_eq!(radio, vec![4]);
         // Everything onboard lost: only the radio is left.
