@@ -89,3 +89,35 @@ fn the_loader_never_panics_on_mutated_scenarios() {
     }
     assert!(ok > 100 && refused > 100, "mutations too mild or too harsh: {ok} loaded, {refused} refused");
 }
+
+#[test]
+fn comparison_files_never_panic_when_mutated_and_what_loads_has_valid_cells() {
+    use proxform_scenario::builtin::{paper_spec, COMPARE_PAPER};
+    use proxform_scenario::comparison::Comparison;
+    let mut rng = Lcg(0xC0FFEE);
+    let (mut ok, mut refused) = (0, 0);
+    for _ in 0..3000 {
+        let text = mutate(COMPARE_PAPER, &mut rng);
+        match Comparison::parse(&text, "mutant.toml", |name| match name {
+            "paper" => Ok(paper_spec()),
+            other => Err(format!("unknown scenario '{other}'")),
+        }) {
+            Ok(c) => {
+                // Every cell of an accepted comparison is a valid scenario, within the bounds.
+                assert!(c.seeds >= 1 && c.runs() <= proxform_scenario::comparison::MAX_RUNS);
+                for m in &c.methods {
+                    for cond in &c.conditions {
+                        cond.scenario(&c.base_spec, m).expect("a checked comparison's cells are valid");
+                    }
+                }
+                ok += 1;
+            }
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(msg.starts_with("mutant.toml") || msg.starts_with("condition"), "unlocated: {msg}");
+                refused += 1;
+            }
+        }
+    }
+    assert!(ok > 100 && refused > 100, "mutations too mild or too harsh: {ok} loaded, {refused} refused");
+}
