@@ -39,6 +39,8 @@ pub enum CompareError {
 pub const MAX_SEEDS: u64 = 1_000_000;
 /// Most runs of a comparison (methods × conditions × seeds): every run's row is kept.
 pub const MAX_RUNS: u64 = 2_000_000;
+/// Most cells of a comparison (methods × conditions).
+pub const MAX_CELLS: u64 = 2_000;
 
 /// A value error at `key` of comparison file `file` (the line is found by the caller).
 fn value_error(file: &str, key: &str, message: String) -> CompareError {
@@ -260,7 +262,18 @@ impl Comparison {
         if !(1..=MAX_SEEDS).contains(&spec.seeds) {
             return Err(bad("seeds".into(), format!("must be 1 to {MAX_SEEDS}, found {}", spec.seeds)));
         }
-        let runs = (spec.methods.len() as u64).saturating_mul(spec.conditions.len() as u64).saturating_mul(spec.seeds);
+        let cells = (spec.methods.len() as u64).saturating_mul(spec.conditions.len() as u64);
+        if cells > MAX_CELLS {
+            return Err(bad(
+                "condition".into(),
+                format!(
+                    "{} methods × {} conditions = {cells} cells, more than the {MAX_CELLS} a comparison may have",
+                    spec.methods.len(),
+                    spec.conditions.len()
+                ),
+            ));
+        }
+        let runs = cells.saturating_mul(spec.seeds);
         if runs > MAX_RUNS {
             return Err(bad(
                 "seeds".into(),

@@ -77,13 +77,19 @@ impl Fault {
     }
 }
 
+/// Whether fault `f` lets its UAV fly at time `t` (a removal until it happens, a join once it
+/// has; other faults do not ground anybody).
+pub fn allows(f: &Fault, t: f64) -> bool {
+    match *f {
+        Fault::Remove { at_s, .. } => t < at_s - 1e-9,
+        Fault::Join { at_s, .. } => t >= at_s - 1e-9,
+        _ => true,
+    }
+}
+
 /// Whether UAV `i` flies at time `t`.
 pub fn is_active(faults: &[Fault], i: usize, t: f64) -> bool {
-    faults.iter().all(|f| match *f {
-        Fault::Remove { uav, at_s } => uav.index() != i || t < at_s - 1e-9,
-        Fault::Join { uav, at_s, .. } => uav.index() != i || t >= at_s - 1e-9,
-        _ => true,
-    })
+    faults.iter().filter(|f| f.uav().is_some_and(|u| u.index() == i)).all(|f| allows(f, t))
 }
 
 /// True when the radio is up at `t`.

@@ -278,3 +278,29 @@ pub fn drifting_groups(deps: &[DependencySet], navigator: UavId, f: &FormationSp
         ),
     )]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uavs_that_never_lead_to_the_navigator_are_named() {
+        let deps = |tables: &[&[(u32, f64)]]| -> Vec<DependencySet> {
+            tables
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    DependencySet::new(UavId(i as u32), tables.len(), t.iter().map(|&(j, c)| (UavId(j), c)).collect())
+                        .expect("valid")
+                })
+                .collect()
+        };
+        let spec = FormationSpec::default();
+        // 2 → 1, 3 → 2: everybody leads to UAV 1.
+        assert!(drifting_groups(&deps(&[&[], &[(0, 1.0)], &[(1, 1.0)]]), UavId(0), &spec).is_empty());
+        // 3 ↔ 4 lean only on each other; 5 leans on nobody.
+        let w = drifting_groups(&deps(&[&[], &[(0, 1.0)], &[(3, 1.0)], &[(2, 1.0)], &[]]), UavId(0), &spec);
+        assert_eq!(w.len(), 1);
+        assert!(w[0].message.starts_with("UAVs 3, 4, 5 never lean"), "{}", w[0].message);
+    }
+}

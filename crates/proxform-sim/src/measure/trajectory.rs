@@ -129,3 +129,41 @@ impl Observer for Trajectory {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::measure::observer::UavStep;
+    use proxform_scenario::builtin::paper;
+
+    /// Counts the rows it is given.
+    struct Count(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+
+    impl RowSink for Count {
+        fn row(&mut self, _: &TrajectoryRow) {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+    }
+
+    #[test]
+    fn a_long_flight_is_streamed_and_kept_decimated() {
+        let sc = paper();
+        let states: Vec<State9> = sc.initial().to_vec();
+        let uavs = vec![UavStep::default(); 6];
+        let active = [true; 6];
+        let streamed = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        // A flight of 3·10^6 steps: every 3rd step streamed, every 600th kept.
+        let mut t = Trajectory::for_flight(3_000_000, Some(Box::new(Count(streamed.clone()))));
+        assert_eq!((t.stream_every, t.keep_every), (3, 600));
+        for k in 0..6000 {
+            let frame =
+                StepFrame { k, t: k as f64 * 0.1, states: &states, uavs: &uavs, active: &active, radio_sent: 0 };
+            t.on_step(&sc, &frame);
+        }
+        assert_eq!(streamed.load(std::sync::atomic::Ordering::Relaxed), 2000 * 6);
+        assert_eq!(t.rows.len(), 10 * 6);
+        // A short flight keeps and streams every step.
+        let short = Trajectory::for_flight(1000, None);
+        assert_eq!((short.stream_every, short.keep_every), (1, 1));
+    }
+}

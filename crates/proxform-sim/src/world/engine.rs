@@ -95,7 +95,7 @@ impl<'s> Simulation<'s> {
             arriving: Vec::new(),
             history: VecDeque::new(),
             sent_now: 0,
-            active: (0..n).map(|i| schedule::is_active(scenario.faults(), i, 0.0)).collect(),
+            active: initially_flying(scenario),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
             sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma()),
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
@@ -223,6 +223,18 @@ impl<'s> Simulation<'s> {
     }
 }
 
+/// Which UAVs fly at t = 0: all but those removed at 0 or joining later (one pass over the
+/// schedule).
+fn initially_flying(sc: &Scenario) -> Vec<bool> {
+    let mut active = vec![true; sc.len()];
+    for f in sc.faults() {
+        if let Some(u) = f.uav().filter(|_| matches!(f, Fault::Remove { .. } | Fault::Join { .. })) {
+            active[u.index()] &= schedule::allows(f, 0.0);
+        }
+    }
+    active
+}
+
 impl<'s> World<'s> {
     fn t(&self) -> f64 {
         self.k as f64 * self.scenario.dt_s()
@@ -235,14 +247,21 @@ impl<'s> World<'s> {
             return;
         }
         let t = self.t();
+        // Whether each UAV with a removal or a join flies now: every one of its faults must
+        // allow it (one pass over the schedule, not one per fault).
+        let mut flies = std::collections::BTreeMap::new();
+        for f in sc.faults() {
+            if let Fault::Remove { uav, .. } | Fault::Join { uav, .. } = *f {
+                let now = schedule::allows(f, t);
+                flies.entry(uav.index()).and_modify(|a: &mut bool| *a &= now).or_insert(now);
+            }
+        }
         for f in sc.faults() {
             match *f {
-                Fault::Remove { uav, .. } => {
-                    self.active[uav.index()] = schedule::is_active(sc.faults(), uav.index(), t)
-                }
+                Fault::Remove { uav, .. } => self.active[uav.index()] = flies[&uav.index()],
                 Fault::Join { uav, offset_m, .. } => {
                     let i = uav.index();
-                    let now = schedule::is_active(sc.faults(), i, t);
+                    let now = flies[&i];
                     if now && !self.active[i] {
                         // Appears in its slot relative to the navigator (or to the formation's
                         // estimate of it), shifted by the offset.
@@ -383,6 +402,32 @@ mod tests {
                 assert!(e.iter().all(|v| v.abs() < 1e-6), "UAV {} drifts: {e:?}", i + 1);
             }
         }
+    }
+
+    #[test]
+    fn a_broadcast_carries_what_the_sender_believes() {
+        // UAV1 is a beacon; its position fix glitches 20 m to the left from t = 0.
+        let sc = straight(|s| {
+            s.radio.beacons = Some(vec![1]);
+            s.fault = vec![FaultSpec {
+                kind: Some("glitch".into()),
+                uav: Some(1),
+                at_s: Some(0.0),
+                duration_s: Some(1.0),
+                offset_m: Some([0.0, 20.0, 0.0]),
+            }];
+        });
+        let mut sim = Simulation::new(&sc, RunOptions::default(), 1, 0);
+        sim.step();
+        let w = &sim.world;
+        assert_eq!(w.arriving.len(), 1);
+        let m = &w.arriving[0];
+        assert_eq!(m.sender, 0);
+        // The message says what UAV1 measured (20 m off), and the range is from where it was.
+        let truth = sc.path().state_at(0.0, [0.0; 3]);
+        assert!((m.state[1] - truth[1] - 20.0).abs() < 1e-9, "{} vs {}", m.state[1], truth[1]);
+        assert_eq!(m.at, [truth[0], truth[1], truth[2]]);
+        assert_eq!(sim.frame().radio_sent, 1);
     }
 
     #[test]
