@@ -115,7 +115,8 @@ fn uav_row(out: &mut impl Write, label: &str, worst: &[f64; 6], adjustments: f64
     for e in worst {
         write!(out, "{:>10}", number(*e))?;
     }
-    writeln!(out, "{:>14}{:>8}", number(adjustments), if ok { "PASS" } else { "FAIL" })?;
+    let adjust = if adjustments.abs() < 1e9 { format!("{adjustments:.1}") } else { number(adjustments) };
+    writeln!(out, "{adjust:>14}{:>8}", if ok { "PASS" } else { "FAIL" })?;
     Ok(())
 }
 
