@@ -32,6 +32,12 @@ pub const MAX_STEPS: f64 = 1e8;
 pub const MIN_DT_S: f64 = 1e-3;
 /// See [`MIN_DT_S`].
 pub const MAX_DT_S: f64 = 1.0;
+/// Longest warm start (s).
+pub const MAX_WARMUP_S: f64 = 600.0;
+/// Most UAVs that may all broadcast to all.
+pub const MAX_BROADCAST_ALL_UAVS: usize = 20_000;
+/// Most radio messages in flight (sent, not yet arrived).
+pub const MAX_MESSAGES_IN_FLIGHT: usize = 10_000_000;
 /// Most UAVs a scenario may have.
 pub const MAX_UAVS: usize = 10_000_000;
 
@@ -71,6 +77,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
             or_default("safety_distance_m", spec.safety_distance_m, defaults::SAFETY_DISTANCE_M, positive)?;
         values::distance("safety_distance_m", safety_distance_m)?;
         let warmup_s = or_default("warmup_s", spec.warmup_s, defaults::WARMUP_S, non_negative)?;
+        if warmup_s > MAX_WARMUP_S {
+            return Err(err(
+                "warmup_s",
+                format!(
+                    "{} s is more than {MAX_WARMUP_S} s: the warm start only lets the tracks learn their rates",
+                    values::show(warmup_s)
+                ),
+            ));
+        }
         let vehicle = vehicle::vehicle(&spec.vehicle)?;
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
         let mut params = controller::params(&spec.controller, dt_s, fixed_wing, safety_distance_m)?;
@@ -103,6 +118,33 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 }
             }
             RadioNeed::All => radio.broadcast_all = true,
+        }
+        // Every receiver checks every message: all-to-all broadcast is O(N²) a step, and a delayed
+        // radio keeps every message of the delay.
+        let senders = if radio.broadcast_all { n } else { beacons.len() };
+        if radio.broadcast_all && n > MAX_BROADCAST_ALL_UAVS {
+            return Err(err(
+                "radio.broadcast_all",
+                format!(
+                    "{n} UAVs all broadcasting is {n}² message checks a step: at most {MAX_BROADCAST_ALL_UAVS} UAVs; \
+                     name a few radio.beacons instead{}",
+                    if spec.controller.method.as_deref() == Some("consensus") {
+                        " (consensus needs every UAV's broadcasts)"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        if (radio.delay_steps as usize + 1).saturating_mul(senders) > MAX_MESSAGES_IN_FLIGHT {
+            return Err(err(
+                "radio.delay_s",
+                format!(
+                    "{} periods of delay with {senders} broadcasting UAVs keep {} messages in flight, more than {MAX_MESSAGES_IN_FLIGHT}",
+                    radio.delay_steps,
+                    (radio.delay_steps as usize + 1).saturating_mul(senders)
+                ),
+            ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
         let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;

@@ -23,22 +23,37 @@ pub fn derive(
 ) -> Result<Vec<DependencySet>, ConfigError> {
     let n = slots.len();
     let nav = slots.get(navigator.index()).ok_or(ConfigError::UnknownUav { id: navigator, size: n })?.offset_m;
-    let mut grid = NeighbourGrid::new();
-    grid.rebuild(slots.iter().map(|s| [s.offset_m.x, s.offset_m.y, s.offset_m.z]), max_distance_m);
     let to_nav: Vec<f64> = slots.iter().map(|s| (s.offset_m - nav).norm()).collect();
+    let at = |i: usize| [slots[i].offset_m.x, slots[i].offset_m.y, slots[i].offset_m.z];
+    // Each UAV's candidates: the slots closer to the navigator within the search radius. The
+    // radius grows by doubling up to `max_distance_m`, and only for the UAVs still short of k
+    // candidates, so a generous maximum does not make every search cover the whole formation.
+    let mut found: Vec<Vec<(f64, u32)>> = vec![Vec::new(); n];
+    let mut pending: Vec<usize> = (0..n).filter(|&i| i != navigator.index()).collect();
+    let spread = to_nav.iter().copied().fold(0.0, f64::max);
+    let mut radius = max_distance_m.min((spread / (n as f64).sqrt().max(1.0)).max(1.0) * 4.0);
+    let mut grid = NeighbourGrid::new();
+    while !pending.is_empty() {
+        let last = radius >= max_distance_m;
+        grid.rebuild((0..n).map(at), radius);
+        pending.retain(|&i| {
+            let cands = &mut found[i];
+            cands.clear();
+            grid.for_each_within(at(i), radius, |j, _, d2| {
+                if to_nav[j as usize] < to_nav[i] - 1e-9 {
+                    cands.push((d2.sqrt(), j));
+                }
+            });
+            cands.len() < k && !last
+        });
+        radius = (2.0 * radius).min(max_distance_m);
+    }
     let mut out = Vec::with_capacity(n);
-    let mut cands: Vec<(f64, u32)> = Vec::with_capacity(64);
-    for (i, s) in slots.iter().enumerate() {
+    for (i, cands) in found.iter_mut().enumerate() {
         if i == navigator.index() {
             out.push(DependencySet::default());
             continue;
         }
-        cands.clear();
-        grid.for_each_within([s.offset_m.x, s.offset_m.y, s.offset_m.z], max_distance_m, |j, _, d2| {
-            if to_nav[j as usize] < to_nav[i] - 1e-9 {
-                cands.push((d2.sqrt(), j));
-            }
-        });
         cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         cands.truncate(k);
         let nav_in_cands = cands.iter().any(|c| c.1 == navigator.0);
@@ -50,6 +65,7 @@ pub fn derive(
             refs.push((navigator, if refs.is_empty() { 1.0 } else { navigator_degree }));
         }
         out.push(DependencySet::new(UavId(i as u32), n, refs)?);
+        *cands = Vec::new();
     }
     Ok(out)
 }
@@ -85,5 +101,15 @@ mod tests {
         }
         // The UAV right behind the navigator leans on it most.
         assert_eq!(deps[7].refs()[0].0, UavId(2));
+        // A generous maximum finds the same nearest references as a tight one.
+        let wide = derive(&slots, nav, 3, 1e6, 0.0).expect("valid");
+        let tight = derive(&slots, nav, 3, 80.0, 0.0).expect("valid");
+        let fits = (0..30).filter(|&i| tight[i].refs().len() == 3).count();
+        assert!(fits > 20);
+        for i in 0..30 {
+            if tight[i].refs().len() == 3 {
+                assert_eq!(wide[i], tight[i], "UAV {i}");
+            }
+        }
     }
 }
