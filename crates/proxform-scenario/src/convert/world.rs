@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use proxform_core::angle::{deg, kmh};
 use proxform_core::UavId;
 
-use super::values::{err, non_negative, or_default, positive, probability, required, uav, vec3, SpecError};
+use super::values::{err, non_negative, or_default, positive, probability, required, uav, vec3, within, SpecError};
 use crate::defaults;
 use crate::faults::Fault;
 use crate::radio::{GilbertElliott, RadioModel};
@@ -15,7 +15,20 @@ use crate::wind::{Gust, Severity, Turbulence, Wind};
 
 /// Measurement noise (each σ times `noise.scale`), the GNSS-like bias and the actuation error.
 pub fn noise(n: &NoiseSpec) -> Result<(MeasurementNoise, Option<CorrelatedNoise>, f64), SpecError> {
+    // Beyond these the sensors measure nothing: the noise would be the whole signal.
+    const LIMITS: [(&str, f64, &str); 4] = [
+        ("noise.position_m", 1000.0, "m"),
+        ("noise.velocity_kmh", 360.0, "km/h"),
+        ("noise.attitude_deg", 90.0, "°"),
+        ("noise.gnss_bias_m", 1000.0, "m"),
+    ];
+    for ((key, max, unit), v) in LIMITS.iter().zip([n.position_m, n.velocity_kmh, n.attitude_deg, n.gnss_bias_m]) {
+        if let Some(v) = v {
+            within(key, v, *max, unit, "noise that large measures nothing")?;
+        }
+    }
     let scale = or_default("noise.scale", n.scale, 1.0, non_negative)?;
+    within("noise.scale", scale, 1e3, "times", "noise that large measures nothing")?;
     let noise = MeasurementNoise {
         position_m: or_default("noise.position_m", n.position_m, defaults::NOISE_POSITION_M, non_negative)? * scale,
         velocity_mps: kmh(or_default(
@@ -77,7 +90,7 @@ pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
 pub fn wind(w: &WindSpec) -> Result<Wind, SpecError> {
     let mut out = Wind::default();
     if let Some(v) = w.steady_kmh {
-        out.steady_mps = vec3("wind.steady_kmh", v)?.map(kmh);
+        out.steady_mps = wind_speeds("wind.steady_kmh", v)?.map(kmh);
     }
     let severity = match w.turbulence.as_deref() {
         None | Some("none") => None,
@@ -99,7 +112,7 @@ pub fn wind(w: &WindSpec) -> Result<Wind, SpecError> {
             out.gust = Some(Gust {
                 at_s: non_negative("wind.gust_at_s", at)?,
                 duration_s: positive("wind.gust_duration_s", d)?,
-                peak_mps: vec3("wind.gust_peak_kmh", peak)?.map(kmh),
+                peak_mps: wind_speeds("wind.gust_peak_kmh", peak)?.map(kmh),
             });
         }
         _ => return Err(err("wind.gust_at_s", "a gust needs gust_at_s, gust_duration_s and gust_peak_kmh")),
@@ -200,4 +213,13 @@ pub fn faults_after(faults: &[Fault], duration_s: f64) -> Vec<SpecError> {
             })
         })
         .collect()
+}
+
+/// A wind vector (km/h), each component within what a vehicle could fly in.
+fn wind_speeds(key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SpecError> {
+    let w = vec3(key, v)?;
+    for k in 0..3 {
+        within(&format!("{key}[{}]", k + 1), w[k], 500.0, "km/h", "stronger than any wind a UAV flies in")?;
+    }
+    Ok(w)
 }
