@@ -443,9 +443,12 @@ pub fn compare_plots(
     register_embedded_font()?;
     let mut written = Vec::new();
     type Pick = fn(&proxform_scenario::comparison::Condition) -> Option<f64>;
-    let sweeps: [(&str, &str, Pick); 2] = [
+    let sweeps: [(&str, &str, Pick); 3] = [
         ("error_vs_loss", "radio loss (%)", |c| c.is_loss_only().then_some(100.0 * c.radio_loss)),
         ("error_vs_delay", "radio delay (s)", |c| c.is_delay_only().then_some(c.radio_delay_s)),
+        ("error_vs_channel_loss", "loss on every channel: onboard detections and radio (%)", |c| {
+            c.channel_loss().map(|p| 100.0 * p)
+        }),
     ];
     for (file, x_desc, pick) in sweeps {
         // (method, [(x, median, p95)])

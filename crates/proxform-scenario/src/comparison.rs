@@ -87,6 +87,11 @@ pub struct ConditionSpec {
     pub fail_at_s: Option<f64>,
     /// Probability of losing each onboard observation, in [0, 1]. Default 0.
     pub dropout: Option<f64>,
+    /// Every channel a method uses loses this fraction, independently: each onboard detection
+    /// and each radio message, in [0, 1] (sets both `dropout` and `radio_loss`; give neither
+    /// with it). The like-for-like loss: a method that senses onboard is touched by it as much
+    /// as one that listens to the radio.
+    pub channel_loss: Option<f64>,
 }
 
 /// A comparison file (TOML).
@@ -158,6 +163,15 @@ impl Condition {
     /// error-against-loss curve).
     pub fn is_loss_only(&self) -> bool {
         Self { name: String::new(), radio_loss: 0.0, ..self.clone() } == Self::ideal("")
+    }
+
+    /// The loss of every channel when it is the only difference from [`Condition::ideal`]
+    /// (onboard dropout equal to the radio loss: a point of the error-against-channel-loss
+    /// curve; the ideal condition is its 0).
+    pub fn channel_loss(&self) -> Option<f64> {
+        let same = self.radio_loss == self.dropout;
+        let rest = Self { name: String::new(), radio_loss: 0.0, dropout: 0.0, ..self.clone() } == Self::ideal("");
+        (same && rest).then_some(self.radio_loss)
     }
 
     /// True when only the radio delay differs from [`Condition::ideal`].
@@ -326,8 +340,16 @@ impl Comparison {
                 Some(p) => Ok(p),
                 None => Ok(0.0),
             };
-            let radio_loss = probability("radio_loss", c.radio_loss)?;
-            let dropout = probability("dropout", c.dropout)?;
+            let (radio_loss, dropout) = match c.channel_loss {
+                Some(_) if c.radio_loss.is_some() || c.dropout.is_some() => {
+                    return Err(bad(key("channel_loss"), "sets radio_loss and dropout: give neither with it".into()));
+                }
+                Some(p) => {
+                    let p = probability("channel_loss", Some(p))?;
+                    (p, p)
+                }
+                None => (probability("radio_loss", c.radio_loss)?, probability("dropout", c.dropout)?),
+            };
             let radio_delay_s = c.radio_delay_s.unwrap_or(0.0);
             let steps = radio_delay_s / base.dt_s;
             if !(radio_delay_s.is_finite() && radio_delay_s >= 0.0) || (steps - steps.round()).abs() > 1e-6 {
@@ -413,6 +435,9 @@ mod tests {
         assert!(c.conditions.iter().any(|c| c.fail.is_some()));
         assert!(c.conditions.iter().filter(|c| c.is_loss_only()).count() >= 3);
         assert!(c.conditions.iter().filter(|c| c.is_delay_only()).count() >= 3);
+        // Like-for-like loss: every channel loses the same fraction.
+        let lossy: Vec<f64> = c.conditions.iter().filter_map(|c| c.channel_loss()).filter(|p| *p > 0.0).collect();
+        assert!(lossy.len() >= 3, "{lossy:?}");
     }
 
     #[test]
@@ -422,6 +447,10 @@ mod tests {
             (format!("{head}[[condition]]\nname = 'a'\nradio_loss = 1.5\n"), "condition[1].radio_loss"),
             (format!("{head}[[condition]]\nname = 'a'\nradio_delay_s = 0.05\n"), "condition[1].radio_delay_s"),
             (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 9\n"), "condition[1].fail_uav"),
+            (
+                format!("{head}[[condition]]\nname = 'a'\nchannel_loss = 0.3\ndropout = 0.1\n"),
+                "condition[1].channel_loss",
+            ),
             (format!("{head}[[condition]]\nname = 'a'\nwind = 3\n"), "wind"),
             (
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
