@@ -94,6 +94,8 @@ enum Predictor {
     AlphaBeta,
     /// The plain transition F on the latest observation.
     ConstantVelocity,
+    /// A Kalman filter with a Singer manoeuvre model (σ_a 1 m/s², τ 1 s, the scenario's noise).
+    Singer,
 }
 
 impl RunArgs {
@@ -123,6 +125,7 @@ impl RunArgs {
                 match p {
                     Predictor::AlphaBeta => "alpha_beta",
                     Predictor::ConstantVelocity => "constant_velocity",
+                    Predictor::Singer => "singer",
                 }
                 .into(),
             );

@@ -6,7 +6,7 @@ use proxform_core::angle::kmh;
 use proxform_core::state::State9;
 use proxform_core::{
     ControllerParams, ControllerSetup, DependencySet, Formation, FormationController, FormationFrame, FormationSlot,
-    KinematicModel, Method, Observation, ObservationSource, ProximityController, UavId, VehicleModel,
+    KinematicModel, Method, Observation, ObservationSource, PredictorKind, ProximityController, UavId, VehicleModel,
 };
 
 fn main() {
@@ -106,6 +106,32 @@ fn method_step(bencher: divan::Bencher, label: &str) {
     let mut t = 0.0;
     let d = ctrl.step(t, &own, &obs);
     assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }), "{label}: {d:?}");
+    bencher.bench_local(|| {
+        t += 0.1;
+        divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
+    });
+}
+
+/// One adjusting step with 8 neighbours for each neighbour predictor: the default α-β
+/// tracks, the plain transition, and the Kalman filter with a Singer manoeuvre model.
+#[divan::bench(args = ["alpha_beta", "constant_velocity", "singer"])]
+fn predictor_step(bencher: divan::Bencher, predictor: &str) {
+    let kind = match predictor {
+        "alpha_beta" => PredictorKind::default(),
+        "constant_velocity" => PredictorKind::ConstantVelocity,
+        _ => PredictorKind::Singer {
+            accel_sigma_mps2: 1.0,
+            tau_s: 1.0,
+            position_sigma_m: 0.02,
+            velocity_sigma_mps: 0.05,
+            alpha: 0.8,
+            beta: 0.8 * 0.8 / 1.2,
+        },
+    };
+    let (mut ctrl, obs, own) = setup_with(8, ControllerParams { predictor: kind, ..ControllerParams::default() });
+    let mut t = 0.0;
+    let d = ctrl.step(t, &own, &obs);
+    assert!(matches!(d.outcome, proxform_core::Outcome::Adjusted { .. }), "{predictor}: {d:?}");
     bencher.bench_local(|| {
         t += 0.1;
         divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))

@@ -21,6 +21,7 @@ pub mod horizon;
 pub mod method;
 pub mod observation;
 pub mod predictor;
+pub mod singer;
 pub mod state;
 pub mod vehicle;
 

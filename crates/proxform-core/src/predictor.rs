@@ -12,6 +12,7 @@
 
 use crate::error::{unit_interval, ConfigError};
 use crate::observation::{Observation, UavId};
+use crate::singer::{Axis, Singer, Step as SingerStep};
 use crate::state::{State9, VX, X};
 
 /// How neighbours are predicted one step ahead.
@@ -25,6 +26,23 @@ pub enum PredictorKind {
         /// Value gain α ∈ (0, 1]. Default 0.8.
         alpha: f64,
         /// Rate gain β ∈ [0, 1]. Default 0.5333…, the Benedict-Bordner value α²/(2 − α).
+        beta: f64,
+    },
+    /// A Kalman filter per axis on position, velocity and a Singer manoeuvre acceleration
+    /// ([`crate::singer`]), fed by every observation of the neighbour with its measurement
+    /// noise; the attitude on the α-β filter.
+    Singer {
+        /// Manoeuvre acceleration σ_a (m/s², > 0). Default 1.
+        accel_sigma_mps2: f64,
+        /// Its correlation time τ (s, > 0). Default 1.
+        tau_s: f64,
+        /// Measurement noise of an observed position (m, > 0), 1σ: the scenario's.
+        position_sigma_m: f64,
+        /// Measurement noise of an observed velocity (m/s, > 0), 1σ: the scenario's.
+        velocity_sigma_mps: f64,
+        /// α-β gains of the attitude.
+        alpha: f64,
+        /// See `alpha`.
         beta: f64,
     },
 }
@@ -41,7 +59,13 @@ impl PredictorKind {
 
     /// Checks the gains.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        if let PredictorKind::AlphaBeta { alpha, beta } = *self {
+        if let PredictorKind::Singer { accel_sigma_mps2, tau_s, position_sigma_m, velocity_sigma_mps, .. } = *self {
+            crate::error::positive("predictor accel_sigma_mps2", accel_sigma_mps2)?;
+            crate::error::positive("predictor tau_s", tau_s)?;
+            crate::error::positive("predictor position_sigma_m", position_sigma_m)?;
+            crate::error::positive("predictor velocity_sigma_mps", velocity_sigma_mps)?;
+        }
+        if let PredictorKind::AlphaBeta { alpha, beta } | PredictorKind::Singer { alpha, beta, .. } = *self {
             unit_interval("predictor alpha", alpha)?;
             if alpha == 0.0 {
                 return Err(ConfigError::OutOfRange {
@@ -84,7 +108,7 @@ impl Track {
 /// allocated once: a step allocates nothing.
 #[derive(Debug, Clone)]
 pub struct NeighbourTracks {
-    kind: PredictorKind,
+    kind: Kind,
     timeout_s: f64,
     /// A coasting track extrapolates its acceleration for at most this long after its last
     /// measurement, then goes on at the velocity it has reached (s).
@@ -97,6 +121,26 @@ pub struct NeighbourTracks {
     capacity: usize,
 }
 
+/// The predictor as the tracks run it: the Kalman filter's state boxed, so that the α-β tracks
+/// of a large swarm pay one word for it.
+#[derive(Debug, Clone)]
+enum Kind {
+    ConstantVelocity,
+    AlphaBeta { alpha: f64, beta: f64 },
+    Singer(Box<SingerTracks>),
+}
+
+/// The Singer filter's model, the attitude's α-β gains, the Kalman axes of each track, and
+/// `F` and `Q` of the last interval (the update period, nearly always).
+#[derive(Debug, Clone)]
+struct SingerTracks {
+    model: Singer,
+    alpha: f64,
+    beta: f64,
+    axes: Vec<[Axis; 3]>,
+    step: Option<SingerStep>,
+}
+
 const FREE: u32 = u32::MAX;
 
 impl NeighbourTracks {
@@ -106,6 +150,19 @@ impl NeighbourTracks {
         let capacity = capacity.max(1);
         // Allocated once at full capacity: growing per neighbour fragments the heap of a large
         // swarm (measured: +40 % resident memory at 10^5 UAVs).
+        let kind = match kind {
+            PredictorKind::ConstantVelocity => Kind::ConstantVelocity,
+            PredictorKind::AlphaBeta { alpha, beta } => Kind::AlphaBeta { alpha, beta },
+            PredictorKind::Singer { accel_sigma_mps2, tau_s, position_sigma_m, velocity_sigma_mps, alpha, beta } => {
+                Kind::Singer(Box::new(SingerTracks {
+                    model: Singer { accel_sigma_mps2, tau_s, position_sigma_m, velocity_sigma_mps },
+                    alpha,
+                    beta,
+                    axes: Vec::with_capacity(capacity),
+                    step: None,
+                }))
+            }
+        };
         Self {
             kind,
             timeout_s,
@@ -118,7 +175,14 @@ impl NeighbourTracks {
 
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
-        self.ids.capacity() * std::mem::size_of::<(u32, u8)>() + self.tracks.capacity() * std::mem::size_of::<Track>()
+        self.ids.capacity() * std::mem::size_of::<(u32, u8)>()
+            + self.tracks.capacity() * std::mem::size_of::<Track>()
+            + match &self.kind {
+                Kind::Singer(k) => {
+                    std::mem::size_of::<SingerTracks>() + k.axes.capacity() * std::mem::size_of::<[Axis; 3]>()
+                }
+                _ => 0,
+            }
     }
 
     /// Feeds observation `obs` (taken at `now − obs.age_s`) and returns the neighbour's
@@ -126,7 +190,7 @@ impl NeighbourTracks {
     pub fn predict(&mut self, obs: &Observation, now: f64, horizon_s: f64) -> State9 {
         let t_obs = now - obs.age_s;
         let track = match self.kind {
-            PredictorKind::ConstantVelocity => {
+            Kind::ConstantVelocity => {
                 // The plain F, exact in f64.
                 let h = now + horizon_s - t_obs;
                 let mut s = obs.state;
@@ -135,7 +199,7 @@ impl NeighbourTracks {
                 }
                 return s;
             }
-            PredictorKind::AlphaBeta { alpha, beta } => {
+            Kind::AlphaBeta { alpha, beta } => {
                 let slot = self.slot_for(obs.id, t_obs);
                 let (id, seen) = self.ids[slot];
                 let tr = &mut self.tracks[slot];
@@ -149,6 +213,48 @@ impl NeighbourTracks {
                     self.ids[slot].1 = 2;
                 } else if dt > 0.0 {
                     alpha_beta_update(tr, &obs.state, dt, alpha, beta);
+                }
+                *tr
+            }
+            Kind::Singer(_) => {
+                let slot = self.slot_for(obs.id, t_obs);
+                let (id, seen) = self.ids[slot];
+                let Kind::Singer(k) = &mut self.kind else { unreachable!("matched above") };
+                let SingerTracks { model: m, alpha, beta, axes, step } = &mut **k;
+                let (tr, axes) = (&mut self.tracks[slot], &mut axes[slot]);
+                let dt = t_obs - tr.t;
+                let z = &obs.state;
+                let fresh = dt <= self.timeout_s; // false for NaN too
+                if id != obs.id.0 || !fresh {
+                    *tr = Track::start(t_obs, z);
+                    *axes = std::array::from_fn(|k| m.start(z[X + k], z[VX + k]));
+                    self.ids[slot] = (obs.id.0, 1);
+                } else if dt >= 0.0 {
+                    // Every observation updates the track, two at the same instant included.
+                    if dt > 0.0 {
+                        let f = match step {
+                            Some(s) if s.t == dt => *s,
+                            _ => *step.insert(m.step(dt)),
+                        };
+                        for axis in axes.iter_mut() {
+                            Singer::predict_with(axis, &f);
+                        }
+                    }
+                    for k in 0..3 {
+                        m.update(&mut axes[k], z[X + k], z[VX + k]);
+                    }
+                    if dt > 0.0 && seen < 2 {
+                        attitude_two_point_start(tr, z, dt);
+                        self.ids[slot].1 = 2;
+                    } else if dt > 0.0 {
+                        va_alpha_beta(tr, z, dt, *alpha, *beta, 3..6);
+                    }
+                    tr.t = t_obs;
+                }
+                for k in 0..3 {
+                    tr.pos[k] = axes[k].x[0];
+                    tr.va[k] = axes[k].x[1] as f32;
+                    tr.rate[k] = axes[k].x[2] as f32;
                 }
                 *tr
             }
@@ -202,6 +308,9 @@ impl NeighbourTracks {
         if self.ids.len() < self.capacity {
             self.ids.push((FREE, 0));
             self.tracks.push(Track { t: t_obs, ..Track::default() });
+            if let Kind::Singer(k) = &mut self.kind {
+                k.axes.push([Axis::default(); 3]);
+            }
             return self.ids.len() - 1;
         }
         // Evict the track observed longest ago.
@@ -240,8 +349,15 @@ fn alpha_beta_update(tr: &mut Track, z: &State9, dt: f64, alpha: f64, beta: f64)
         tr.pos[k] = pred + alpha * (z[X + k] - pred);
     }
     // Velocity and attitude: value and rate (attitude residuals wrapped).
+    va_alpha_beta(tr, z, dt, alpha, beta, 0..6);
+    tr.t += dt;
+}
+
+/// The α-β update of the velocity and attitude components `ks` (0-2 velocity, 3-5 attitude).
+#[inline]
+fn va_alpha_beta(tr: &mut Track, z: &State9, dt: f64, alpha: f64, beta: f64, ks: std::ops::Range<usize>) {
     let beta_dt = beta / dt;
-    for k in 0..6 {
+    for k in ks {
         let rate = f64::from(tr.rate[k]);
         let pred = f64::from(tr.va[k]) + dt * rate;
         let raw = z[VX + k] - pred;
@@ -249,7 +365,16 @@ fn alpha_beta_update(tr: &mut Track, z: &State9, dt: f64, alpha: f64, beta: f64)
         tr.va[k] = (pred + alpha * res) as f32;
         tr.rate[k] = (rate + beta_dt * res) as f32;
     }
-    tr.t += dt;
+}
+
+/// The two-point start of the attitude alone (the Kalman axes carry position and velocity).
+#[inline]
+fn attitude_two_point_start(tr: &mut Track, z: &State9, dt: f64) {
+    for k in 3..6 {
+        let d = crate::state::difference_component(VX + k, z[VX + k], f64::from(tr.va[k]));
+        tr.rate[k] = (d / dt) as f32;
+        tr.va[k] = z[VX + k] as f32;
+    }
 }
 
 /// The track's state `h` seconds after its measurement time.
@@ -323,6 +448,45 @@ mod tests {
         let x = tracks.state_at(0, 2.0);
         assert_relative_eq!(x[3], 12.0 + 2.0 * 0.2, epsilon = 1e-4);
         assert_relative_eq!(x[0], 11.0 + 12.0 * 1.0 + 2.0 * 0.2 * (1.0 - 0.1), epsilon = 1e-3);
+    }
+
+    #[test]
+    fn a_singer_track_fuses_an_onboard_detection_and_a_radio_report_of_the_same_instant() {
+        let kind = PredictorKind::Singer {
+            accel_sigma_mps2: 1.0,
+            tau_s: 1.0,
+            position_sigma_m: 1.0,
+            velocity_sigma_mps: 0.5,
+            alpha: 0.8,
+            beta: 0.8 * 0.8 / 1.2,
+        };
+        let mut one = NeighbourTracks::new(kind, 4, 1.0, 0.2);
+        let mut two = NeighbourTracks::new(kind, 4, 1.0, 0.2);
+        let at = |y: f64| {
+            let mut s = State9::zeros();
+            s[1] = y;
+            s[3] = 50.0;
+            s
+        };
+        for k in 0..5 {
+            let t = k as f64 * 0.1;
+            let mut x = at(0.0);
+            x[0] = 50.0 * t;
+            one.predict(&obs(1, x), t, 0.1);
+            two.predict(&obs(1, x), t, 0.1);
+        }
+        // At 0.5 s the onboard detection says y = +1 m and the radio report y = −1 m: alone,
+        // the first pulls the track toward +1; fused, the two cancel.
+        let (mut up, mut down) = (at(1.0), at(-1.0));
+        up[0] = 25.0;
+        down[0] = 25.0;
+        let alone = one.predict(&obs(1, up), 0.5, 0.0);
+        two.predict(&obs(1, up), 0.5, 0.0);
+        let mut radio = obs(1, down);
+        radio.source = ObservationSource::Radio;
+        let fused = two.predict(&radio, 0.5, 0.0);
+        assert!(alone[1] > 0.1, "{}", alone[1]);
+        assert!(fused[1].abs() < 0.5 * alone[1], "{} vs {}", fused[1], alone[1]);
     }
 
     #[test]

@@ -111,9 +111,12 @@ fn path(p: &NavigatorPath) -> PathSpec {
 fn controller(sc: &Scenario) -> ControllerSpec {
     let p = sc.controller();
     let d: &State9 = &p.envelope.thresholds;
-    let (predictor, alpha, beta) = match p.predictor {
-        PredictorKind::ConstantVelocity => ("constant_velocity", None, None),
-        PredictorKind::AlphaBeta { alpha, beta } => ("alpha_beta", Some(alpha), Some(beta)),
+    let (predictor, alpha, beta, singer) = match p.predictor {
+        PredictorKind::ConstantVelocity => ("constant_velocity", None, None, None),
+        PredictorKind::AlphaBeta { alpha, beta } => ("alpha_beta", Some(alpha), Some(beta), None),
+        PredictorKind::Singer { accel_sigma_mps2, tau_s, alpha, beta, .. } => {
+            ("singer", Some(alpha), Some(beta), Some((accel_sigma_mps2, tau_s)))
+        }
     };
     let method = sc.method();
     let gains = match method {
@@ -132,6 +135,8 @@ fn controller(sc: &Scenario) -> ControllerSpec {
         predictor: Some(predictor.into()),
         predictor_alpha: alpha,
         predictor_beta: beta,
+        predictor_accel_sigma_mps2: singer.map(|s| s.0),
+        predictor_tau_s: singer.map(|s| s.1),
         track_timeout_s: Some(p.track_timeout_s),
         coast_s: Some(p.coast_s),
         coast_accel_s: Some(p.coast_accel_s),

@@ -196,12 +196,17 @@ pub struct ControllerSpec {
     pub closing_time_s: Option<f64>,
     /// Input penalty (≥ 0). Default 0.01.
     pub input_weight: Option<f64>,
-    /// "alpha_beta" (default) or "constant_velocity".
+    /// "alpha_beta" (default), "constant_velocity" or "singer" (a Kalman filter with a Singer
+    /// manoeuvre model; the attitude on α-β).
     pub predictor: Option<String>,
     /// α of the α-β predictor, in (0, 1]. Default 0.8.
     pub predictor_alpha: Option<f64>,
     /// β of the α-β predictor, in [0, 1]. Default α²/(2 − α).
     pub predictor_beta: Option<f64>,
+    /// Singer predictor: manoeuvre acceleration σ_a (m/s², > 0). Default 1.
+    pub predictor_accel_sigma_mps2: Option<f64>,
+    /// Singer predictor: its correlation time τ (s, > 0). Default 1.
+    pub predictor_tau_s: Option<f64>,
     /// Track timeout (s). Default 1.
     pub track_timeout_s: Option<f64>,
     /// Longest a missing neighbour coasts on its track (s, ≥ 0). Default 0.5.

@@ -148,3 +148,21 @@ fn under_30_percent_dropout_the_losses_that_matter_are_those_of_the_main_referen
     let off = run_batch(&with(0.3, 0.1), off, 17, 20, None, &|| {}).summary;
     assert_eq!(off.pass_fraction, 0.0);
 }
+
+#[test]
+fn under_30_percent_dropout_the_singer_filter_holds_more_runs_than_alpha_beta_tracks() {
+    // A Kalman filter with a Singer manoeuvre model learns the front row's catch-up accelerations
+    // that the α-β tracks lag (measured over 1000 seeds: 0.885 against 0.797).
+    let with = |predictor: &str| {
+        paper(|s| {
+            s.sensing.dropout = Some(0.3);
+            s.controller.predictor = Some(predictor.into());
+        })
+    };
+    let ab = batch(&with("alpha_beta"), 13, 300);
+    let singer = batch(&with("singer"), 13, 300);
+    assert!(singer.pass_fraction > ab.pass_fraction + 0.04, "{} vs {}", singer.pass_fraction, ab.pass_fraction);
+    // Undisturbed, both hold the paper formation.
+    let calm = batch(&paper(|s| s.controller.predictor = Some("singer".into())), 13, 100);
+    assert_eq!(calm.pass_fraction, 1.0);
+}

@@ -5,7 +5,7 @@ use proxform_core::controller::MAX_HORIZON;
 use proxform_core::state;
 use proxform_core::{ControllerParams, Envelope, Method, PredictorKind};
 
-use super::values::{distance, err, finite, non_negative, positive, probability, SpecError};
+use super::values::{distance, err, finite, non_negative, or_default, positive, probability, SpecError};
 use crate::spec::ControllerSpec;
 
 /// A threshold's state index, key, value as written and unit conversion.
@@ -16,7 +16,7 @@ pub const MAX_AREAS: i64 = 1024;
 
 /// α of the default α-β predictor.
 const DEFAULT_ALPHA: f64 = match PredictorKind::DEFAULT {
-    PredictorKind::AlphaBeta { alpha, .. } => alpha,
+    PredictorKind::AlphaBeta { alpha, .. } | PredictorKind::Singer { alpha, .. } => alpha,
     PredictorKind::ConstantVelocity => 1.0,
 };
 
@@ -93,24 +93,49 @@ pub fn params(
         }
         p.own_filter_gain = v;
     }
+    let gains = || -> Result<(f64, f64), SpecError> {
+        let alpha = c.predictor_alpha.unwrap_or(DEFAULT_ALPHA);
+        let alpha = positive("controller.predictor_alpha", alpha)?;
+        if alpha > 1.0 {
+            return Err(err("controller.predictor_alpha", format!("must be in (0, 1], found {alpha}")));
+        }
+        let beta = match c.predictor_beta {
+            Some(b) => probability("controller.predictor_beta", b)?,
+            None => alpha * alpha / (2.0 - alpha),
+        };
+        Ok((alpha, beta))
+    };
+    let singer_keys = c.predictor_accel_sigma_mps2.is_some() || c.predictor_tau_s.is_some();
     p.predictor = match c.predictor.as_deref() {
+        _ if singer_keys && c.predictor.as_deref() != Some("singer") => {
+            return Err(err("controller.predictor_tau_s", "applies to predictor = \"singer\" only"));
+        }
         None | Some("alpha_beta") => {
-            let alpha = c.predictor_alpha.unwrap_or(DEFAULT_ALPHA);
-            let alpha = positive("controller.predictor_alpha", alpha)?;
-            if alpha > 1.0 {
-                return Err(err("controller.predictor_alpha", format!("must be in (0, 1], found {alpha}")));
-            }
-            let beta = match c.predictor_beta {
-                Some(b) => probability("controller.predictor_beta", b)?,
-                None => alpha * alpha / (2.0 - alpha),
-            };
+            let (alpha, beta) = gains()?;
             PredictorKind::AlphaBeta { alpha, beta }
         }
         Some("constant_velocity") => PredictorKind::ConstantVelocity,
+        Some("singer") => {
+            let (alpha, beta) = gains()?;
+            PredictorKind::Singer {
+                accel_sigma_mps2: or_default(
+                    "controller.predictor_accel_sigma_mps2",
+                    c.predictor_accel_sigma_mps2,
+                    1.0,
+                    positive,
+                )?,
+                tau_s: or_default("controller.predictor_tau_s", c.predictor_tau_s, 1.0, positive)?,
+                // The measurement noise is the scenario's, filled in with it.
+                position_sigma_m: f64::NAN,
+                velocity_sigma_mps: f64::NAN,
+                alpha,
+                beta,
+            }
+        }
         Some(o) => {
             return Err(err(
                 "controller.predictor",
-                format!("unknown predictor \"{o}\" (expected \"alpha_beta\" or \"constant_velocity\")"),
+                format!("unknown predictor \"{o}\" (expected \"alpha_beta\", \"constant_velocity\" or \"singer\")"),
             ))
         }
     };

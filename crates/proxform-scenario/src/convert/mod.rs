@@ -103,6 +103,12 @@ impl TryFrom<ScenarioSpec> for Scenario {
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
 
         let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
+        if let proxform_core::PredictorKind::Singer { position_sigma_m, velocity_sigma_mps, .. } = &mut params.predictor
+        {
+            // The filter weighs measurements by the sensors' noise (a floor keeps it proper).
+            *position_sigma_m = noise.position_m.max(1e-4);
+            *velocity_sigma_mps = noise.velocity_mps.max(1e-4);
+        }
         let (dropout, reference_dropout) = world::sensing(&spec.sensing)?;
         let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
         let allowable = world::allowable(&spec.allowable)?;
