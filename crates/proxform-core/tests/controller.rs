@@ -240,3 +240,21 @@ fn a_negative_separation_is_refused() {
     );
     assert!(err.is_err());
 }
+
+#[test]
+fn a_neighbour_reported_twice_counts_once() {
+    // The same UAV detected onboard and heard over the radio takes one area, not two.
+    let states = everyone_in_slot();
+    let mut obs: Vec<Observation> = [0u32, 2, 3].iter().map(|&j| observe(j, states[j as usize])).collect();
+    let mut c = controller(params());
+    let once = c.clone().step(0.0, &states[1], &obs);
+    // The radio report puts UAV1 a metre nearer: it must still not take a place of its own.
+    let mut again = obs[0];
+    again.source = ObservationSource::Radio;
+    again.state[0] -= 1.0;
+    obs.push(again);
+    let twice = c.step(0.0, &states[1], &obs);
+    assert_eq!(once.occupied_areas, twice.occupied_areas);
+    assert_eq!(once.main_refs, twice.main_refs);
+    assert_eq!(once.outcome, twice.outcome);
+}

@@ -161,6 +161,9 @@ impl ProximityController {
         // F·X_i: the state the UAV will have if it keeps its present course.
         let x_hold = vehicle.hold(own, params.dt_s);
 
+        // §3: every further report of a neighbour already observed (a radio report beside an
+        // onboard detection) updates its track; the first report stands for it below.
+        self.fuse_repeated_reports(now_s, observations);
         // §2: S_i, the nearest perceived UAV in each azimuth area.
         self.sort_into_areas(now_s, own, observations);
         // Steps 1-3: X̂_ij per neighbour, accumulated into X̄_i and X̂ᴰ_i.
@@ -184,6 +187,18 @@ impl ProximityController {
         Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
     }
 
+    /// Feeds the tracks every report of a UAV after its first one in `observations` (with a
+    /// predictor that fuses them, the sensor passes a radio report beside the onboard detection
+    /// of the same UAV); those reports then take no place of their own in the areas.
+    fn fuse_repeated_reports(&mut self, now_s: f64, observations: &[Observation]) {
+        let dt = self.setup.params.dt_s;
+        for (k, o) in observations.iter().enumerate() {
+            if observations[..k].iter().any(|p| p.id == o.id) {
+                self.tracks.predict(o, now_s, dt);
+            }
+        }
+    }
+
     /// §2: fills S_i (`self.nearest`) with the nearest UAV per azimuth area, from the UAV's
     /// own view of the observations; then neighbours perceived recently but missing now coast
     /// on their tracks (§3) into areas that have no fresh observation.
@@ -195,7 +210,7 @@ impl ProximityController {
         nearest.iter_mut().for_each(|a| a.0 = EMPTY);
         let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
-            if o.id == me {
+            if o.id == me || observations[..k].iter().any(|p| p.id == o.id) {
                 continue;
             }
             let (dx, dy, dz) = (o.state[X] - own[X], o.state[X + 1] - own[X + 1], o.state[X + 2] - own[X + 2]);

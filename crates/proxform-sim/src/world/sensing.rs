@@ -160,7 +160,8 @@ impl ProximitySensor {
             let n = states.len();
             for m in link.messages {
                 let j = m.sender as usize;
-                if j == i || j >= n || !link.active[j] || out[start..].iter().any(|o| o.id.index() == j) {
+                let seen = !link.fuse && out[start..].iter().any(|o| o.id.index() == j);
+                if j == i || j >= n || !link.active[j] || seen {
                     continue;
                 }
                 let q = &m.at;
@@ -210,8 +211,12 @@ pub struct Link<'a> {
     pub delay_s: f64,
     /// The receiver's Gilbert-Elliott channel is in its bad state.
     pub channel_bad: bool,
+    /// Whether the receiver's tracks fuse every report of a UAV (a radio report beside its onboard
+    /// detection is then passed too; otherwise the radio only fills in what onboard sensing
+    /// missed).
+    pub fuse: bool,
     /// Whether the receiver's controller uses onboard sensing (false: radio messages only;
-    /// the nearest neighbour is still found, for the separation metric).
+    /// no neighbour is scanned).
     pub onboard: bool,
 }
 
@@ -259,6 +264,16 @@ mod tests {
     }
 
     fn perceive(states: &[State9], deps: &[DependencySet], dropout: f64, messages: &[Message]) -> Vec<Observation> {
+        perceive_fusing(states, deps, dropout, messages, false)
+    }
+
+    fn perceive_fusing(
+        states: &[State9],
+        deps: &[DependencySet],
+        dropout: f64,
+        messages: &[Message],
+        fuse: bool,
+    ) -> Vec<Observation> {
         let sensor = ProximitySensor::new(8, 250.0, State9::zeros());
         let mut grid = NeighbourGrid::new();
         grid.rebuild(states.iter().map(|s| [s[0], s[1], s[2]]), 250.0);
@@ -275,6 +290,7 @@ mod tests {
             delay_s: 0.0,
             channel_bad: false,
             onboard: true,
+            fuse,
         };
         let key = crate::random::RunKey::new(1, 0).at(0);
         let mut draws = PerceptionDraws {
@@ -303,6 +319,10 @@ mod tests {
         let heard = perceive(&states, &deps, 0.0, &[message(1), message(4)]);
         let radio: Vec<u32> = heard.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
         assert_eq!(radio, vec![4]);
+        // A tracker that fuses gets the radio report of a UAV it also detects onboard.
+        let fused = perceive_fusing(&states, &deps, 0.0, &[message(1), message(4)], true);
+        let radio: Vec<u32> = fused.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
+        assert_eq!(radio, vec![1, 4]);
         // Everything onboard lost: only the radio is left.
         assert!(perceive(&states, &deps, 1.0, &[]).is_empty());
         // Turned around, the same neighbours fall in other areas.
