@@ -244,7 +244,8 @@ impl NeighbourTracks {
                         m.update(&mut axes[k], z[X + k], z[VX + k]);
                     }
                     if dt > 0.0 && seen < 2 {
-                        attitude_two_point_start(tr, z, dt);
+                        // The attitude alone: the Kalman axes carry position and velocity.
+                        va_two_point_start(tr, z, dt, 3..6);
                         self.ids[slot].1 = 2;
                     } else if dt > 0.0 {
                         va_alpha_beta(tr, z, dt, *alpha, *beta, 3..6);
@@ -329,13 +330,20 @@ impl NeighbourTracks {
 /// from the difference of the first two.
 #[inline]
 fn two_point_start(tr: &mut Track, z: &State9, dt: f64) {
-    for k in 0..6 {
+    va_two_point_start(tr, z, dt, 0..6);
+    tr.pos = [z[0], z[1], z[2]];
+    tr.t += dt;
+}
+
+/// The two-point start of the velocity and attitude components `ks` (0-2 velocity, 3-5
+/// attitude): value from the measurement, rate from the difference with the first.
+#[inline]
+fn va_two_point_start(tr: &mut Track, z: &State9, dt: f64, ks: std::ops::Range<usize>) {
+    for k in ks {
         let d = crate::state::difference_component(VX + k, z[VX + k], f64::from(tr.va[k]));
         tr.rate[k] = (d / dt) as f32;
         tr.va[k] = z[VX + k] as f32;
     }
-    tr.pos = [z[0], z[1], z[2]];
-    tr.t += dt;
 }
 
 /// One α-β update after `dt` seconds with measurement `z`.
@@ -364,16 +372,6 @@ fn va_alpha_beta(tr: &mut Track, z: &State9, dt: f64, alpha: f64, beta: f64, ks:
         let res = if k >= 3 { crate::angle::wrap_pi(raw) } else { raw };
         tr.va[k] = (pred + alpha * res) as f32;
         tr.rate[k] = (rate + beta_dt * res) as f32;
-    }
-}
-
-/// The two-point start of the attitude alone (the Kalman axes carry position and velocity).
-#[inline]
-fn attitude_two_point_start(tr: &mut Track, z: &State9, dt: f64) {
-    for k in 3..6 {
-        let d = crate::state::difference_component(VX + k, z[VX + k], f64::from(tr.va[k]));
-        tr.rate[k] = (d / dt) as f32;
-        tr.va[k] = z[VX + k] as f32;
     }
 }
 
