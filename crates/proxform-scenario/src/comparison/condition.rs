@@ -77,6 +77,9 @@ impl Condition {
         }
         sc.sensing.dropout = Some(self.dropout);
         sc.controller.horizon = Some(i64::from(method.horizon));
+        if let Some(p) = &method.predictor {
+            sc.controller.predictor = Some(p.clone());
+        }
         sc.controller.method = Some(method.method.label().into());
         sc.controller.gains = method.gains.clone();
         let base_name = base.name.as_deref().unwrap_or("scenario");

@@ -68,6 +68,9 @@ pub enum MethodSpec {
         /// A baseline's gains (keys of its gains struct; omitted ones keep their defaults),
         /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_share = 0.5 }`.
         gains: Option<toml::Table>,
+        /// The neighbour predictor: `"alpha_beta"` (default), `"constant_velocity"` or
+        /// `"singer"` (the Kalman tracks, fed by every channel).
+        predictor: Option<String>,
     },
 }
 
@@ -128,6 +131,8 @@ pub struct MethodEntry {
     pub horizon: u32,
     /// A baseline's gains as written (None: its defaults).
     pub gains: Option<toml::Table>,
+    /// The neighbour predictor (None: the base scenario's).
+    pub predictor: Option<String>,
 }
 
 /// A checked comparison.
@@ -226,10 +231,10 @@ impl Comparison {
         }
         let mut methods = Vec::new();
         for (k, m) in spec.methods.iter().enumerate() {
-            let (label, name, horizon, gains) = match m {
-                MethodSpec::Label(l) => (l.as_str(), None, None, None),
-                MethodSpec::Table { method, name, horizon, gains } => {
-                    (method.as_str(), name.clone(), *horizon, gains.clone())
+            let (label, name, horizon, gains, predictor) = match m {
+                MethodSpec::Label(l) => (l.as_str(), None, None, None, None),
+                MethodSpec::Table { method, name, horizon, gains, predictor } => {
+                    (method.as_str(), name.clone(), *horizon, gains.clone(), predictor.clone())
                 }
             };
             let key = format!("methods[{}]", k + 1);
@@ -242,12 +247,22 @@ impl Comparison {
             if horizon > 1 && method != Method::Proximity {
                 return Err(bad(format!("{key}.horizon"), "applies to the proximity method only".into()));
             }
-            let name =
+            if let Some(p) = predictor.as_deref().filter(|p| !["alpha_beta", "constant_velocity", "singer"].contains(p))
+            {
+                return Err(bad(
+                    format!("{key}.predictor"),
+                    format!("unknown predictor \"{p}\" (expected \"alpha_beta\", \"constant_velocity\" or \"singer\")"),
+                ));
+            }
+            let mut name =
                 name.unwrap_or_else(|| if horizon > 1 { format!("{label} H={horizon}") } else { label.to_string() });
+            if let (Some(p), MethodSpec::Label(_) | MethodSpec::Table { name: None, .. }) = (&predictor, m) {
+                name = format!("{name} {p}");
+            }
             if methods.iter().any(|e: &MethodEntry| e.name == name) {
                 return Err(bad(key, format!("duplicate method name '{name}'")));
             }
-            methods.push(MethodEntry { name, method, horizon, gains });
+            methods.push(MethodEntry { name, method, horizon, gains, predictor });
         }
         let mut conditions: Vec<Condition> = Vec::new();
         for (k, c) in spec.conditions.iter().enumerate() {
@@ -410,6 +425,22 @@ mod tests {
                     [[condition]]\nname = 'a'\n[[condition]]\nname = 'b'\n";
         let e = parse(many).expect_err("too many runs").to_string();
         assert!(e.contains("6000000 runs, more than the 2000000"), "{e}");
+    }
+
+    #[test]
+    fn a_predictor_given_to_a_method_reaches_its_cells() {
+        let text = "name = 'x'\nscenario = 'paper'\nseeds = 1\n\
+                    methods = ['proximity', { method = 'proximity', predictor = 'singer' }]\n\
+                    [[condition]]\nname = 'a'\n";
+        let c = parse(text).expect("valid");
+        assert_eq!(c.methods[1].name, "proximity singer");
+        let sc = c.conditions[0].scenario(&c.base_spec, &c.methods[1]).expect("valid");
+        assert!(matches!(sc.controller().predictor, proxform_core::PredictorKind::Singer { .. }));
+        let plain = c.conditions[0].scenario(&c.base_spec, &c.methods[0]).expect("valid");
+        assert!(matches!(plain.controller().predictor, proxform_core::PredictorKind::AlphaBeta { .. }));
+        let bad = text.replace("'singer'", "'magic'");
+        let e = parse(&bad).expect_err("unknown predictor").to_string();
+        assert!(e.contains("methods[2].predictor: unknown predictor"), "{e}");
     }
 
     #[test]
