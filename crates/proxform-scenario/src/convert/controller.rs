@@ -22,12 +22,7 @@ const DEFAULT_ALPHA: f64 = match PredictorKind::DEFAULT {
 
 /// The controller's parameters; unset permissible errors take the vehicle's defaults, and the
 /// turn feed-forward is on for the fixed wing. The separation distance is resolved by the caller.
-pub fn params(
-    c: &ControllerSpec,
-    dt_s: f64,
-    fixed_wing: bool,
-    _safety_distance_m: f64,
-) -> Result<ControllerParams, SpecError> {
+pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<ControllerParams, SpecError> {
     let mut p = ControllerParams { dt_s, ..ControllerParams::default() };
     if fixed_wing {
         p.envelope.thresholds = ControllerParams::fixed_wing_thresholds();

@@ -88,7 +88,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         let vehicle = vehicle::vehicle(&spec.vehicle)?;
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
-        let mut params = controller::params(&spec.controller, dt_s, fixed_wing, safety_distance_m)?;
+        let mut params = controller::params(&spec.controller, dt_s, fixed_wing)?;
 
         let formation::Slots { slots, frame, explicit } = formation::slots(&spec.formation)?;
         let n = slots.len();
