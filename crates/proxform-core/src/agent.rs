@@ -104,8 +104,9 @@ impl Agent {
     }
 
     /// One update period at `now_s`: `own_measured` is the UAV's measurement of its own state,
-    /// `heard` what reached it (each id at most once). The own-state filter (gain < 1) blends
-    /// the measurement with the UAV's own prediction before the controller decides.
+    /// `heard` what reached it (a UAV reported more than once counts once). The own-state
+    /// filter (gain < 1) blends the measurement with the UAV's own prediction before the
+    /// controller decides.
     pub fn step(&mut self, now_s: f64, own_measured: &State9, heard: &[Observation]) -> Decision {
         let setup = self.controller.setup();
         let gain = setup.params().own_filter_gain;

@@ -153,7 +153,8 @@ impl ProximityController {
     }
 
     /// One update period at time `now_s`: `own` is the UAV's estimate of its own state X_i,
-    /// `observations` what it perceives of the others (each id at most once).
+    /// `observations` what it perceives of the others (a UAV reported more than once
+    /// counts once; its further reports feed its track).
     pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
         let Some(slot_i) = self.formation.slot(self.id).copied() else { return Decision::alone() };
         let setup = Arc::clone(&self.setup);
@@ -161,10 +162,8 @@ impl ProximityController {
         // F·X_i: the state the UAV will have if it keeps its present course.
         let x_hold = vehicle.hold(own, params.dt_s);
 
-        // §3: every further report of a neighbour already observed (a radio report beside an
-        // onboard detection) updates its track; the first report stands for it below.
-        self.fuse_repeated_reports(now_s, observations);
-        // §2: S_i, the nearest perceived UAV in each azimuth area.
+        // §2: S_i, the nearest perceived UAV in each azimuth area (§3: a repeated report of a
+        // neighbour updates its track and takes no place of its own).
         self.sort_into_areas(now_s, own, observations);
         // Steps 1-3: X̂_ij per neighbour, accumulated into X̄_i and X̂ᴰ_i.
         let est = self.estimate(now_s, own, &slot_i, &x_hold, observations);
@@ -187,21 +186,12 @@ impl ProximityController {
         Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
     }
 
-    /// Feeds the tracks every report of a UAV after its first one in `observations` (with a
-    /// predictor that fuses them, the sensor passes a radio report beside the onboard detection
-    /// of the same UAV); those reports then take no place of their own in the areas.
-    fn fuse_repeated_reports(&mut self, now_s: f64, observations: &[Observation]) {
-        let dt = self.setup.params.dt_s;
-        for (k, o) in observations.iter().enumerate() {
-            if observations[..k].iter().any(|p| p.id == o.id) {
-                self.tracks.predict(o, now_s, dt);
-            }
-        }
-    }
-
     /// §2: fills S_i (`self.nearest`) with the nearest UAV per azimuth area, from the UAV's
     /// own view of the observations; then neighbours perceived recently but missing now coast
-    /// on their tracks (§3) into areas that have no fresh observation.
+    /// on their tracks (§3) into areas that have no fresh observation. Every report of a UAV
+    /// after its first one (with a predictor that fuses, the sensor passes a radio report
+    /// beside the onboard detection of the same UAV) only feeds its track; the first report
+    /// stands for it in the areas.
     fn sort_into_areas(&mut self, now_s: f64, own: &State9, observations: &[Observation]) {
         let Self { id: me, setup, tracks, nearest, .. } = self;
         let me = *me;
@@ -210,7 +200,11 @@ impl ProximityController {
         nearest.iter_mut().for_each(|a| a.0 = EMPTY);
         let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
-            if o.id == me || observations[..k].iter().any(|p| p.id == o.id) {
+            if observations[..k].iter().any(|p| p.id == o.id) {
+                tracks.predict(o, now_s, params.dt_s);
+                continue;
+            }
+            if o.id == me {
                 continue;
             }
             let (dx, dy, dz) = (o.state[X] - own[X], o.state[X + 1] - own[X + 1], o.state[X + 2] - own[X + 2]);
