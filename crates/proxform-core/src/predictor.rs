@@ -143,6 +143,22 @@ struct SingerTracks {
 
 const FREE: u32 = u32::MAX;
 
+/// Observation times closer than this (s) are the same instant. Time stamps reached by
+/// different sums (`now − age` of a delayed radio report against an earlier `now`) differ by
+/// rounding; a rate taken over that difference would be noise divided by ~1e-17 s. Far below
+/// the shortest update period (1 ms) and far above the rounding of any flight time.
+pub const SAME_INSTANT_S: f64 = 1e-6;
+
+/// Time from `t_track` to `t_obs`, zero when they are the same instant.
+fn elapsed(t_obs: f64, t_track: f64) -> f64 {
+    let dt = t_obs - t_track;
+    if dt.abs() < SAME_INSTANT_S {
+        0.0
+    } else {
+        dt
+    }
+}
+
 impl NeighbourTracks {
     /// Tracks for at most `capacity` neighbours; a track not updated for `timeout_s` restarts.
     /// Coasting tracks extrapolate their acceleration for at most `coast_accel_s`.
@@ -203,7 +219,7 @@ impl NeighbourTracks {
                 let slot = self.slot_for(obs.id, t_obs);
                 let (id, seen) = self.ids[slot];
                 let tr = &mut self.tracks[slot];
-                let dt = t_obs - tr.t;
+                let dt = elapsed(t_obs, tr.t);
                 let fresh = dt <= self.timeout_s; // false for NaN too
                 if id != obs.id.0 || !fresh {
                     *tr = Track::start(t_obs, &obs.state);
@@ -222,7 +238,7 @@ impl NeighbourTracks {
                 let Kind::Singer(k) = &mut self.kind else { unreachable!("matched above") };
                 let SingerTracks { model: m, alpha, beta, axes, step } = &mut **k;
                 let (tr, axes) = (&mut self.tracks[slot], &mut axes[slot]);
-                let dt = t_obs - tr.t;
+                let dt = elapsed(t_obs, tr.t);
                 let z = &obs.state;
                 let fresh = dt <= self.timeout_s; // false for NaN too
                 if id != obs.id.0 || !fresh {
@@ -274,7 +290,7 @@ impl NeighbourTracks {
     pub fn coasting(&self, s: usize, now: f64, max_s: f64) -> Option<UavId> {
         let (id, _) = self.ids[s];
         let age = now - self.tracks[s].t;
-        (id != FREE && age > 1e-9 && age <= max_s.min(self.timeout_s) + 1e-9).then_some(UavId(id))
+        (id != FREE && age >= SAME_INSTANT_S && age <= max_s.min(self.timeout_s) + SAME_INSTANT_S).then_some(UavId(id))
     }
 
     /// Seconds since track slot `s` was last measured, at `now`.
@@ -485,6 +501,42 @@ mod tests {
         let fused = two.predict(&radio, 0.5, 0.0);
         assert!(alone[1] > 0.1, "{}", alone[1]);
         assert!(fused[1].abs() < 0.5 * alone[1], "{} vs {}", fused[1], alone[1]);
+    }
+
+    #[test]
+    fn reports_of_one_instant_stamped_by_different_sums_give_no_rate() {
+        // A neighbour flying 50 m/s along x, observed every 0.1 s; then the same instant again,
+        // its stamp off by rounding (1e-14 s) and its position off by measurement noise (2 cm).
+        for kind in [
+            PredictorKind::default(),
+            PredictorKind::Singer {
+                accel_sigma_mps2: 1.0,
+                tau_s: 1.0,
+                position_sigma_m: 0.02,
+                velocity_sigma_mps: 0.05,
+                alpha: 0.8,
+                beta: 0.8 * 0.8 / 1.2,
+            },
+        ] {
+            let mut tracks = NeighbourTracks::new(kind, 4, 1.0, 0.2);
+            let at = |t: f64, dy: f64| {
+                let mut s = State9::zeros();
+                s[0] = 50.0 * t;
+                s[1] = dy;
+                s[3] = 50.0;
+                s[8] = dy;
+                s
+            };
+            for k in 0..10 {
+                let t = k as f64 * 0.1;
+                tracks.predict(&obs(2, at(t, 0.0)), t, 0.1);
+            }
+            let t = 0.9 + 1e-14;
+            let p = tracks.predict(&obs(2, at(t, 0.02)), t, 0.1);
+            assert!((p[4]).abs() < 1.0, "{kind:?}: lateral velocity {}", p[4]);
+            assert!((p[1]).abs() < 0.1, "{kind:?}: lateral position {}", p[1]);
+            assert!((p[8]).abs() < 0.1, "{kind:?}: roll {}", p[8]);
+        }
     }
 
     #[test]

@@ -46,3 +46,20 @@ fn delay_and_bursty_loss_cost_accuracy() {
     assert!(bursty.swarm.radio_used_per_uav_s < 0.9 * base.swarm.radio_used_per_uav_s);
     assert!(bursty.p99_abs_error.y_m > base.p99_abs_error.y_m);
 }
+
+#[test]
+fn delayed_radio_reports_beside_onboard_detections_keep_the_formation() {
+    // Onboard detections stamped `now` and delayed radio reports stamped `now − delay` for the
+    // same neighbours: the two time stamps of one instant differ by rounding, which must not
+    // become a rate. With each predictor that tracks.
+    for predictor in ["alpha_beta", "singer"] {
+        let spec = paper_spec().with(|s| {
+            s.controller.predictor = Some(predictor.into());
+            s.radio.broadcast_all = Some(true);
+            s.radio.delay_s = Some(0.1);
+        });
+        let sum = batch(&Scenario::try_from(spec).expect("valid"), 11, 10);
+        assert!(sum.pass_fraction >= 0.9, "{predictor}: {} {:?}", sum.pass_fraction, sum.p99_abs_error);
+        assert!(sum.p99_abs_error.alpha_deg < 1.0, "{predictor}: {:?}", sum.p99_abs_error);
+    }
+}
