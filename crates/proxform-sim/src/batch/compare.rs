@@ -2,6 +2,8 @@
 //! disturbances, rows in (method, condition, seed) order whatever the thread count. The file
 //! format and its checks are [`proxform_scenario::comparison`].
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use proxform_core::RadioNeed;
 use proxform_scenario::comparison::{CompareError, Comparison, Condition, MethodEntry};
 use proxform_scenario::Scenario;
@@ -63,6 +65,17 @@ pub fn effective(c: &Condition, method: &MethodEntry, base: &Scenario) -> Condit
 /// each run. Rows are in (method, condition, seed) order. Cells that [`effective`] makes equal
 /// are run once.
 pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<Vec<CompareRow>, CompareError> {
+    let never = AtomicBool::new(false);
+    Ok(run_comparison_stoppable(cmp, progress, &never)?.expect("a comparison nobody stops runs to its end"))
+}
+
+/// [`run_comparison`] that another thread can stop (a user's interrupt): once `stop` is set,
+/// no new flight starts and the result is `Ok(None)`.
+pub fn run_comparison_stoppable(
+    cmp: &Comparison,
+    progress: &(dyn Fn() + Sync),
+    stop: &AtomicBool,
+) -> Result<Option<Vec<CompareRow>>, CompareError> {
     let (unique, uses) = plan(cmp);
     let unique: Vec<(usize, Scenario)> = unique
         .into_iter()
@@ -71,46 +84,54 @@ pub fn run_comparison(cmp: &Comparison, progress: &(dyn Fn() + Sync)) -> Result<
     let tasks: Vec<(usize, u64)> = (0..unique.len()).flat_map(|k| (0..cmp.seeds).map(move |r| (k, r))).collect();
     // One flight per work item: cells differ in cost by 100× (the horizon QP), and rayon's
     // adaptive splitting would otherwise leave a whole chunk of expensive cells to one thread.
-    let runs: Vec<crate::measure::metrics::RunSummary> = tasks
+    let Some(runs): Option<Vec<crate::measure::metrics::RunSummary>> = tasks
         .par_iter()
         .with_max_len(1)
         .map(|&(k, r)| {
+            if stop.load(Ordering::Relaxed) {
+                return None;
+            }
             let (s, _) = run_one(&unique[k].1, RunOptions::default(), cmp.seed, r, false);
             progress();
-            s
+            Some(s)
         })
-        .collect();
+        .collect::<Option<_>>()
+        .filter(|_| !stop.load(Ordering::Relaxed))
+    else {
+        return Ok(None);
+    };
     let seeds = cmp.seeds as usize;
     let allowable = cmp.base.allowable().as_array();
-    Ok(uses
-        .iter()
-        .flat_map(|&(mi, ci, k)| {
-            let (m, c) = (&cmp.methods[mi], &cmp.conditions[ci]);
-            runs[k * seeds..(k + 1) * seeds].iter().map(move |s| {
-                let e = s.max_abs_error;
-                let ratio = (0..6).map(|a| e[a] / allowable[a]).fold(0.0, f64::max);
-                let per_min = 60.0 / s.duration_s.max(f64::MIN_POSITIVE);
-                CompareRow {
-                    method: m.name.clone(),
-                    condition: c.name.clone(),
-                    run: s.run,
-                    pass: s.pass,
-                    max_error_m: e[0].max(e[1]).max(e[2]),
-                    max_error_ratio: ratio,
-                    max_x_m: e[0],
-                    max_y_m: e[1],
-                    max_z_m: e[2],
-                    rms_error_m: ((s.rms_error[0].powi(2) + s.rms_error[1].powi(2) + s.rms_error[2].powi(2)) / 3.0)
-                        .sqrt(),
-                    min_separation_m: s.min_separation_m,
-                    adjustments_per_uav_min: s.adjustments as f64 / s.followers.max(1) as f64 * per_min,
-                    messages_per_uav_min: s.radio_used_per_uav_s * 60.0,
-                    control_effort: s.control_effort,
-                    alone_s_per_uav: s.alone_s_per_uav,
-                }
+    Ok(Some(
+        uses.iter()
+            .flat_map(|&(mi, ci, k)| {
+                let (m, c) = (&cmp.methods[mi], &cmp.conditions[ci]);
+                runs[k * seeds..(k + 1) * seeds].iter().map(move |s| {
+                    let e = s.max_abs_error;
+                    let ratio = (0..6).map(|a| e[a] / allowable[a]).fold(0.0, f64::max);
+                    let per_min = 60.0 / s.duration_s.max(f64::MIN_POSITIVE);
+                    CompareRow {
+                        method: m.name.clone(),
+                        condition: c.name.clone(),
+                        run: s.run,
+                        pass: s.pass,
+                        max_error_m: e[0].max(e[1]).max(e[2]),
+                        max_error_ratio: ratio,
+                        max_x_m: e[0],
+                        max_y_m: e[1],
+                        max_z_m: e[2],
+                        rms_error_m: ((s.rms_error[0].powi(2) + s.rms_error[1].powi(2) + s.rms_error[2].powi(2)) / 3.0)
+                            .sqrt(),
+                        min_separation_m: s.min_separation_m,
+                        adjustments_per_uav_min: s.adjustments as f64 / s.followers.max(1) as f64 * per_min,
+                        messages_per_uav_min: s.radio_used_per_uav_s * 60.0,
+                        control_effort: s.control_effort,
+                        alone_s_per_uav: s.alone_s_per_uav,
+                    }
+                })
             })
-        })
-        .collect())
+            .collect(),
+    ))
 }
 
 /// What [`plan`] returns: the distinct cells to fly, as (method, condition) indices of a

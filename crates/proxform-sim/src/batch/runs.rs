@@ -4,6 +4,8 @@
 //! seed and its index whatever thread runs it; results are collected in run order and
 //! aggregated sequentially, so the summary is bit-identical for any thread count.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 
 use proxform_scenario::Scenario;
@@ -151,14 +153,22 @@ pub fn run_one(
     run_one_ticking(scenario, options, (seed, run), recording, &|| {})
 }
 
-/// Observer that calls a function after every step (a progress bar's tick).
-struct Ticker<'a>(&'a (dyn Fn() + Sync));
+/// Observer that calls a function after every step (a progress bar's tick) and ends the run
+/// early once `stop` is set.
+struct Ticker<'a> {
+    tick: &'a (dyn Fn() + Sync),
+    stop: &'a AtomicBool,
+}
 
 impl Observer for Ticker<'_> {
     fn on_step(&mut self, _: &Scenario, frame: &crate::measure::observer::StepFrame<'_>) {
         if frame.k > 0 {
-            (self.0)();
+            (self.tick)();
         }
+    }
+
+    fn keep_going(&self) -> bool {
+        !self.stop.load(Ordering::Relaxed)
     }
 }
 
@@ -171,14 +181,27 @@ pub fn run_one_ticking(
     record: Option<Trajectory>,
     tick: &(dyn Fn() + Sync),
 ) -> (RunSummary, Option<Trajectory>) {
+    run_one_stoppable(scenario, options, (seed, run), record, tick, &AtomicBool::new(false))
+}
+
+/// [`run_one_ticking`] that ends early once `stop` is set.
+fn run_one_stoppable(
+    scenario: &Scenario,
+    options: RunOptions,
+    (seed, run): (u64, u64),
+    record: Option<Trajectory>,
+    tick: &(dyn Fn() + Sync),
+    stop: &AtomicBool,
+) -> (RunSummary, Option<Trajectory>) {
     let sim = Simulation::new(scenario, options, seed, run);
     let metrics = RunMetrics::new(scenario);
+    let ticker = Ticker { tick, stop };
     if let Some(trajectory) = record {
-        let mut obs = ((metrics, trajectory), Ticker(tick));
+        let mut obs = ((metrics, trajectory), ticker);
         sim.run(&mut obs);
         (obs.0 .0.finish(run, scenario.duration_s()), Some(obs.0 .1))
     } else {
-        let mut obs = (metrics, Ticker(tick));
+        let mut obs = (metrics, ticker);
         sim.run(&mut obs);
         (obs.0.finish(run, scenario.duration_s()), None)
     }
@@ -195,20 +218,42 @@ pub fn run_batch(
     record_first: Option<Trajectory>,
     progress: &(dyn Fn() + Sync),
 ) -> BatchResult {
+    let never = AtomicBool::new(false);
+    run_batch_stoppable(scenario, options, seed, runs, record_first, progress, &never)
+        .expect("a batch nobody stops runs to its end")
+}
+
+/// [`run_batch`] that another thread can stop (a user's interrupt): once `stop` is set, the
+/// flights in progress end at their next step, no new one starts, and the result is None.
+pub fn run_batch_stoppable(
+    scenario: &Scenario,
+    options: RunOptions,
+    seed: u64,
+    runs: u64,
+    record_first: Option<Trajectory>,
+    progress: &(dyn Fn() + Sync),
+    stop: &AtomicBool,
+) -> Option<BatchResult> {
     let results: Vec<(RunSummary, Option<Trajectory>)> = if runs == 1 {
-        vec![run_one_ticking(scenario, options, (seed, 0), record_first, progress)]
+        vec![run_one_stoppable(scenario, options, (seed, 0), record_first, progress, stop)]
     } else {
         let first = std::sync::Mutex::new(record_first);
         (0..runs)
             .into_par_iter()
             .map(|r| {
+                if stop.load(Ordering::Relaxed) {
+                    return None;
+                }
                 let record = if r == 0 { first.lock().ok().and_then(|mut f| f.take()) } else { None };
-                let out = run_one_ticking(scenario, options, (seed, r), record, &|| {});
+                let out = run_one_stoppable(scenario, options, (seed, r), record, &|| {}, stop);
                 progress();
-                out
+                Some(out)
             })
-            .collect()
+            .collect::<Option<_>>()?
     };
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
     let mut first_trajectory = None;
     let mut summaries = Vec::with_capacity(results.len());
     for (s, t) in results {
@@ -218,7 +263,7 @@ pub fn run_batch(
         summaries.push(s);
     }
     let summary = aggregate(scenario, seed, &summaries);
-    BatchResult { runs: summaries, summary, first_trajectory }
+    Some(BatchResult { runs: summaries, summary, first_trajectory })
 }
 
 /// Aggregates run summaries (in run order) into a [`Summary`].
@@ -323,6 +368,35 @@ mod tests {
             connectivity_min: 1.0,
             alone_s_per_uav: 0.0,
         }
+    }
+
+    #[test]
+    fn a_stopped_batch_ends_at_the_next_step_and_returns_nothing() {
+        use std::sync::atomic::AtomicU64;
+        let sc = paper();
+        // A single run ticks per step: stop it after 10 of its 1000 steps.
+        let (stop, steps) = (AtomicBool::new(false), AtomicU64::new(0));
+        let tick = || {
+            if steps.fetch_add(1, Ordering::Relaxed) + 1 == 10 {
+                stop.store(true, Ordering::Relaxed);
+            }
+        };
+        assert!(run_batch_stoppable(&sc, RunOptions::default(), 1, 1, None, &tick, &stop).is_none());
+        assert_eq!(steps.load(Ordering::Relaxed), 10);
+        // Many runs tick per run: no new run starts once stopped.
+        let (stop, runs) = (AtomicBool::new(false), AtomicU64::new(0));
+        let tick = || {
+            runs.fetch_add(1, Ordering::Relaxed);
+            stop.store(true, Ordering::Relaxed);
+        };
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("threads");
+        let out = pool.install(|| run_batch_stoppable(&sc, RunOptions::default(), 1, 1000, None, &tick, &stop));
+        assert!(out.is_none());
+        assert!(runs.load(Ordering::Relaxed) <= 2 + 2, "{runs:?} runs finished after the stop");
+        // Never stopped: the whole batch.
+        let never = AtomicBool::new(false);
+        let all = run_batch_stoppable(&sc, RunOptions::default(), 1, 2, None, &|| {}, &never).expect("a result");
+        assert_eq!(all.runs.len(), 2);
     }
 
     #[test]

@@ -44,12 +44,22 @@ pub struct UavStep {
 pub trait Observer {
     /// Called for the initial state and after every step.
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>);
+
+    /// Whether the run should go on; asked before every step. A run stopped early (a user's
+    /// interrupt) is incomplete: its metrics describe the steps flown only.
+    fn keep_going(&self) -> bool {
+        true
+    }
 }
 
 impl<A: Observer, B: Observer> Observer for (A, B) {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
         self.0.on_step(scenario, frame);
         self.1.on_step(scenario, frame);
+    }
+
+    fn keep_going(&self) -> bool {
+        self.0.keep_going() && self.1.keep_going()
     }
 }
 

@@ -216,7 +216,7 @@ impl<'s> Simulation<'s> {
             observer.on_step(sc, &self.frame());
         }
         let end = (self.world.k + steps).min(sc.steps());
-        while self.world.k < end {
+        while self.world.k < end && observer.keep_going() {
             self.step();
             observer.on_step(sc, &self.frame());
         }
