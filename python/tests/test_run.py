@@ -1,0 +1,142 @@
+"""Runs from Python: the same numbers as the command line, whatever the thread count, with
+the GIL released, progress on the calling thread, and Ctrl-C that stops a run."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import threading
+import time
+import _thread
+
+import numpy as np
+import pytest
+
+import proxform
+
+
+def test_the_paper_passes():
+    r = proxform.run("paper")
+    assert r.summary["pass_fraction"] == 1.0 and r.pass_fraction == 1.0
+    assert r.summary["runs"] == 1 and r.summary["seed"] == 1
+
+
+def test_summary_runs_and_trajectories_equal_the_cli_files(cli, tmp_path):
+    out = tmp_path / "cli"
+    subprocess.run(
+        [cli, "run", "--seed", "7", "--runs", "3", "--out", out, "--no-figures", "-q"],
+        check=True, timeout=600, stdout=subprocess.DEVNULL,
+    )
+    r = proxform.run("paper", seed=7, runs=3)
+    # summary.json, value for value (JSON round trips every float exactly).
+    assert r.summary == json.loads((out / "summary.json").read_text())
+    # runs.csv: the CLI rounds to its printed decimals.
+    with open(out / "runs.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(r.runs) == 3
+    assert set(rows[0]) == set(r.runs.columns)
+    for name in r.runs.columns:
+        cli_col = np.array([float(row[name]) for row in rows])
+        np.testing.assert_allclose(r.runs[name].astype(float), cli_col, atol=1e-3, rtol=0, err_msg=name)
+    # trajectories.csv: the first run, row for row, to the file's 6 decimals.
+    with open(out / "trajectories.csv") as f:
+        traj = list(csv.DictReader(f))
+    tr = r.trajectories
+    assert len(traj) == len(tr) == 6 * 1001
+    for name in ["t_s", "uav", "x_m", "y_m", "err_y_m", "gamma_rad", "err_gamma_deg"]:
+        np.testing.assert_allclose(tr[name], [float(row[name]) for row in traj], atol=1e-6, rtol=0, err_msg=name)
+    assert list(tr["outcome"][6:12]) == [row["outcome"] for row in traj[6:12]]
+    assert tr.to_pandas().shape == (6 * 1001, len(tr.columns))
+
+
+def test_results_do_not_depend_on_the_thread_count():
+    one = proxform.run("paper", seed=3, runs=4, threads=1, trajectories=False)
+    two = proxform.run("paper", seed=3, runs=4, threads=2, trajectories=False)
+    assert one.summary == two.summary
+    for name in one.runs.columns:
+        assert np.array_equal(one.runs[name], two.runs[name]), name
+    assert one.trajectories is None
+
+
+def test_no_adjustment_fails_the_check():
+    sc = proxform.load("paper").with_values({"duration_s": 40})
+    assert proxform.run(sc, adjust=False, trajectories=False).pass_fraction == 0.0
+
+
+def test_progress_is_reported_on_the_calling_thread():
+    seen = []
+    caller = threading.get_ident()
+
+    def progress(done, total):
+        seen.append((done, total, threading.get_ident()))
+
+    proxform.run("paper", runs=8, threads=2, trajectories=False, progress=progress)
+    assert seen and seen[-1][:2] == (8, 8)
+    assert all(t == caller for _, _, t in seen)
+    assert [d for d, _, _ in seen] == sorted(d for d, _, _ in seen)
+
+
+def test_the_gil_is_released_while_running():
+    ticks = 0
+    stop = False
+
+    def count():
+        nonlocal ticks
+        while not stop:
+            ticks += 1
+            time.sleep(0.001)
+
+    t = threading.Thread(target=count)
+    t.start()
+    try:
+        proxform.run("paper", runs=6, threads=1, trajectories=False)
+    finally:
+        stop = True
+        t.join(timeout=10)
+    assert ticks > 20, ticks
+
+
+def test_ctrl_c_stops_a_long_run_promptly():
+    # A batch that would take minutes; Ctrl-C after 0.5 s.
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            proxform.run("paper", runs=100_000, threads=2, trajectories=False)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 10
+
+
+def test_an_error_in_the_progress_callback_stops_the_run():
+    def progress(done, total):
+        if done > 0:
+            raise RuntimeError("enough")
+
+    started = time.monotonic()
+    with pytest.raises(RuntimeError, match="enough"):
+        proxform.run("paper", runs=100_000, trajectories=False, progress=progress)
+    assert time.monotonic() - started < 10
+
+
+@pytest.mark.parametrize("kwargs", [{"runs": 0}, {"runs": 10**8}, {"threads": 100_000}, {"seed": -1}])
+def test_bad_arguments_raise(kwargs):
+    with pytest.raises((ValueError, OverflowError, TypeError)):
+        proxform.run("paper", trajectories=False, **kwargs)
+
+
+def test_progress_true_without_tqdm_writes_a_line(capsys, monkeypatch):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_tqdm(name, *args, **kwargs):
+        if name.startswith("tqdm"):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_tqdm)
+    proxform.run("paper", runs=3, threads=1, trajectories=False, progress=True)
+    assert "3/3 runs" in capsys.readouterr().err
