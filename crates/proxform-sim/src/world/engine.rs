@@ -21,7 +21,7 @@ use std::collections::VecDeque;
 
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
-use proxform_core::Agent;
+use proxform_core::{Agent, Decision};
 use proxform_scenario::faults::{self as schedule, Fault};
 use proxform_scenario::Scenario;
 
@@ -29,7 +29,8 @@ use super::environment::{EnvStep, UavEnv};
 use super::faults::{self, FaultStep};
 use super::measurement::{self, Message, OwnSensors};
 use super::options::{NeighbourSearch, RunOptions};
-use super::phases::{for_each_block, Mode, StepContext};
+use super::phases::{for_each_block, for_each_block_in_order, Mode, StepContext};
+use super::remote::{holding, Agents, Phase, Sensed, StepRequest};
 use super::sensing::{noisy, ProximitySensor, Scene};
 use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::{RunKey, Source, StreamKey};
@@ -41,15 +42,36 @@ pub const PARALLEL_MIN_UAVS: usize = 1024;
 const WARMUP_STEP_BASE: u64 = 1 << 62;
 
 /// One simulated flight: the world, and the agents it steps.
-#[derive(Debug)]
 pub struct Simulation<'s> {
     world: World<'s>,
-    /// Every follower's agent (None for the navigator, which flies its path).
+    /// Every follower's agent (None for the navigator, which flies its path, and for every UAV
+    /// when the agents run outside the engine).
     agents: Vec<Option<Agent>>,
+    /// Agents outside the engine, if any, with the buffers of their requests.
+    outside: Option<Outside<'s>>,
     /// The states being written this step.
     next: Vec<State9>,
     /// What each UAV's last update produced.
     uavs: Vec<UavStep>,
+}
+
+impl std::fmt::Debug for Simulation<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("world", &self.world)
+            .field("agents", &self.agents.len())
+            .field("outside", &self.outside.is_some())
+            .finish()
+    }
+}
+
+/// Agents outside the engine and what passes between them and the world each step.
+struct Outside<'s> {
+    agents: Box<dyn Agents + 's>,
+    sensed: Sensed,
+    decisions: Vec<Decision>,
+    /// The decisions by UAV index (None: navigator, inactive).
+    by_uav: Vec<Option<Decision>>,
 }
 
 /// Everything of a flight but the agents: read by every block while the agents step.
@@ -79,9 +101,39 @@ struct World<'s> {
 impl<'s> Simulation<'s> {
     /// A flight of `scenario` for run `run` of seed `seed`.
     pub fn new(scenario: &'s Scenario, options: RunOptions, seed: u64, run: u64) -> Self {
+        let nav = scenario.navigator().index();
+        let agents =
+            (0..scenario.len()).map(|i| (i != nav).then(|| scenario.agent(proxform_core::UavId(i as u32)))).collect();
+        Self::build(scenario, options, (seed, run), agents, None).warmed()
+    }
+
+    /// A flight whose followers' agents run outside the engine ([`super::remote`]): each step
+    /// the world asks `agents` for every active follower's decision, between its sensing and
+    /// its actuation (the warm-up included). Stepped in order on one thread. With agents that
+    /// step as the in-process ones, the flight is bit-identical to [`Self::new`]'s.
+    pub fn with_agents(
+        scenario: &'s Scenario,
+        options: RunOptions,
+        (seed, run): (u64, u64),
+        agents: Box<dyn Agents + 's>,
+    ) -> Self {
+        let n = scenario.len();
+        let outside = Outside { agents, sensed: Sensed::default(), decisions: Vec::new(), by_uav: vec![None; n] };
+        let none = (0..n).map(|_| None).collect();
+        let mut sim = Self::build(scenario, options, (seed, run), none, Some(outside));
+        sim.world.parallel = false;
+        sim.warmed()
+    }
+
+    fn build(
+        scenario: &'s Scenario,
+        options: RunOptions,
+        (seed, run): (u64, u64),
+        agents: Vec<Option<Agent>>,
+        outside: Option<Outside<'s>>,
+    ) -> Self {
         let n = scenario.len();
         let nav = scenario.navigator().index();
-        let agents = (0..n).map(|i| (i != nav).then(|| scenario.agent(proxform_core::UavId(i as u32)))).collect();
         let s0 = scenario.initial()[nav];
         let areas = scenario.controller().areas;
         let world = World {
@@ -101,7 +153,7 @@ impl<'s> Simulation<'s> {
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
         };
-        Self { world, agents, next: scenario.initial().to_vec(), uavs: vec![UavStep::default(); n] }.warmed()
+        Self { world, agents, outside, next: scenario.initial().to_vec(), uavs: vec![UavStep::default(); n] }
     }
 
     fn warmed(mut self) -> Self {
@@ -137,9 +189,15 @@ impl<'s> Simulation<'s> {
             let world = &self.world;
             let ctx = world.context(key, t, Mode::Warm(&ideal));
             let parallel = world.parallel;
-            for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| {
-                ctx.warm(b, blk)
-            });
+            match &mut self.outside {
+                Some(out) => {
+                    out.sense(&ctx, (&mut self.agents, &mut self.next, &mut self.uavs), areas);
+                    out.ask(w, t, Phase::Warm);
+                }
+                None => for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| {
+                    ctx.warm(b, blk)
+                }),
+            }
         }
         std::mem::swap(&mut self.world.current, &mut self.next);
         // The flight's radio starts afresh: nothing of the warm-up is on the air.
@@ -197,7 +255,22 @@ impl<'s> Simulation<'s> {
         let w = &self.world;
         let ctx = w.context(w.run.at(w.k), w.t(), Mode::Fly);
         let (areas, parallel) = (w.scenario.controller().areas.areas, w.parallel);
-        for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| ctx.fly(b, blk));
+        match &mut self.outside {
+            Some(out) => {
+                let bufs = (&mut self.agents, &mut self.next, &mut self.uavs);
+                out.sense(&ctx, bufs, areas);
+                out.ask(w.k, w.t(), Phase::Fly);
+                let by_uav = &out.by_uav;
+                for_each_block_in_order(&mut self.agents, &mut self.next, &mut self.uavs, areas, |b, blk| {
+                    ctx.apply(b, blk, by_uav)
+                });
+            }
+            None => {
+                for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| {
+                    ctx.fly(b, blk)
+                });
+            }
+        }
         std::mem::swap(&mut self.world.current, &mut self.next);
         self.world.k += 1;
     }
@@ -233,6 +306,28 @@ fn initially_flying(sc: &Scenario) -> Vec<bool> {
         }
     }
     active
+}
+
+/// The engine's per-UAV buffers, as the block phases take them.
+type Buffers<'b> = (&'b mut Vec<Option<Agent>>, &'b mut Vec<State9>, &'b mut Vec<UavStep>);
+
+impl Outside<'_> {
+    /// Perceive and estimate for every block, gathering what each active follower sensed.
+    fn sense(&mut self, ctx: &StepContext<'_>, (agents, next, uavs): Buffers<'_>, areas: usize) {
+        let sensed = &mut self.sensed;
+        sensed.clear();
+        for_each_block_in_order(agents, next, uavs, areas, |b, blk| ctx.sense(b, blk, sensed));
+    }
+
+    /// The agents' decisions on what was sensed, by UAV.
+    fn ask(&mut self, k: u64, t_s: f64, phase: Phase) {
+        let request = StepRequest { k, t_s, phase, sensed: &self.sensed };
+        self.agents.decide(&request, &mut self.decisions);
+        self.by_uav.iter_mut().for_each(|d| *d = None);
+        for (j, u) in self.sensed.uavs.iter().enumerate() {
+            self.by_uav[u.index()] = Some(self.decisions.get(j).copied().unwrap_or_else(holding));
+        }
+    }
 }
 
 impl<'s> World<'s> {

@@ -8,5 +8,6 @@ pub mod measurement;
 pub mod options;
 pub mod phases;
 pub mod radio;
+pub mod remote;
 pub mod sensing;
 pub mod wind;

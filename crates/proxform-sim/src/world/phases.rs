@@ -17,6 +17,7 @@ use super::environment::UavEnv;
 use super::faults::FaultStep;
 use super::measurement::{Message, OwnSensors};
 use super::options::RunOptions;
+use super::remote::Sensed;
 use super::sensing::{Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
 use crate::measure::observer::UavStep;
 use crate::random::{Source, StreamKey};
@@ -46,11 +47,23 @@ pub(super) fn for_each_block(
                 |scratch, (b, ((agents, next), uavs))| f(b * BLOCK, &mut Block { agents, next, uavs, scratch }),
             );
     } else {
-        let mut scratch = BlockScratch::new(areas);
-        let blocks = agents.chunks_mut(BLOCK).zip(next.chunks_mut(BLOCK)).zip(uavs.chunks_mut(BLOCK));
-        for (b, ((agents, next), uavs)) in blocks.enumerate() {
-            f(b * BLOCK, &mut Block { agents, next, uavs, scratch: &mut scratch });
-        }
+        for_each_block_in_order(agents, next, uavs, areas, f);
+    }
+}
+
+/// [`for_each_block`] in order on this thread, with a function that may change what it
+/// captures (the split path of [`super::remote`] gathers what every block sensed).
+pub(super) fn for_each_block_in_order(
+    agents: &mut [Option<Agent>],
+    next: &mut [State9],
+    uavs: &mut [UavStep],
+    areas: usize,
+    mut f: impl FnMut(usize, &mut Block<'_>),
+) {
+    let mut scratch = BlockScratch::new(areas);
+    let blocks = agents.chunks_mut(BLOCK).zip(next.chunks_mut(BLOCK)).zip(uavs.chunks_mut(BLOCK));
+    for (b, ((agents, next), uavs)) in blocks.enumerate() {
+        f(b * BLOCK, &mut Block { agents, next, uavs, scratch: &mut scratch });
     }
 }
 
@@ -185,12 +198,13 @@ impl StepContext<'_> {
             env: self.env,
             faults: matches!(self.mode, Mode::Fly).then_some(self.faults),
         };
+        let nav = self.scenario.navigator().index();
         let s = &mut *blk.scratch;
         s.own.clear();
         for b in 0..blk.agents.len() {
             let i = first + b;
             let truth = &self.scene.states[i];
-            s.own.push(if self.active[i] && blk.agents[b].is_some() { sensors.measure(i, truth) } else { *truth });
+            s.own.push(if self.active[i] && i != nav { sensors.measure(i, truth) } else { *truth });
         }
     }
 
@@ -234,8 +248,9 @@ impl StepContext<'_> {
     fn propagate(&self, first: usize, blk: &mut Block<'_>) {
         let sc = self.scenario;
         let dt = sc.dt_s();
+        let nav = sc.navigator().index();
         let s = &*blk.scratch;
-        for b in 0..blk.agents.len() {
+        for b in 0..blk.next.len() {
             let i = first + b;
             let (next, aux) = (&mut blk.next[b], &mut blk.uavs[b]);
             let me = &self.scene.states[i];
@@ -244,7 +259,7 @@ impl StepContext<'_> {
                 *aux = UavStep::default();
                 continue;
             }
-            let (Some(agent), Some(decision)) = (&blk.agents[b], s.decisions[b]) else {
+            let Some(decision) = s.decisions[b].filter(|_| i != nav) else {
                 *next = sc.path().state_at(self.t + dt, self.start);
                 aux.outcome = None;
                 aux.model_error = [0.0; 9];
@@ -287,8 +302,8 @@ impl StepContext<'_> {
             };
             aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
             aux.outcome = Some(decision.outcome);
-            let scale = agent.vehicle().input_scale(dt);
-            aux.effort = (0..agent.vehicle().n_inputs())
+            let scale = vehicle.input_scale(dt);
+            aux.effort = (0..vehicle.n_inputs())
                 .map(|j| if scale[j] > 0.0 { (decision.input[j] / scale[j]).powi(2) } else { 0.0 })
                 .sum::<f64>()
                 .sqrt() as f32;
@@ -309,5 +324,36 @@ impl StepContext<'_> {
         self.perceive(first, blk);
         self.estimate(first, blk);
         self.decide(blk, first);
+    }
+
+    /// For agents outside the engine ([`super::remote`]), the phases before the decision:
+    /// perceive and estimate, then each active follower's measurement and observations
+    /// appended to `out`.
+    pub fn sense(&self, first: usize, blk: &mut Block<'_>, out: &mut Sensed) {
+        self.perceive(first, blk);
+        self.estimate(first, blk);
+        let nav = self.scenario.navigator().index();
+        let s = &*blk.scratch;
+        for b in 0..blk.next.len() {
+            let i = first + b;
+            if self.active[i] && i != nav {
+                let from = out.heard.len();
+                out.heard.extend_from_slice(&s.heard[s.spans[b].clone()]);
+                out.uavs.push(proxform_core::UavId(i as u32));
+                out.own.push(s.own[b]);
+                out.spans.push(from..out.heard.len());
+            }
+        }
+    }
+
+    /// For agents outside the engine, the phases after the decision: actuate and propagate
+    /// with `decisions` (indexed by UAV; None for the navigator and inactive UAVs). Needs the
+    /// block's measurements of the same step ([`Self::sense`] just before, in the same order).
+    pub fn apply(&self, first: usize, blk: &mut Block<'_>, decisions: &[Option<Decision>]) {
+        let s = &mut *blk.scratch;
+        s.decisions.clear();
+        s.decisions.extend_from_slice(&decisions[first..first + blk.next.len()]);
+        self.actuate(first, blk);
+        self.propagate(first, blk);
     }
 }

@@ -1,0 +1,107 @@
+//! Agents outside the engine: the split path (sense every follower, ask the agents once, then
+//! actuate and propagate) flies exactly the fused path when the agents step as the in-process
+//! ones, whatever the scenario's faults, radio, vehicle or own-state filter; an agent that
+//! does not answer holds its course.
+
+use proxform_core::Decision;
+use proxform_scenario::builtin::{paper_spec, spec_by_name};
+use proxform_scenario::spec::FaultSpec;
+use proxform_scenario::{Scenario, ScenarioSpec};
+use proxform_sim::world::remote::{holding, Agents, LocalAgents, Phase, StepRequest};
+use proxform_sim::{Observer, RunOptions, Simulation, StepFrame};
+
+/// Every state of every step.
+#[derive(Default)]
+struct Record(Vec<proxform_core::State9>);
+
+impl Observer for Record {
+    fn on_step(&mut self, _: &Scenario, frame: &StepFrame<'_>) {
+        self.0.extend_from_slice(frame.states);
+    }
+}
+
+fn flights(sc: &Scenario, seed: u64) -> (Vec<proxform_core::State9>, Vec<proxform_core::State9>) {
+    let mut fused = Record::default();
+    Simulation::new(sc, RunOptions::default(), seed, 0).run(&mut fused);
+    let mut split = Record::default();
+    Simulation::with_agents(sc, RunOptions::default(), (seed, 0), Box::new(LocalAgents::new(sc))).run(&mut split);
+    (fused.0, split.0)
+}
+
+fn scenario(spec: ScenarioSpec) -> Scenario {
+    Scenario::try_from(spec).expect("valid")
+}
+
+#[test]
+fn the_split_path_flies_the_fused_path_bit_for_bit() {
+    let short = |mut s: ScenarioSpec| {
+        s.duration_s = Some(30.0);
+        s
+    };
+    let cases = [
+        ("paper", short(paper_spec())),
+        (
+            "faults, filter and radio",
+            short(paper_spec().with(|s| {
+                s.controller.own_filter_gain = Some(0.6);
+                s.radio.beacons = Some(vec![1]);
+                s.radio.delay_s = Some(0.2);
+                s.radio.loss = Some(0.2);
+                s.sensing.dropout = Some(0.2);
+                s.fault = vec![
+                    FaultSpec::remove(2, 10.0),
+                    FaultSpec {
+                        kind: Some("glitch".into()),
+                        uav: Some(4),
+                        at_s: Some(5.0),
+                        duration_s: Some(2.0),
+                        offset_m: Some([0.0, 20.0, 0.0]),
+                    },
+                ];
+            })),
+        ),
+        ("fixed wing in turbulence", short(spec_by_name("fixed-wing-v", None).expect("built in"))),
+    ];
+    for (name, spec) in cases {
+        let sc = scenario(spec);
+        let (fused, split) = flights(&sc, 3);
+        assert_eq!(fused.len(), split.len(), "{name}");
+        assert!(fused == split, "{name}: the split path differs");
+    }
+}
+
+/// Agents of which one never answers.
+struct Silent {
+    inner: LocalAgents,
+    silent: u32,
+    warm_requests: usize,
+}
+
+impl Agents for Silent {
+    fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        self.inner.decide(request, out);
+        self.warm_requests += usize::from(request.phase == Phase::Warm);
+        for (j, u) in request.sensed.uavs.iter().enumerate() {
+            if u.0 == self.silent {
+                out[j] = holding();
+            }
+        }
+    }
+}
+
+#[test]
+fn a_silent_agent_holds_its_course_and_the_others_still_decide() {
+    let sc = scenario(paper_spec().with(|s| s.duration_s = Some(20.0)));
+    let agents = Silent { inner: LocalAgents::new(&sc), silent: 2, warm_requests: 0 };
+    let mut sim = Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents));
+    let start = sim.states()[2];
+    for _ in 0..50 {
+        sim.step();
+    }
+    // UAV3 kept its velocity and attitude: no input ever reached it.
+    let now = sim.states()[2];
+    assert_eq!(&now.as_slice()[3..], &start.as_slice()[3..]);
+    let (fused, _) = flights(&sc, 1);
+    // The others decided (their states differ from a formation that never adjusts).
+    assert!(fused.len() > 6 * 50);
+}
