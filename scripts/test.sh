@@ -4,5 +4,5 @@
 # what CI runs. One target folder serves both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo test --release --workspace
+cargo test --release --workspace --all-features
 scripts/python.sh test

@@ -2,9 +2,12 @@
 
 mod bench;
 mod compare;
+#[cfg(feature = "net")]
+mod distributed;
 mod figures;
 mod files;
 mod memory;
+mod net_args;
 mod output;
 mod report;
 mod run;
@@ -32,12 +35,41 @@ enum Command {
     Init(scenarios::InitArgs),
     /// Measure agent-updates per second and peak memory of the swarm scenario, 10^2 … 10^6 UAVs.
     Bench(bench::BenchArgs),
+    /// Serve the simulated world over Zenoh and wait for agents started elsewhere
+    /// (`proxform run --distributed --external-agents`).
+    World(run::RunArgs),
+    /// Run one or more UAVs' controllers as this process (the `proxform-agent` program).
+    #[command(disable_help_flag = true)]
+    Agent {
+        /// The agent's arguments (see `proxform agent --help`).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
+}
+
+/// `proxform agent …`: runs `proxform-agent` (beside this program) with the same arguments;
+/// the controller never runs inside the program that links the simulator.
+fn agent(args: &[std::ffi::OsString]) -> anyhow::Result<std::process::ExitCode> {
+    use anyhow::Context;
+    let bin = std::env::current_exe()
+        .context("cannot locate this program")?
+        .with_file_name(format!("proxform-agent{}", std::env::consts::EXE_SUFFIX));
+    let status = std::process::Command::new(&bin).args(args).status().with_context(|| {
+        format!("cannot run {} (build it with `cargo build --release -p proxform-net`)", bin.display())
+    })?;
+    Ok(std::process::ExitCode::from(status.code().map_or(2, |c| c.clamp(0, 255) as u8)))
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
+        Command::World(mut args) => {
+            args.net.distributed = true;
+            args.net.external_agents = true;
+            run::run(&args)
+        }
+        Command::Agent { args } => agent(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Scenarios => scenarios::list(),

@@ -76,6 +76,46 @@ pub struct RunArgs {
     /// Print the scenario as it runs, every default filled in (TOML), and exit.
     #[arg(long)]
     print_scenario: bool,
+    /// The distributed run's options.
+    #[command(flatten)]
+    pub net: crate::net_args::NetArgs,
+}
+
+/// A distributed batch (the world here, each follower's agent in its own process), with the
+/// network's numbers printed to standard error.
+#[cfg(feature = "net")]
+fn distributed(
+    scenario: &proxform_scenario::Scenario,
+    options: RunOptions,
+    seeds: (u64, u64),
+    record: Option<Trajectory>,
+    progress: &(dyn Fn() + Sync),
+    net: &crate::net_args::NetArgs,
+) -> Result<proxform_sim::BatchResult> {
+    let d = crate::distributed::run(scenario, options, seeds, record, progress, net)?;
+    let mut rt = d.stats.round_trips_s.clone();
+    let (median, p99) = (
+        proxform_sim::measure::stats::quantile_of(&mut rt, 0.5) * 1e3,
+        proxform_sim::measure::stats::quantile_of(&mut rt, 0.99) * 1e3,
+    );
+    eprintln!(
+        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable; \
+         round trip median {:.3} ms, p99 {:.3} ms",
+        d.processes, d.stats.answered, d.stats.missing, d.stats.late, d.stats.garbage, median, p99
+    );
+    Ok(d.result)
+}
+
+#[cfg(not(feature = "net"))]
+fn distributed(
+    _: &proxform_scenario::Scenario,
+    _: RunOptions,
+    _: (u64, u64),
+    _: Option<Trajectory>,
+    _: &(dyn Fn() + Sync),
+    _: &crate::net_args::NetArgs,
+) -> Result<proxform_sim::BatchResult> {
+    bail!("this proxform was built without the network agent: build it with `cargo build --release --features net -p proxform-cli -p proxform-net`")
 }
 
 /// Parses `--threads`: 0 (all cores) to [`crate::files::MAX_THREADS`].
@@ -192,7 +232,13 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     };
     let record = (!(args.no_figures && args.no_trajectories)).then(|| Trajectory::for_flight(scenario.steps(), sink));
     let started = Instant::now();
-    let mut result = pool.install(|| run_batch(&scenario, options, args.seed, args.runs, record, &|| bar.inc(1)));
+    let mut result = if args.net.distributed {
+        let d = distributed(&scenario, options, (args.seed, args.runs), record, &|| bar.inc(1), &args.net)?;
+        bar.finish_and_clear();
+        d
+    } else {
+        pool.install(|| run_batch(&scenario, options, args.seed, args.runs, record, &|| bar.inc(1)))
+    };
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 

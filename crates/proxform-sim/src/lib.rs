@@ -18,7 +18,9 @@ pub mod random;
 pub mod world;
 
 pub use batch::compare;
-pub use batch::runs::{run_batch, run_batch_stoppable, run_one, AxisErrors, BatchResult, Summary, SwarmMetrics};
+pub use batch::runs::{
+    run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, Summary, SwarmMetrics,
+};
 pub use measure::metrics::{RunMetrics, RunSummary};
 pub use measure::observer::{Observer, StepFrame};
 pub use measure::trajectory::{Trajectory, TrajectoryRow};

@@ -16,6 +16,7 @@ use crate::measure::stats::quantile_of;
 use crate::measure::trajectory::Trajectory;
 use crate::world::engine::Simulation;
 use crate::world::options::RunOptions;
+use crate::world::remote::Agents;
 
 /// Per-axis errors: x, y, z (m) and α, β, γ (deg).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -194,8 +195,19 @@ fn run_one_stoppable(
     stop: &AtomicBool,
 ) -> (RunSummary, Option<Trajectory>) {
     let sim = Simulation::new(scenario, options, seed, run);
+    observe(scenario, sim, run, record, (Ticker { tick, stop }, &mut ()))
+}
+
+/// Flies `sim` (run `run`), watched by the metrics, the recorder (if any), the ticker and
+/// whatever else the caller watches with.
+fn observe(
+    scenario: &Scenario,
+    sim: Simulation<'_>,
+    run: u64,
+    record: Option<Trajectory>,
+    ticker: (Ticker<'_>, &mut dyn Observer),
+) -> (RunSummary, Option<Trajectory>) {
     let metrics = RunMetrics::new(scenario);
-    let ticker = Ticker { tick, stop };
     if let Some(trajectory) = record {
         let mut obs = ((metrics, trajectory), ticker);
         sim.run(&mut obs);
@@ -261,6 +273,42 @@ pub fn run_batch_stoppable(
             first_trajectory = t;
         }
         summaries.push(s);
+    }
+    let summary = aggregate(scenario, seed, &summaries);
+    Some(BatchResult { runs: summaries, summary, first_trajectory })
+}
+
+/// [`run_batch_stoppable`] with the followers' agents outside the engine
+/// ([`crate::world::remote`]): the runs fly one after the other, all asking `agents`, each
+/// also shown to `watch` (`progress` ticks after each run, or each step of a single run).
+pub fn run_batch_with_agents(
+    scenario: &Scenario,
+    options: RunOptions,
+    (seed, runs): (u64, u64),
+    mut record_first: Option<Trajectory>,
+    (progress, stop): (&(dyn Fn() + Sync), &AtomicBool),
+    (agents, watch): (&mut dyn Agents, &mut dyn Observer),
+) -> Option<BatchResult> {
+    let mut summaries = Vec::with_capacity(runs as usize);
+    let mut first_trajectory = None;
+    for r in 0..runs {
+        if stop.load(Ordering::Relaxed) {
+            return None;
+        }
+        let sim = Simulation::with_agents(scenario, options, (seed, r), Box::new(&mut *agents));
+        let tick: &(dyn Fn() + Sync) = if runs == 1 { progress } else { &|| {} };
+        let (summary, trajectory) =
+            observe(scenario, sim, r, record_first.take(), (Ticker { tick, stop }, &mut *watch));
+        if trajectory.is_some() {
+            first_trajectory = trajectory;
+        }
+        summaries.push(summary);
+        if runs > 1 {
+            progress();
+        }
+    }
+    if stop.load(Ordering::Relaxed) {
+        return None;
     }
     let summary = aggregate(scenario, seed, &summaries);
     Some(BatchResult { runs: summaries, summary, first_trajectory })

@@ -52,6 +52,21 @@ pub trait Observer {
     }
 }
 
+/// Watches nothing.
+impl Observer for () {
+    fn on_step(&mut self, _: &Scenario, _: &StepFrame<'_>) {}
+}
+
+impl<O: Observer + ?Sized> Observer for &mut O {
+    fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
+        (**self).on_step(scenario, frame);
+    }
+
+    fn keep_going(&self) -> bool {
+        (**self).keep_going()
+    }
+}
+
 impl<A: Observer, B: Observer> Observer for (A, B) {
     fn on_step(&mut self, scenario: &Scenario, frame: &StepFrame<'_>) {
         self.0.on_step(scenario, frame);

@@ -68,6 +68,8 @@ impl std::fmt::Debug for Simulation<'_> {
 /// Agents outside the engine and what passes between them and the world each step.
 struct Outside<'s> {
     agents: Box<dyn Agents + 's>,
+    /// The flight's run of the batch.
+    run: u64,
     sensed: Sensed,
     decisions: Vec<Decision>,
     /// The decisions by UAV index (None: navigator, inactive).
@@ -118,7 +120,7 @@ impl<'s> Simulation<'s> {
         agents: Box<dyn Agents + 's>,
     ) -> Self {
         let n = scenario.len();
-        let outside = Outside { agents, sensed: Sensed::default(), decisions: Vec::new(), by_uav: vec![None; n] };
+        let outside = Outside { agents, run, sensed: Sensed::default(), decisions: Vec::new(), by_uav: vec![None; n] };
         let none = (0..n).map(|_| None).collect();
         let mut sim = Self::build(scenario, options, (seed, run), none, Some(outside));
         sim.world.parallel = false;
@@ -321,7 +323,7 @@ impl Outside<'_> {
 
     /// The agents' decisions on what was sensed, by UAV.
     fn ask(&mut self, k: u64, t_s: f64, phase: Phase) {
-        let request = StepRequest { k, t_s, phase, sensed: &self.sensed };
+        let request = StepRequest { run: self.run, k, t_s, phase, sensed: &self.sensed };
         self.agents.decide(&request, &mut self.decisions);
         self.by_uav.iter_mut().for_each(|d| *d = None);
         for (j, u) in self.sensed.uavs.iter().enumerate() {

@@ -62,6 +62,8 @@ impl Sensed {
 /// One update period's question to the agents.
 #[derive(Debug, Clone, Copy)]
 pub struct StepRequest<'a> {
+    /// Run of the batch (each run's flight starts with fresh agents).
+    pub run: u64,
     /// Flight step k (t = k Δt), or the warm-up step counted from its start.
     pub k: u64,
     /// Time of the update (s; negative in the warm-up).
@@ -82,6 +84,12 @@ pub trait Agents {
     /// One decision per entry of `request.sensed`, in its order, into `out` (cleared first);
     /// an agent that did not answer gets [`holding`].
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>);
+}
+
+impl<A: Agents + ?Sized> Agents for &mut A {
+    fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        (**self).decide(request, out);
+    }
 }
 
 /// The in-process agents behind the [`Agents`] interface: what a remote agent does with each

@@ -1,0 +1,64 @@
+//! The agent processes a launcher starts: each started with the launcher as its parent (on
+//! Linux it dies with it), checked while the flight runs, and ended by its id on every path
+//! out — success, failure, Ctrl-C, or a panic (the guard's drop) — so no process outlives the
+//! launcher.
+
+use std::process::{Child, Command};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+
+/// Processes started by this one.
+#[derive(Debug, Default)]
+pub struct Children {
+    procs: Vec<(String, Child)>,
+}
+
+impl Children {
+    /// Starts `cmd`, named `label` in messages.
+    pub fn spawn(&mut self, mut cmd: Command, label: String) -> Result<()> {
+        let child = cmd.spawn().with_context(|| format!("cannot start {label}"))?;
+        self.procs.push((label, child));
+        Ok(())
+    }
+
+    /// The process ids.
+    pub fn pids(&self) -> Vec<u32> {
+        self.procs.iter().map(|(_, c)| c.id()).collect()
+    }
+
+    /// An error if any process has exited (before it was told to).
+    pub fn check(&mut self) -> Result<()> {
+        for (label, child) in &mut self.procs {
+            if let Some(status) = child.try_wait().with_context(|| format!("cannot wait for {label}"))? {
+                bail!("{label} exited early ({status})");
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits up to `grace` for every process to exit, then kills the rest (by id) and reaps them.
+    /// Returns how many had to be killed.
+    pub fn finish(&mut self, grace: Duration) -> usize {
+        let start = Instant::now();
+        while start.elapsed() < grace && self.procs.iter_mut().any(|(_, c)| matches!(c.try_wait(), Ok(None))) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let mut killed = 0;
+        for (_, child) in &mut self.procs {
+            if matches!(child.try_wait(), Ok(None)) {
+                let _ = child.kill();
+                killed += 1;
+            }
+            let _ = child.wait();
+        }
+        self.procs.clear();
+        killed
+    }
+}
+
+impl Drop for Children {
+    fn drop(&mut self) {
+        self.finish(Duration::ZERO);
+    }
+}

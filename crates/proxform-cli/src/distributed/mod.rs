@@ -1,0 +1,162 @@
+//! `proxform run --distributed` and `proxform world`: the simulated world served over Zenoh,
+//! each follower's controller in a `proxform-agent` process (started here, or elsewhere with
+//! `--external-agents`). The world runs the same engine as an in-process run, with its
+//! followers' decisions asked over the network (lockstep: the world advances when every live
+//! agent has answered or the step's deadline passed), so a lockstep flight is the in-process
+//! flight, byte for byte.
+
+mod children;
+mod world;
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use proxform_net::keys::Swarm;
+use proxform_net::transport::{free_loopback_endpoint, Role, Session};
+use proxform_scenario::Scenario;
+use proxform_sim::{run_batch_with_agents, BatchResult, RunOptions, Trajectory};
+
+use crate::net_args::NetArgs;
+use children::Children;
+pub use world::NetStats;
+use world::{NavigatorTelemetry, NetAgents};
+
+/// Set by Ctrl-C: the flight stops at its next step and everything is shut down.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+fn seconds(name: &str, v: f64) -> Result<Duration> {
+    if !(v.is_finite() && (0.0..=86_400.0).contains(&v)) {
+        bail!("--{name}: {v} s is not a duration from 0 to one day");
+    }
+    Ok(Duration::from_secs_f64(v))
+}
+
+/// A distributed batch: its result and what the network did.
+pub struct Distributed {
+    /// The batch, as an in-process one.
+    pub result: BatchResult,
+    /// The network's numbers.
+    pub stats: NetStats,
+    /// Agent processes started.
+    pub processes: usize,
+}
+
+/// Runs `runs` seeded flights of `scenario` with its followers' agents over the network.
+pub fn run(
+    scenario: &Scenario,
+    options: RunOptions,
+    (seed, runs): (u64, u64),
+    record: Option<Trajectory>,
+    progress: &(dyn Fn() + Sync),
+    args: &NetArgs,
+) -> Result<Distributed> {
+    let deadline = seconds("step-deadline-s", args.step_deadline_s)?;
+    let wait = seconds("wait-agents-s", args.wait_agents_s)?;
+    let delay = seconds("start-delay-s", args.start_delay_s)?;
+    if runs > u64::from(u32::MAX) {
+        bail!("--runs: at most {} runs in a distributed batch", u32::MAX);
+    }
+    let endpoint = match &args.listen {
+        Some(e) => e.clone(),
+        None => free_loopback_endpoint()?,
+    };
+    let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
+    let session = Session::open(&Role::Router { listen: vec![endpoint.clone()] })
+        .with_context(|| format!("cannot serve the world on {endpoint}"))?;
+    let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
+    let mut net = NetAgents::new(session, swarm, scenario, deadline)?;
+    let nav = scenario.navigator().0 + 1;
+    let followers: Vec<u32> = (1..=scenario.len() as u32).filter(|u| *u != nav).collect();
+
+    // The agents read the scenario as given (its spec), so they build the same agents.
+    let spec_text = toml::to_string(scenario.spec()).context("cannot write the scenario for the agents")?;
+    let spec_file = std::env::temp_dir().join(format!("proxform-{}-{}.toml", std::process::id(), net.swarm().name()));
+    std::fs::write(&spec_file, spec_text).with_context(|| format!("cannot write {}", spec_file.display()))?;
+    let _remove = RemoveOnDrop(spec_file.clone());
+
+    let mut children = Children::default();
+    if !args.external_agents {
+        let bin = agent_bin(args)?;
+        for group in followers.chunks(args.agents_per_process as usize) {
+            let list: Vec<String> = group.iter().map(u32::to_string).collect();
+            let mut cmd = std::process::Command::new(&bin);
+            cmd.arg("--scenario")
+                .arg(&spec_file)
+                .arg("--uavs")
+                .arg(list.join(","))
+                .arg("--swarm")
+                .arg(net.swarm().name())
+                .arg("--connect")
+                .arg(&endpoint)
+                .arg("--idle-exit-s")
+                .arg("10")
+                .arg("--exit-with-parent")
+                .stdin(std::process::Stdio::null());
+            children.spawn(cmd, format!("agent of UAV(s) {}", list.join(",")))?;
+        }
+    } else {
+        eprintln!(
+            "world: serving swarm '{}' on {endpoint}; waiting for agents of UAVs {followers:?}",
+            net.swarm().name()
+        );
+    }
+    INTERRUPTED.store(false, Ordering::Relaxed);
+    // A second Ctrl-C handler cannot be installed; the first one already sets the flag.
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
+    net.wait_for(&followers, wait, &mut || {
+        if INTERRUPTED.load(Ordering::Relaxed) {
+            bail!("interrupted");
+        }
+        children.check()
+    })?;
+    let ready = Instant::now();
+    while ready.elapsed() < delay && !INTERRUPTED.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let result = run_batch_with_agents(
+        scenario,
+        options,
+        (seed, runs),
+        record,
+        (progress, &INTERRUPTED),
+        (&mut net, &mut telemetry),
+    );
+    // Whatever happened: tell the agents, give them a moment, end the rest by id.
+    let _ = net.end(runs);
+    let processes = children.pids().len();
+    children.finish(Duration::from_secs(2));
+    let stats = net.stats.clone();
+    net.into_session().close();
+    match result {
+        Some(result) => Ok(Distributed { result, stats, processes }),
+        None => bail!("interrupted"),
+    }
+}
+
+/// The agent binary: the one named, or `proxform-agent` beside this program.
+fn agent_bin(args: &NetArgs) -> Result<PathBuf> {
+    let bin = match &args.agent_bin {
+        Some(p) => p.clone(),
+        None => std::env::current_exe()
+            .context("cannot locate this program")?
+            .with_file_name(format!("proxform-agent{}", std::env::consts::EXE_SUFFIX)),
+    };
+    if !bin.is_file() {
+        bail!(
+            "{} not found: build it with `cargo build --release -p proxform-net` (or name it with --agent-bin)",
+            bin.display()
+        );
+    }
+    Ok(bin)
+}
+
+/// Removes a file when dropped.
+struct RemoveOnDrop(PathBuf);
+
+impl Drop for RemoveOnDrop {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}

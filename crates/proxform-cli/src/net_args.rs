@@ -1,0 +1,38 @@
+//! The command line of a distributed run (`proxform run --distributed`, `proxform world`),
+//! present in every build so that a build without the network agent says so.
+
+use std::path::PathBuf;
+
+/// How a distributed run is laid out.
+#[derive(Debug, Clone, clap::Args)]
+pub struct NetArgs {
+    /// Fly with each follower's controller in its own process over Zenoh (lockstep; the same
+    /// results as in-process). Needs a build with `--features net` and the `proxform-agent`
+    /// binary beside `proxform`.
+    #[arg(long)]
+    pub distributed: bool,
+    /// Do not start agents: wait for agents started elsewhere (`proxform world`).
+    #[arg(long, requires = "distributed")]
+    pub external_agents: bool,
+    /// UAVs per agent process.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub agents_per_process: u32,
+    /// Longest wait for the agents' decisions in one step (s); a missing one holds.
+    #[arg(long, default_value_t = 2.0)]
+    pub step_deadline_s: f64,
+    /// Longest wait for every agent to announce itself (s).
+    #[arg(long, default_value_t = 60.0)]
+    pub wait_agents_s: f64,
+    /// Pause after the agents are ready and before the flight (s), for outside clients.
+    #[arg(long, default_value_t = 0.0)]
+    pub start_delay_s: f64,
+    /// The world's Zenoh endpoint [default: a free loopback TCP port].
+    #[arg(long)]
+    pub listen: Option<String>,
+    /// The swarm's name (keys proxform/v1/<swarm>/…) [default: proxform-<process id>].
+    #[arg(long)]
+    pub swarm: Option<String>,
+    /// The agent binary [default: proxform-agent beside this program].
+    #[arg(long)]
+    pub agent_bin: Option<PathBuf>,
+}

@@ -1,0 +1,131 @@
+//! `proxform-agent`: the controllers of one or more UAVs as a process, over Zenoh.
+//!
+//! It reads the same scenario as the simulator (a file, or a built-in name), connects to a
+//! Zenoh router (a `proxform world`, or any router the swarm shares), announces the UAVs it
+//! runs, and answers every update of theirs with a decision, until the world ends the batch
+//! or goes silent. It links the method and the scenario model, never the simulator.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use proxform_net::agent::{serve, Ended, Host, Timing};
+use proxform_net::keys::Swarm;
+use proxform_net::transport::{Role, Session};
+use proxform_net::vehicle::NetVehicle;
+use proxform_scenario::{builtin, load, Scenario};
+
+/// Largest scenario file read (bytes), as `proxform run` reads.
+const MAX_INPUT_BYTES: u64 = 16 << 20;
+
+/// One or more UAVs' controllers as a process.
+#[derive(Debug, Parser)]
+#[command(name = "proxform-agent", version)]
+struct Args {
+    /// Scenario file (TOML), or a built-in scenario's name.
+    #[arg(long)]
+    scenario: String,
+    /// The UAV to run (from 1; not the navigator).
+    #[arg(long, conflicts_with = "uavs")]
+    uav: Option<u32>,
+    /// Several UAVs in this process, comma-separated: 2,3,4.
+    #[arg(long, value_delimiter = ',')]
+    uavs: Vec<u32>,
+    /// The swarm's name (the key prefix proxform/v1/<swarm>/).
+    #[arg(long, default_value = "proxform")]
+    swarm: String,
+    /// The router's endpoint.
+    #[arg(long, default_value = "tcp/127.0.0.1:7447")]
+    connect: String,
+    /// Exit when nothing arrived for this long (s).
+    #[arg(long, default_value_t = 30.0)]
+    idle_exit_s: f64,
+    /// Wait this long for the router at start (s).
+    #[arg(long, default_value_t = 10.0)]
+    wait_s: f64,
+    /// Exit when the process that started this one exits (Linux; a launcher's agents never
+    /// outlive it, even when it is killed).
+    #[arg(long)]
+    exit_with_parent: bool,
+}
+
+/// Asks the kernel to kill this process when its parent exits.
+#[cfg(target_os = "linux")]
+fn exit_with_parent() -> Result<()> {
+    let parent = nix::unistd::getppid();
+    nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGKILL).context("cannot follow the parent process")?;
+    // The parent may have exited before the request: then this process was re-parented.
+    if nix::unistd::getppid() != parent {
+        bail!("the parent process has already exited");
+    }
+    Ok(())
+}
+
+#[cfg(not(target_os = "linux"))]
+fn exit_with_parent() -> Result<()> {
+    Ok(())
+}
+
+fn scenario(arg: &str) -> Result<Scenario> {
+    if builtin::NAMES.contains(&arg) {
+        let spec = builtin::spec_by_name(arg, None).map_err(anyhow::Error::msg)?;
+        return Scenario::try_from(spec).context("invalid built-in scenario");
+    }
+    let path = PathBuf::from(arg);
+    let meta = std::fs::metadata(&path).with_context(|| format!("cannot read scenario file {arg}"))?;
+    if !meta.is_file() || meta.len() > MAX_INPUT_BYTES {
+        bail!("scenario file {arg} is not a regular file of at most {} MiB", MAX_INPUT_BYTES >> 20);
+    }
+    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read scenario file {arg} as UTF-8"))?;
+    Ok(load::parse(&text, arg)?)
+}
+
+fn seconds(name: &str, v: f64) -> Result<Duration> {
+    if !(v.is_finite() && v > 0.0 && v <= 86_400.0) {
+        bail!("--{name}: {v} s is not a duration from 0 to one day");
+    }
+    Ok(Duration::from_secs_f64(v))
+}
+
+fn run(args: Args) -> Result<Ended> {
+    if args.exit_with_parent {
+        exit_with_parent()?;
+    }
+    let uavs: Vec<u32> = match args.uav {
+        Some(u) => vec![u],
+        None if !args.uavs.is_empty() => args.uavs.clone(),
+        None => bail!("name the UAV to run: --uav N or --uavs 2,3,4"),
+    };
+    let sc = Arc::new(scenario(&args.scenario)?);
+    let mut host = Host::new(sc, &uavs)?;
+    let swarm = Swarm::new(&args.swarm)?;
+    let timing = Timing { idle_exit: seconds("idle-exit-s", args.idle_exit_s)?, ..Timing::default() };
+    let role = Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)? };
+    let session = Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?;
+    let mut vehicle = NetVehicle::new(session, swarm, &uavs)?;
+    let ended = serve(&mut host, &mut vehicle, timing)?;
+    if host.dropped + host.refused + vehicle.garbage > 0 {
+        eprintln!(
+            "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable messages",
+            host.dropped, host.refused, vehicle.garbage
+        );
+    }
+    Ok(ended)
+}
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(Ended::Done) => ExitCode::SUCCESS,
+        Ok(Ended::Idle) => {
+            eprintln!("proxform-agent: nothing heard from the world for too long; exiting");
+            ExitCode::from(3)
+        }
+        Err(e) => {
+            eprintln!("proxform-agent: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

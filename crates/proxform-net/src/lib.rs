@@ -1,0 +1,19 @@
+//! proxform-net: one UAV's controller as a process, talking over real middleware (Zenoh).
+//!
+//! - [`wire`]: the messages and their bytes, apart from any transport (schema version 1,
+//!   `docs/wire.md`).
+//! - [`keys`]: the key expressions under which they travel (`proxform/v1/<swarm>/…`).
+//! - [`transport`]: a Zenoh session on the given endpoints (multicast scouting off), with the
+//!   publishers and subscribers of an agent or a world.
+//! - [`vehicle`]: what an agent sees of its UAV (its own state and observations in, a command
+//!   out): the network world implements it here; a MAVLink autopilot bridge would next.
+//! - [`agent`]: the loop that steps the core's [`proxform_core::Agent`] over a vehicle.
+//!
+//! This crate reads the same checked [`proxform_scenario::Scenario`] as the simulator but never
+//! links the simulator: an agent knows only its own measured state and what reaches it.
+
+pub mod agent;
+pub mod keys;
+pub mod transport;
+pub mod vehicle;
+pub mod wire;

@@ -1,0 +1,176 @@
+//! The transport: a Zenoh session with explicit endpoints and multicast scouting off (nothing
+//! is discovered or announced beyond the endpoints given), and typed publishing and receiving
+//! of [`crate::wire`] messages. A world runs as a Zenoh router that agents and outside clients
+//! connect to; the key expressions are those of [`crate::keys`].
+
+use std::time::Duration;
+
+use zenoh::Wait;
+
+use crate::wire::codec::{self, DecodeError};
+use crate::wire::Message;
+
+/// How a process joins the network.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Role {
+    /// A router listening on these endpoints (such as `tcp/127.0.0.1:7447`); others connect to
+    /// it. The world runs as one.
+    Router {
+        /// Endpoints to listen on.
+        listen: Vec<String>,
+    },
+    /// A client of a router at one of these endpoints. Agents and outside programs run as one.
+    Client {
+        /// Endpoints to connect to.
+        connect: Vec<String>,
+        /// How long to wait for the router at start.
+        wait_for_router: Duration,
+    },
+}
+
+/// A transport that could not be set up or used.
+#[derive(Debug, thiserror::Error)]
+pub enum TransportError {
+    /// The configuration was refused (a malformed endpoint, say).
+    #[error("network configuration: {0}")]
+    Config(String),
+    /// The session could not be opened (nothing listening, a port in use).
+    #[error("cannot open the network session: {0}")]
+    Open(String),
+    /// A declaration or a publication failed.
+    #[error("network: {0}")]
+    Io(String),
+}
+
+/// A loopback TCP endpoint on a port that was free a moment ago (`tcp/127.0.0.1:P`), for a
+/// router of this machine's own.
+pub fn free_loopback_endpoint() -> Result<String, TransportError> {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").map_err(|e| TransportError::Open(e.to_string()))?;
+    let port = listener.local_addr().map_err(|e| TransportError::Open(e.to_string()))?.port();
+    Ok(format!("tcp/127.0.0.1:{port}"))
+}
+
+/// An open session.
+pub struct Session {
+    inner: zenoh::Session,
+}
+
+impl std::fmt::Debug for Session {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session").field("zid", &self.inner.zid().to_string()).finish()
+    }
+}
+
+fn config(role: &Role) -> Result<zenoh::Config, TransportError> {
+    let mut c = zenoh::Config::default();
+    let json = |v: &[String]| format!("[{}]", v.iter().map(|e| format!("{e:?}")).collect::<Vec<_>>().join(","));
+    let mut set = |key: &str, value: String| {
+        c.insert_json5(key, &value).map_err(|e| TransportError::Config(format!("{key} = {value}: {e}")))
+    };
+    set("scouting/multicast/enabled", "false".into())?;
+    set("scouting/gossip/enabled", "false".into())?;
+    match role {
+        Role::Router { listen } => {
+            set("mode", "\"router\"".into())?;
+            set("listen/endpoints", json(listen))?;
+        }
+        Role::Client { connect, wait_for_router } => {
+            set("mode", "\"client\"".into())?;
+            set("connect/endpoints", json(connect))?;
+            set("connect/timeout_ms", wait_for_router.as_millis().to_string())?;
+        }
+    }
+    Ok(c)
+}
+
+impl Session {
+    /// Opens a session in `role`.
+    pub fn open(role: &Role) -> Result<Self, TransportError> {
+        let inner = zenoh::open(config(role)?).wait().map_err(|e| TransportError::Open(e.to_string()))?;
+        Ok(Self { inner })
+    }
+
+    /// A publisher of messages on `key`.
+    pub fn publisher(&self, key: &str) -> Result<Publisher, TransportError> {
+        let inner =
+            self.inner.declare_publisher(key.to_string()).wait().map_err(|e| TransportError::Io(e.to_string()))?;
+        Ok(Publisher { inner })
+    }
+
+    /// Puts one message on `key` without declaring a publisher.
+    pub fn put(&self, key: &str, m: &Message) -> Result<(), TransportError> {
+        self.inner.put(key.to_string(), codec::encode(m)).wait().map_err(|e| TransportError::Io(e.to_string()))
+    }
+
+    /// Closes the session (also done on drop).
+    pub fn close(self) {
+        let _ = self.inner.close().wait();
+    }
+}
+
+/// Publishes messages on one key.
+pub struct Publisher {
+    inner: zenoh::pubsub::Publisher<'static>,
+}
+
+impl Publisher {
+    /// Sends `m`.
+    pub fn send(&self, m: &Message) -> Result<(), TransportError> {
+        self.inner.put(codec::encode(m)).wait().map_err(|e| TransportError::Io(e.to_string()))
+    }
+}
+
+/// What arrived on a subscription.
+#[derive(Debug)]
+pub enum Received {
+    /// A message, with the key it came on.
+    Message(String, Message),
+    /// Bytes that are not a message (a foreign or broken sender): reported, not fatal.
+    Garbage(String, DecodeError),
+}
+
+/// Messages from any number of subscriptions, in arrival order, in one queue.
+pub struct Inbox {
+    rx: std::sync::mpsc::Receiver<Received>,
+    /// Kept alive: dropping a subscriber undeclares it.
+    _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
+}
+
+impl Inbox {
+    /// The next message, waiting at most `timeout`; None when nothing came.
+    pub fn recv_timeout(&self, timeout: Duration) -> Option<Received> {
+        self.rx.recv_timeout(timeout).ok()
+    }
+
+    /// The next message if one is waiting.
+    pub fn try_recv(&self) -> Option<Received> {
+        self.rx.try_recv().ok()
+    }
+}
+
+impl Session {
+    /// An inbox receiving every message on `keys` (key expressions: `*` and `**` allowed).
+    pub fn inbox(&self, keys: &[String]) -> Result<Inbox, TransportError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let mut subscribers = Vec::with_capacity(keys.len());
+        for key in keys {
+            let tx = tx.clone();
+            let sub = self
+                .inner
+                .declare_subscriber(key.clone())
+                .callback(move |sample| {
+                    let key = sample.key_expr().as_str().to_string();
+                    let received = match codec::decode(&sample.payload().to_bytes()) {
+                        Ok(m) => Received::Message(key, m),
+                        Err(e) => Received::Garbage(key, e),
+                    };
+                    // The inbox is gone only while its owner shuts down.
+                    let _ = tx.send(received);
+                })
+                .wait()
+                .map_err(|e| TransportError::Io(e.to_string()))?;
+            subscribers.push(sub);
+        }
+        Ok(Inbox { rx, _subscribers: subscribers })
+    }
+}
