@@ -17,7 +17,12 @@ pub struct NetArgs {
     /// UAVs per agent process.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub agents_per_process: u32,
-    /// Longest wait for the agents' decisions in one step (s); a missing one holds.
+    /// How the world's clock advances: `lockstep` (when every live agent has answered, or the
+    /// step's deadline passed; the in-process results) or `realtime` (every process on its
+    /// own wall clock at the scenario's period; observations carry their real age).
+    #[arg(long, default_value = "lockstep", value_parser = ["lockstep", "realtime"])]
+    pub clock: String,
+    /// Longest wait for the agents' decisions in one step (s, lockstep); a missing one holds.
     #[arg(long, default_value_t = 2.0)]
     pub step_deadline_s: f64,
     /// Longest wait for every agent to announce itself (s).

@@ -99,10 +99,33 @@ fn distributed(
         proxform_sim::measure::stats::quantile_of(&mut rt, 0.99) * 1e3,
     );
     eprintln!(
-        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable; \
-         round trip median {:.3} ms, p99 {:.3} ms",
-        d.processes, d.stats.answered, d.stats.missing, d.stats.late, d.stats.garbage, median, p99
+        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} lost \
+         to [network] faults; round trip median {:.3} ms, p99 {:.3} ms",
+        d.processes, d.stats.answered, d.stats.missing, d.stats.late, d.stats.garbage, d.stats.dropped, median, p99
     );
+    if d.stats.steps > 0 {
+        let mut ages = d.stats.ages_s.clone();
+        let (a50, a99) = (
+            proxform_sim::measure::stats::quantile_of(&mut ages, 0.5) * 1e3,
+            proxform_sim::measure::stats::quantile_of(&mut ages, 0.99) * 1e3,
+        );
+        eprintln!(
+            "real time: {} of {} steps began late (> 0.1 Δt); updates were {a50:.3} ms old (median), {a99:.3} ms \
+             (p99) when the agents stepped",
+            d.stats.late_steps, d.stats.steps
+        );
+    }
+    if !d.usage.is_empty() {
+        let n = d.usage.len() as f64;
+        let cpu = d.usage.iter().map(|u| u.0).sum::<f64>() / n;
+        let peak = d.usage.iter().map(|u| u.1).max().unwrap_or(0);
+        eprintln!(
+            "agent processes: CPU {cpu:.2} s each (mean; {:.1} % of the batch's {:.1} s), peak memory {} (largest)",
+            100.0 * cpu / d.wall_s.max(1e-9),
+            d.wall_s,
+            crate::memory::mib(Some(peak))
+        );
+    }
     Ok(d.result)
 }
 

@@ -40,3 +40,150 @@ fn lockstep_over_zenoh_is_the_in_process_run_byte_for_byte() {
     }
     let _ = (std::fs::remove_dir_all(a), std::fs::remove_dir_all(b));
 }
+
+/// The agent binary beside `proxform`.
+fn agent_bin() -> PathBuf {
+    Path::new(bin()).with_file_name("proxform-agent")
+}
+
+fn free_endpoint() -> String {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").expect("a free port");
+    format!("tcp/127.0.0.1:{}", l.local_addr().expect("bound").port())
+}
+
+/// Kills a child by its id when dropped (a test that fails leaves nothing running).
+struct Reap(std::process::Child);
+
+impl Drop for Reap {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn spawn_agent(endpoint: &str, swarm: &str, uav: u32) -> Reap {
+    Reap(
+        Command::new(agent_bin())
+            .args(["--scenario", "paper", "--uav", &uav.to_string(), "--swarm", swarm, "--connect", endpoint])
+            .args(["--idle-exit-s", "5"])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("proxform-agent starts"),
+    )
+}
+
+#[test]
+fn an_agent_killed_in_flight_leaves_and_rejoins_its_slot_when_restarted() {
+    // Real time, 24 s: UAV3's agent is killed (SIGKILL) about 6 s into the flight and
+    // restarted 6 s later; the others keep the formation, and UAV3 is back in its slot.
+    let (endpoint, swarm, dir) = (free_endpoint(), format!("kill-{}", std::process::id()), out("kill"));
+    let world = Command::new(bin())
+        .args(["world", "--clock", "realtime", "--duration-s", "24", "--no-figures", "-q", "--listen", &endpoint])
+        .args(["--swarm", &swarm, "--wait-agents-s", "30", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the world starts");
+    let mut world = Reap(world);
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let mut agents: Vec<Reap> = (2..=6).map(|u| spawn_agent(&endpoint, &swarm, u)).collect();
+    std::thread::sleep(std::time::Duration::from_secs(7));
+    // SIGKILL, by its id.
+    let victim = agents.remove(1);
+    drop(victim);
+    std::thread::sleep(std::time::Duration::from_secs(6));
+    agents.push(spawn_agent(&endpoint, &swarm, 3));
+    let status = world.0.wait().expect("the world ends");
+    let mut stderr = String::new();
+    if let Some(mut e) = world.0.stderr.take() {
+        use std::io::Read;
+        let _ = e.read_to_string(&mut stderr);
+    }
+    assert!(status.success(), "every UAV within its allowable errors: {stderr}");
+    let summary = std::fs::read_to_string(dir.join("summary.json")).expect("summary");
+    assert!(summary.contains("\"pass_fraction\": 1.0"), "{summary}");
+    // UAV3 left the flight and came back: rows of it are missing in the middle, present at the end.
+    let traj = std::fs::read_to_string(dir.join("trajectories.csv")).expect("trajectories");
+    let uav3: Vec<f64> = traj
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(1) == Some("3"))
+        .filter_map(|l| l.split(',').next()?.parse().ok())
+        .collect();
+    let gap = uav3.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+    assert!(gap > 3.0, "UAV3 was out of the flight for a while (largest gap {gap} s)");
+    assert!(uav3.last().is_some_and(|t| *t > 23.0), "and back at the end");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn ctrl_c_ends_the_launcher_and_every_agent_it_started() {
+    let swarm = format!("sigint-{}", std::process::id());
+    let dir = out("sigint");
+    let launcher = Command::new(bin())
+        .args(["run", "--distributed", "--clock", "realtime", "--duration-s", "60", "--no-figures", "-q"])
+        .args(["--swarm", &swarm, "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("the launcher starts");
+    let pid = launcher.id();
+    let mut launcher = Reap(launcher);
+    let agents = || {
+        let o =
+            Command::new("pgrep").args(["-f", &format!("proxform-agent.*swarm {swarm}")]).output().expect("pgrep runs");
+        String::from_utf8_lossy(&o.stdout).lines().count()
+    };
+    // The five agents come up, the flight starts.
+    let start = std::time::Instant::now();
+    while agents() < 5 && start.elapsed().as_secs() < 20 {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    assert_eq!(agents(), 5);
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    let kill = Command::new("kill").args(["-INT", &pid.to_string()]).status().expect("kill runs");
+    assert!(kill.success());
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = launcher.0.try_wait().expect("wait") {
+            break s;
+        }
+        assert!(start.elapsed().as_secs() < 10, "the launcher did not end after Ctrl-C");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert_eq!(status.code(), Some(2), "an interrupted run is an error");
+    assert_eq!(agents(), 0, "agents outlived their launcher");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn transport_losses_from_the_scenario_are_reproducible_and_cost_decisions() {
+    // The paper with 20 % of the world ↔ agent messages lost, each direction, twice.
+    let dir = out("loss");
+    std::fs::create_dir_all(&dir).expect("a folder");
+    let base =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/paper.toml")).expect("paper");
+    let file = dir.join("lossy.toml");
+    std::fs::write(&file, format!("{base}\n[network]\nloss = 0.2\n")).expect("written");
+    let f = file.to_str().expect("utf-8");
+    let (a, b, c) = (dir.join("a"), dir.join("b"), dir.join("c"));
+    let oa = run(&[f, "--duration-s", "20", "--distributed"], &a);
+    let ob = run(&[f, "--duration-s", "20", "--distributed", "--agents-per-process", "5"], &b);
+    run(&[f, "--duration-s", "20"], &c);
+    let ta = std::fs::read(a.join("trajectories.csv")).expect("a");
+    assert!(ta == std::fs::read(b.join("trajectories.csv")).expect("b"), "the same losses, the same flight");
+    assert!(ta != std::fs::read(c.join("trajectories.csv")).expect("c"), "an in-process run has no transport");
+    let stderr = String::from_utf8_lossy(&oa.stderr);
+    let lost: u64 = stderr
+        .split(" lost to [network] faults")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("the count of lost messages");
+    // 2 × 5 × 210 messages, 20 % of them.
+    assert!((300..=540).contains(&lost), "{lost} lost: {stderr}");
+    assert!(String::from_utf8_lossy(&ob.stderr).contains(&format!(" {lost} lost to [network] faults")));
+    let _ = std::fs::remove_dir_all(dir);
+}

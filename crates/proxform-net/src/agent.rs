@@ -14,7 +14,7 @@ use proxform_scenario::Scenario;
 
 use crate::transport::TransportError;
 use crate::vehicle::{Event, Vehicle};
-use crate::wire::{CommandMsg, Phase, Presence, SenseMsg, StateMsg};
+use crate::wire::{ClockMode, CommandMsg, Phase, Presence, SenseMsg, StateMsg};
 
 /// A UAV that cannot be run from this scenario.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -76,9 +76,16 @@ impl Host {
         self.agents.keys().copied().collect()
     }
 
-    /// Steps the agent of `s.uav` on the update; its command and the state it broadcasts, or
-    /// None when the update is not for this host or not valid.
-    pub fn handle(&mut self, s: &SenseMsg) -> Option<(CommandMsg, StateMsg)> {
+    /// Steps the agent of `s.uav` on the update, which reached it `latency_s` after it was
+    /// measured (0 in lockstep); its command and the state it broadcasts, or None when the
+    /// update is not for this host or not valid.
+    ///
+    /// The agent steps at the update's time t_s: its own state and its observations were
+    /// measured together then, and their ages are relative to that instant (a neighbour
+    /// predicted to a later instant than the own state would be compared with a state that
+    /// is not there: at 70 m/s, 1 ms is 7 cm). The latency is reported with the command; what
+    /// it costs is a decision that reaches the vehicle too late for its period.
+    pub fn handle(&mut self, s: &SenseMsg, latency_s: f64) -> Option<(CommandMsg, StateMsg)> {
         let n = self.scenario.len();
         let Some(h) = self.agents.get_mut(&s.uav) else {
             self.refused += 1;
@@ -108,10 +115,15 @@ impl Host {
                 false => self.dropped += 1,
             }
         }
+        let latency_s = if latency_s.is_finite() { latency_s.max(0.0) } else { 0.0 };
         let decision = h.agent.step(s.t_s, &s.own, &self.heard);
-        let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s: s.t_s, decision };
+        let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s: s.t_s, age_s: latency_s, decision };
         Some((command, StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own }))
     }
+}
+
+fn unix_ns() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
 }
 
 /// How long an agent waits.
@@ -142,16 +154,23 @@ pub enum Ended {
 pub fn serve(host: &mut Host, vehicle: &mut impl Vehicle, timing: Timing) -> Result<Ended, TransportError> {
     vehicle.announce(Presence::Alive)?;
     let (mut last_heard, mut last_announce) = (Instant::now(), Instant::now());
+    // In real time, the wall-clock time of t = 0 (ns since the Unix epoch), from the clock.
+    let mut epoch_ns: Option<u64> = None;
     loop {
         match vehicle.next(timing.announce_every)? {
             Event::Sense(s) => {
                 last_heard = Instant::now();
-                if let Some((command, state)) = host.handle(&s) {
+                let latency = match (epoch_ns, s.phase) {
+                    (Some(e), Phase::Fly) => (unix_ns() as f64 - e as f64) * 1e-9 - s.t_s,
+                    _ => 0.0,
+                };
+                if let Some((command, state)) = host.handle(&s, latency) {
                     vehicle.command(&command, &state)?;
                 }
             }
             Event::Clock(c) => {
                 last_heard = Instant::now();
+                epoch_ns = (c.mode == ClockMode::RealTime && c.epoch_ns > 0).then_some(c.epoch_ns);
                 if c.end {
                     vehicle.announce(Presence::Leaving)?;
                     return Ok(Ended::Done);

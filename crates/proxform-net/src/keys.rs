@@ -9,6 +9,7 @@
 //! | `proxform/v1/S/uav/N/cmd` | [`crate::wire::CommandMsg`] | UAV N's agent → the world (or its autopilot) |
 //! | `proxform/v1/S/clock` | [`crate::wire::ClockMsg`] | the world → everyone |
 //! | `proxform/v1/S/member/N` | [`crate::wire::MemberMsg`] | UAV N's agent → the world |
+//! | `proxform/v1/S/alive/N` | a Zenoh liveliness token (no payload) | held by UAV N's agent while its session lives |
 
 /// A swarm's name as it appears in keys: letters, digits, `-` and `_`, 1 to 64 characters.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -72,6 +73,16 @@ impl Swarm {
     /// UAV `uav`'s membership.
     pub fn member(&self, uav: u32) -> String {
         format!("{}/member/{uav}", self.base())
+    }
+
+    /// UAV `uav`'s liveliness token.
+    pub fn alive(&self, uav: u32) -> String {
+        format!("{}/alive/{uav}", self.base())
+    }
+
+    /// Every UAV's liveliness token.
+    pub fn all_alive(&self) -> String {
+        format!("{}/alive/*", self.base())
     }
 
     /// Every UAV's membership.

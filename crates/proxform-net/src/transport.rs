@@ -174,3 +174,63 @@ impl Session {
         Ok(Inbox { rx, _subscribers: subscribers })
     }
 }
+
+/// A liveliness token: while it lives (and its session does), subscribers of its key see it
+/// alive; when it is dropped, or its process dies and the router loses the connection, they
+/// see it gone at once.
+pub struct Token {
+    _inner: zenoh::liveliness::LivelinessToken,
+}
+
+/// A liveliness token appearing or disappearing: its key, and whether it is alive.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Liveliness {
+    /// The token's key.
+    pub key: String,
+    /// Appeared (true) or gone (false).
+    pub alive: bool,
+}
+
+/// Liveliness changes of the tokens under a key expression, the ones alive at declaration
+/// first.
+pub struct LivelinessInbox {
+    rx: std::sync::mpsc::Receiver<Liveliness>,
+    _subscriber: zenoh::pubsub::Subscriber<()>,
+}
+
+impl LivelinessInbox {
+    /// The next change if one is waiting.
+    pub fn try_recv(&self) -> Option<Liveliness> {
+        self.rx.try_recv().ok()
+    }
+}
+
+impl Session {
+    /// Declares a liveliness token on `key`.
+    pub fn liveliness_token(&self, key: &str) -> Result<Token, TransportError> {
+        let inner = self
+            .inner
+            .liveliness()
+            .declare_token(key.to_string())
+            .wait()
+            .map_err(|e| TransportError::Io(e.to_string()))?;
+        Ok(Token { _inner: inner })
+    }
+
+    /// Follows the liveliness tokens under `key` (a key expression).
+    pub fn liveliness(&self, key: &str) -> Result<LivelinessInbox, TransportError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let sub = self
+            .inner
+            .liveliness()
+            .declare_subscriber(key.to_string())
+            .history(true)
+            .callback(move |sample| {
+                let alive = sample.kind() == zenoh::sample::SampleKind::Put;
+                let _ = tx.send(Liveliness { key: sample.key_expr().as_str().to_string(), alive });
+            })
+            .wait()
+            .map_err(|e| TransportError::Io(e.to_string()))?;
+        Ok(LivelinessInbox { rx, _subscriber: sub })
+    }
+}

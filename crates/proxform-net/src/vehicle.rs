@@ -7,7 +7,7 @@
 use std::time::Duration;
 
 use crate::keys::Swarm;
-use crate::transport::{Inbox, Publisher, Received, Session, TransportError};
+use crate::transport::{Inbox, Publisher, Received, Session, Token, TransportError};
 use crate::wire::{ClockMsg, CommandMsg, MemberMsg, Message, Presence, SenseMsg, StateMsg};
 
 /// What happened while an agent waited for its next update.
@@ -39,6 +39,8 @@ pub struct NetVehicle {
     uavs: Vec<u32>,
     inbox: Inbox,
     commands: Vec<(u32, Publisher, Publisher)>,
+    /// One liveliness token per UAV: the world sees at once when this process is gone.
+    _tokens: Vec<Token>,
     /// Undecodable messages seen (a foreign or broken sender).
     pub garbage: u64,
 }
@@ -53,7 +55,8 @@ impl NetVehicle {
             .iter()
             .map(|u| Ok((*u, session.publisher(&swarm.command(*u))?, session.publisher(&swarm.state(*u))?)))
             .collect::<Result<_, TransportError>>()?;
-        Ok(Self { session, swarm, uavs: uavs.to_vec(), inbox, commands, garbage: 0 })
+        let tokens = uavs.iter().map(|u| session.liveliness_token(&swarm.alive(*u))).collect::<Result<_, _>>()?;
+        Ok(Self { session, swarm, uavs: uavs.to_vec(), inbox, commands, _tokens: tokens, garbage: 0 })
     }
 }
 

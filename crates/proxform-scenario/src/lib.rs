@@ -25,5 +25,5 @@ pub mod wind;
 pub use convert::SpecError;
 pub use load::LoadError;
 pub use path::NavigatorPath;
-pub use scenario::{in_slots, AllowableErrors, CorrelatedNoise, MeasurementNoise, Scenario};
+pub use scenario::{in_slots, AllowableErrors, CorrelatedNoise, MeasurementNoise, NetworkFaults, Scenario};
 pub use spec::ScenarioSpec;

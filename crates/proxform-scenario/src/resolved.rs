@@ -14,8 +14,8 @@ use crate::faults::Fault;
 use crate::path::NavigatorPath;
 use crate::scenario::Scenario;
 use crate::spec::{
-    AllowableSpec, ControllerSpec, FaultSpec, FormationSpec, InitialSpec, NoiseSpec, PathSpec, RadioSpec, ScenarioSpec,
-    SegmentSpec, SensingSpec, SlotSpec, ThresholdsSpec, VehicleSpec, WindSpec,
+    AllowableSpec, ControllerSpec, FaultSpec, FormationSpec, InitialSpec, NetworkSpec, NoiseSpec, PathSpec, RadioSpec,
+    ScenarioSpec, SegmentSpec, SensingSpec, SlotSpec, ThresholdsSpec, VehicleSpec, WindSpec,
 };
 
 fn kmh(v: f64) -> f64 {
@@ -45,6 +45,7 @@ pub fn resolved(sc: &Scenario) -> ScenarioSpec {
         noise: noise(sc),
         sensing: SensingSpec { dropout: Some(sc.dropout()), reference_dropout: Some(sc.reference_dropout()) },
         radio: radio(sc),
+        network: NetworkSpec { loss: Some(sc.network().loss), delay_s: Some(sc.network().delay_s) },
         wind: wind(sc),
         allowable: allowable(sc),
         fault: sc.faults().iter().map(fault).collect(),

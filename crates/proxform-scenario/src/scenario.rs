@@ -45,6 +45,16 @@ pub struct CorrelatedNoise {
     pub tau_s: f64,
 }
 
+/// Faults of the transport between the world and the agents of a distributed run (an
+/// in-process run has no transport).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct NetworkFaults {
+    /// Probability that a message is lost, each direction, in [0, 1).
+    pub loss: f64,
+    /// Delay added to every message (s; real-time clock only).
+    pub delay_s: f64,
+}
+
 /// Allowable formation errors, the pass criterion (METHOD §7, §9).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AllowableErrors {
@@ -84,6 +94,7 @@ pub struct Scenario {
     pub(crate) beacons: Vec<UavId>,
     pub(crate) wind: Wind,
     pub(crate) radio: RadioModel,
+    pub(crate) network: NetworkFaults,
     pub(crate) warnings: Vec<SpecError>,
 }
 
@@ -245,6 +256,11 @@ impl Scenario {
     /// The radio: broadcasters, range, delay and losses.
     pub fn radio(&self) -> &RadioModel {
         &self.radio
+    }
+
+    /// Faults of the transport between the world and the agents of a distributed run.
+    pub fn network(&self) -> &NetworkFaults {
+        &self.network
     }
 
     /// The followers' formation control method.

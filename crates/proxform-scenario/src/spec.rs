@@ -53,6 +53,9 @@ pub struct ScenarioSpec {
     /// Radio.
     #[serde(default)]
     pub radio: RadioSpec,
+    /// The transport of a distributed run (world ↔ agents).
+    #[serde(default)]
+    pub network: NetworkSpec,
     /// Wind, turbulence and gusts.
     #[serde(default)]
     pub wind: WindSpec,
@@ -338,6 +341,18 @@ pub struct SensingSpec {
     /// Probability that an observation of one of the UAV's main references is lost, per
     /// observation and step, in [0, 1]. Default: `dropout`.
     pub reference_dropout: Option<f64>,
+}
+
+/// `[network]`: faults of the transport between the world and the agents of a distributed run
+/// (`proxform run --distributed`); an in-process run has no transport and ignores them.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NetworkSpec {
+    /// Probability that a message between the world and an agent is lost, each direction,
+    /// in [0, 1). Default 0.
+    pub loss: Option<f64>,
+    /// Delay added to every such message (s, real-time clock only), in [0, 10]. Default 0.
+    pub delay_s: Option<f64>,
 }
 
 /// `[radio]`.

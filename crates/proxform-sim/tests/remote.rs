@@ -105,3 +105,54 @@ fn a_silent_agent_holds_its_course_and_the_others_still_decide() {
     // The others decided (their states differ from a formation that never adjusts).
     assert!(fused.len() > 6 * 50);
 }
+
+/// Agents of which one is gone for a while.
+struct Away {
+    inner: LocalAgents,
+    uav: u32,
+    away: std::ops::Range<u64>,
+    step: u64,
+}
+
+impl Agents for Away {
+    fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        if request.phase == Phase::Fly {
+            self.step = request.k;
+        }
+        self.inner.decide(request, out);
+    }
+
+    fn present(&mut self, uav: proxform_core::UavId) -> bool {
+        // Asked before the step's decisions: the step about to fly is `self.step + 1`.
+        uav.0 != self.uav || !self.away.contains(&(self.step + 1))
+    }
+}
+
+/// Which UAVs fly at each step.
+#[derive(Default)]
+struct Flying(Vec<Vec<bool>>, Vec<proxform_core::State9>);
+
+impl Observer for Flying {
+    fn on_step(&mut self, sc: &Scenario, frame: &StepFrame<'_>) {
+        self.0.push(frame.active.to_vec());
+        if frame.k == 150 {
+            // UAV3's error to its slot, 10 s after it came back.
+            let nav = frame.states[0];
+            self.1.push(sc.slot_state(2, &nav) - frame.states[2]);
+        }
+    }
+}
+
+#[test]
+fn a_follower_whose_agent_is_gone_leaves_and_joins_its_slot_when_it_is_back() {
+    let sc = scenario(paper_spec().with(|s| s.duration_s = Some(20.0)));
+    let agents = Away { inner: LocalAgents::new(&sc), uav: 2, away: 20..50, step: 0 };
+    let mut seen = Flying::default();
+    Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents)).run(&mut seen);
+    let uav3: Vec<bool> = seen.0.iter().map(|a| a[2]).collect();
+    assert!(uav3[..20].iter().all(|a| *a), "flies before");
+    assert!(uav3[21..50].iter().all(|a| !*a), "gone while its agent is: {:?}", &uav3[15..55]);
+    assert!(uav3[51..].iter().all(|a| *a), "back after");
+    let e = seen.1[0];
+    assert!(e[0].abs() < 0.5 && e[1].abs() < 0.6 && e[2].abs() < 0.2, "UAV3 back in its slot: {e:?}");
+}

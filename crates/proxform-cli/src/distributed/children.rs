@@ -27,6 +27,12 @@ impl Children {
         self.procs.iter().map(|(_, c)| c.id()).collect()
     }
 
+    /// CPU time used so far (s) and peak resident memory (bytes) of every process still
+    /// running, from `/proc` (Linux; empty elsewhere).
+    pub fn usage(&self) -> Vec<(f64, u64)> {
+        self.procs.iter().filter_map(|(_, c)| usage_of(c.id())).collect()
+    }
+
     /// An error if any process has exited (before it was told to).
     pub fn check(&mut self) -> Result<()> {
         for (label, child) in &mut self.procs {
@@ -61,4 +67,17 @@ impl Drop for Children {
     fn drop(&mut self) {
         self.finish(Duration::ZERO);
     }
+}
+
+/// CPU time (s, the scheduler's own nanosecond counts summed over every thread) and peak
+/// resident memory (bytes, `VmHWM`) of process `pid`.
+fn usage_of(pid: u32) -> Option<(f64, u64)> {
+    let mut cpu_ns = 0u64;
+    for task in std::fs::read_dir(format!("/proc/{pid}/task")).ok()?.flatten() {
+        let sched = std::fs::read_to_string(task.path().join("schedstat")).unwrap_or_default();
+        cpu_ns += sched.split_whitespace().next().and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
+    }
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let hwm_kib: u64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some((cpu_ns as f64 * 1e-9, hwm_kib * 1024))
 }

@@ -15,6 +15,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 use proxform_net::keys::Swarm;
 use proxform_net::transport::{free_loopback_endpoint, Role, Session};
+use proxform_net::wire::ClockMode;
 use proxform_scenario::Scenario;
 use proxform_sim::{run_batch_with_agents, BatchResult, RunOptions, Trajectory};
 
@@ -41,6 +42,10 @@ pub struct Distributed {
     pub stats: NetStats,
     /// Agent processes started.
     pub processes: usize,
+    /// Per agent process still running at the end: CPU time (s) and peak memory (bytes).
+    pub usage: Vec<(f64, u64)>,
+    /// Wall-clock time of the batch (s).
+    pub wall_s: f64,
 }
 
 /// Runs `runs` seeded flights of `scenario` with its followers' agents over the network.
@@ -58,15 +63,11 @@ pub fn run(
     if runs > u64::from(u32::MAX) {
         bail!("--runs: at most {} runs in a distributed batch", u32::MAX);
     }
-    let endpoint = match &args.listen {
-        Some(e) => e.clone(),
-        None => free_loopback_endpoint()?,
-    };
     let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
-    let session = Session::open(&Role::Router { listen: vec![endpoint.clone()] })
-        .with_context(|| format!("cannot serve the world on {endpoint}"))?;
+    let (session, endpoint) = serve(args.listen.as_deref())?;
     let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
-    let mut net = NetAgents::new(session, swarm, scenario, deadline)?;
+    let mode = if args.clock == "realtime" { ClockMode::RealTime } else { ClockMode::Lockstep };
+    let mut net = NetAgents::new(session, swarm, scenario, (mode, deadline, seed))?;
     let nav = scenario.navigator().0 + 1;
     let followers: Vec<u32> = (1..=scenario.len() as u32).filter(|u| *u != nav).collect();
 
@@ -115,6 +116,7 @@ pub fn run(
     while ready.elapsed() < delay && !INTERRUPTED.load(Ordering::Relaxed) {
         std::thread::sleep(Duration::from_millis(20));
     }
+    let flight = Instant::now();
     let result = run_batch_with_agents(
         scenario,
         options,
@@ -123,16 +125,38 @@ pub fn run(
         (progress, &INTERRUPTED),
         (&mut net, &mut telemetry),
     );
+    let wall_s = flight.elapsed().as_secs_f64();
+    let usage = children.usage();
     // Whatever happened: tell the agents, give them a moment, end the rest by id.
     let _ = net.end(runs);
     let processes = children.pids().len();
     children.finish(Duration::from_secs(2));
-    let stats = net.stats.clone();
+    let mut stats = net.stats.clone();
+    stats.dropped = net.dropped;
     net.into_session().close();
     match result {
-        Some(result) => Ok(Distributed { result, stats, processes }),
+        Some(result) => Ok(Distributed { result, stats, processes, usage, wall_s }),
         None => bail!("interrupted"),
     }
+}
+
+/// The world's router on `listen`, or on a free loopback port: a port found free may be taken
+/// before the router binds it (by another program's connection), so a few are tried.
+fn serve(listen: Option<&str>) -> Result<(Session, String)> {
+    if let Some(e) = listen {
+        let session = Session::open(&Role::Router { listen: vec![e.to_string()] })
+            .with_context(|| format!("cannot serve the world on {e}"))?;
+        return Ok((session, e.to_string()));
+    }
+    let mut last = None;
+    for _ in 0..10 {
+        let e = free_loopback_endpoint()?;
+        match Session::open(&Role::Router { listen: vec![e.clone()] }) {
+            Ok(session) => return Ok((session, e)),
+            Err(err) => last = Some(err),
+        }
+    }
+    Err(anyhow::anyhow!("cannot serve the world on a free loopback port: {last:?}"))
 }
 
 /// The agent binary: the one named, or `proxform-agent` beside this program.

@@ -207,6 +207,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
             w.u32(c.run);
             w.u64(c.k);
             w.f64(c.t_s);
+            w.f64(c.age_s);
             w.u8(outcome_code(&d.outcome));
             w.pad(3);
             w.u16(d.occupied_areas);
@@ -295,7 +296,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             Message::Sense(SenseMsg { uav, run, phase, k, t_s, own, heard })
         }
         kind::COMMAND => {
-            let (uav, run, k, t_s) = (r.uav("uav")?, r.u32()?, r.u64()?, r.f64()?);
+            let (uav, run, k, t_s, age_s) = (r.uav("uav")?, r.u32()?, r.u64()?, r.f64()?, r.f64()?);
             let code = r.u8()?;
             r.skip(3)?;
             let (occupied_areas, main_refs, normalised_sq) = (r.u16()?, r.u16()?, r.f64()?);
@@ -309,13 +310,8 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             for j in 0..input.len() {
                 input[j] = r.f64()?;
             }
-            Message::Command(CommandMsg {
-                uav,
-                run,
-                k,
-                t_s,
-                decision: Decision { outcome, input, occupied_areas, main_refs },
-            })
+            let decision = Decision { outcome, input, occupied_areas, main_refs };
+            Message::Command(CommandMsg { uav, run, k, t_s, age_s, decision })
         }
         kind::CLOCK => {
             let mode = match r.u8()? {
@@ -390,6 +386,7 @@ mod tests {
                 run: 1,
                 k: 3,
                 t_s: 0.3,
+                age_s: 0.0004,
                 decision: Decision {
                     outcome: Outcome::Adjusted { normalised_sq: 1.25 },
                     input: Input::from_fn(|j, _| j as f64 * -0.01),
@@ -402,6 +399,7 @@ mod tests {
                 run: 1,
                 k: 4,
                 t_s: 0.4,
+                age_s: 0.0,
                 decision: Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 },
             }),
             Message::Clock(ClockMsg {
@@ -426,7 +424,7 @@ mod tests {
         }
         // Layouts as docs/wire.md gives them.
         let lens: Vec<usize> = samples().iter().map(|m| encode(m).len()).collect();
-        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112, 96, 96, 48, 20]);
+        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112, 104, 104, 48, 20]);
         // NaN payloads and signed zeros survive (bits, not values).
         let odd = Message::State(StateMsg {
             uav: 1,

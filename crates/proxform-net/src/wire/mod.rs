@@ -74,6 +74,9 @@ pub struct CommandMsg {
     pub k: u64,
     /// Time of the update it answers (s).
     pub t_s: f64,
+    /// How old the update was when the agent stepped (s): the transport's latency (0 in
+    /// lockstep, where time is the world's).
+    pub age_s: f64,
     /// The decision.
     pub decision: Decision,
 }

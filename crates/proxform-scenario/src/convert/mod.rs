@@ -111,6 +111,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         let (dropout, reference_dropout) = world::sensing(&spec.sensing)?;
         let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
+        let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable)?;
         let wind = world::wind(&spec.wind)?;
         let faults = world::faults(&spec.fault, n)?;
@@ -178,6 +179,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             beacons,
             wind,
             radio,
+            network,
             warnings,
         })
     }

@@ -120,6 +120,19 @@ pub fn wind(w: &WindSpec) -> Result<Wind, SpecError> {
     Ok(out)
 }
 
+/// The transport faults of a distributed run.
+pub fn network(n: &crate::spec::NetworkSpec) -> Result<crate::scenario::NetworkFaults, SpecError> {
+    let loss = probability("network.loss", n.loss.unwrap_or(0.0))?;
+    if loss >= 1.0 {
+        return Err(super::values::err("network.loss", "must be below 1: every message lost leaves nothing to fly"));
+    }
+    let delay_s = non_negative("network.delay_s", n.delay_s.unwrap_or(0.0))?;
+    if delay_s > 10.0 {
+        return Err(super::values::err("network.delay_s", format!("{delay_s} s: at most 10 s")));
+    }
+    Ok(crate::scenario::NetworkFaults { loss, delay_s })
+}
+
 /// The radio and its beacons.
 pub fn radio(r: &RadioSpec, dt_s: f64, n: usize) -> Result<(RadioModel, Vec<UavId>), SpecError> {
     let beacons = match &r.beacons {

@@ -74,6 +74,8 @@ struct Outside<'s> {
     decisions: Vec<Decision>,
     /// The decisions by UAV index (None: navigator, inactive).
     by_uav: Vec<Option<Decision>>,
+    /// Followers taken out of the flight because their agent is gone.
+    absent: Vec<bool>,
 }
 
 /// Everything of a flight but the agents: read by every block while the agents step.
@@ -120,7 +122,14 @@ impl<'s> Simulation<'s> {
         agents: Box<dyn Agents + 's>,
     ) -> Self {
         let n = scenario.len();
-        let outside = Outside { agents, run, sensed: Sensed::default(), decisions: Vec::new(), by_uav: vec![None; n] };
+        let outside = Outside {
+            agents,
+            run,
+            sensed: Sensed::default(),
+            decisions: Vec::new(),
+            by_uav: vec![None; n],
+            absent: vec![false; n],
+        };
         let none = (0..n).map(|_| None).collect();
         let mut sim = Self::build(scenario, options, (seed, run), none, Some(outside));
         sim.world.parallel = false;
@@ -248,6 +257,9 @@ impl<'s> Simulation<'s> {
     pub fn step(&mut self) {
         let w = &mut self.world;
         w.apply_schedule();
+        if let Some(out) = &mut self.outside {
+            out.apply_membership(w);
+        }
         if w.options.neighbour_search == NeighbourSearch::Grid {
             w.index_positions();
         }
@@ -314,6 +326,27 @@ fn initially_flying(sc: &Scenario) -> Vec<bool> {
 type Buffers<'b> = (&'b mut Vec<Option<Agent>>, &'b mut Vec<State9>, &'b mut Vec<UavStep>);
 
 impl Outside<'_> {
+    /// Followers whose agent is gone leave the flight; those whose agent is back join in their
+    /// slot (relative to the navigator, or to the formation's estimate of it). A UAV the
+    /// scenario itself has out of the flight stays out.
+    fn apply_membership(&mut self, w: &mut World<'_>) {
+        let sc = w.scenario;
+        let nav = sc.navigator().index();
+        for i in (0..sc.len()).filter(|i| *i != nav) {
+            if !w.active[i] && !self.absent[i] {
+                continue;
+            }
+            let here = self.agents.present(proxform_core::UavId(i as u32));
+            if !here && w.active[i] {
+                (w.active[i], self.absent[i]) = (false, true);
+            } else if here && self.absent[i] {
+                let reference = crate::measure::observer::navigator_reference(sc, &w.current, &w.active);
+                w.current[i] = sc.slot_state(i, &reference);
+                (w.active[i], self.absent[i]) = (true, false);
+            }
+        }
+    }
+
     /// Perceive and estimate for every block, gathering what each active follower sensed.
     fn sense(&mut self, ctx: &StepContext<'_>, (agents, next, uavs): Buffers<'_>, areas: usize) {
         let sensed = &mut self.sensed;

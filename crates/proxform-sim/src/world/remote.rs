@@ -84,11 +84,23 @@ pub trait Agents {
     /// One decision per entry of `request.sensed`, in its order, into `out` (cleared first);
     /// an agent that did not answer gets [`holding`].
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>);
+
+    /// Whether UAV `uav`'s agent is there (asked once per flight step for every follower the
+    /// scenario has flying). A follower whose agent is gone leaves the flight as a removed UAV
+    /// does; when its agent is back, it joins in its slot, as a scheduled join does.
+    fn present(&mut self, uav: UavId) -> bool {
+        let _ = uav;
+        true
+    }
 }
 
 impl<A: Agents + ?Sized> Agents for &mut A {
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
         (**self).decide(request, out);
+    }
+
+    fn present(&mut self, uav: UavId) -> bool {
+        (**self).present(uav)
     }
 }
 
