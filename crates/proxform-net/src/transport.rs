@@ -97,6 +97,12 @@ impl Session {
         Ok(Publisher { inner })
     }
 
+    /// Puts raw bytes on `key` (for tests of what a broken sender does; a failed put is
+    /// ignored).
+    pub fn inner_put(&self, key: &str, bytes: Vec<u8>) {
+        let _ = self.inner.put(key.to_string(), bytes).wait();
+    }
+
     /// Puts one message on `key` without declaring a publisher.
     pub fn put(&self, key: &str, m: &Message) -> Result<(), TransportError> {
         self.inner.put(key.to_string(), codec::encode(m)).wait().map_err(|e| TransportError::Io(e.to_string()))
