@@ -24,12 +24,26 @@ def cli() -> pathlib.Path:
 
 
 @pytest.fixture(scope="session")
-def cli_net() -> pathlib.Path:
-    """The command-line tool with the network agent, and proxform-agent beside it (cargo finds
-    them up to date after the test command's `cargo test --all-features`)."""
+def cli_net(tmp_path_factory) -> pathlib.Path:
+    """The command-line tool with the network agent, and proxform-agent beside it: as the test
+    command's `cargo test --all-features` built them, or built here when missing or built
+    without the network agent."""
     target = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
-    subprocess.run(
-        ["cargo", "build", "--release", "-q", "--features", "net", "-p", "proxform-cli", "-p", "proxform-net"],
-        cwd=ROOT, check=True, timeout=3600,
-    )
-    return target / "release" / "proxform"
+    binary, agent = target / "release" / "proxform", target / "release" / "proxform-agent"
+
+    def works() -> bool:
+        if not (binary.exists() and agent.exists()):
+            return False
+        probe = subprocess.run(
+            [binary, "run", "--distributed", "--duration-s", "0.2", "--no-figures", "-q", "--out",
+             tmp_path_factory.mktemp("probe")],
+            capture_output=True, timeout=120,
+        )
+        return probe.returncode == 0
+
+    if not works():
+        subprocess.run(
+            ["cargo", "build", "--release", "-q", "--features", "net", "-p", "proxform-cli", "-p", "proxform-net"],
+            cwd=ROOT, check=True, timeout=3600,
+        )
+    return binary
