@@ -187,3 +187,30 @@ fn transport_losses_from_the_scenario_are_reproducible_and_cost_decisions() {
     assert!(String::from_utf8_lossy(&ob.stderr).contains(&format!(" {lost} lost to [network] faults")));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn a_transport_delay_past_the_period_holds_every_decision_in_real_time() {
+    // Real time, 3 s: a delay of 1 ms costs nothing; one of 95 ms (past 0.9 Δt) makes every
+    // decision of the flight arrive too late, so each counts as holding.
+    let dir = out("delay");
+    std::fs::create_dir_all(&dir).expect("a folder");
+    let base =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/paper.toml")).expect("paper");
+    let missing = |delay: f64, name: &str| -> u64 {
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, format!("{base}\n[network]\ndelay_s = {delay}\n")).expect("written");
+        let f = file.to_str().expect("utf-8");
+        let o = run(&[f, "--duration-s", "3", "--distributed", "--clock", "realtime"], &dir.join(name));
+        let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+        stderr
+            .split(" missing (held)")
+            .next()
+            .and_then(|s| s.rsplit(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no count in {stderr}"))
+    };
+    assert_eq!(missing(0.001, "short"), 0);
+    // 30 flight steps × 5 followers late; the warm-up runs in lockstep.
+    assert_eq!(missing(0.095, "long"), 150);
+    let _ = std::fs::remove_dir_all(dir);
+}
