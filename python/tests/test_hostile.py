@@ -95,3 +95,12 @@ def test_random_controller_inputs_never_panic():
 def test_dicts_of_the_wrong_shape_raise(bad):
     with pytest.raises((ScenarioError, TypeError)):
         proxform.load({"formation": bad})
+
+
+def test_counts_that_overflow_are_refused():
+    sc = proxform.load("paper")
+    many = proxform.Controllers(sc)
+    own = np.tile(sc.initial_states()[1], (5, 1))
+    big = np.array([1, 2**63 - 1, 0, 0, 0], dtype=np.int64)
+    with pytest.raises(ValueError, match="counts"):
+        many.step(0.0, own, big, np.array([1]), np.zeros((1, 9)))

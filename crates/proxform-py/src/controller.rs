@@ -419,7 +419,7 @@ impl PyControllers {
         self.offsets.clear();
         self.offsets.push(0);
         for (i, &c) in counts.iter().enumerate() {
-            let end = self.offsets[i] as i64 + c;
+            let end = (self.offsets[i] as i64).checked_add(c).unwrap_or(i64::MAX);
             if c < 0 || end > m as i64 {
                 return Err(bad(format!("counts[{i}] = {c}: the counts must be ≥ 0 and add up to {m} observations")));
             }
