@@ -119,14 +119,7 @@ fn predictor_step(bencher: divan::Bencher, predictor: &str) {
     let kind = match predictor {
         "alpha_beta" => PredictorKind::default(),
         "constant_velocity" => PredictorKind::ConstantVelocity,
-        _ => PredictorKind::Singer {
-            accel_sigma_mps2: 1.0,
-            tau_s: 1.0,
-            position_sigma_m: 0.02,
-            velocity_sigma_mps: 0.05,
-            alpha: 0.8,
-            beta: 0.8 * 0.8 / 1.2,
-        },
+        _ => PredictorKind::singer(0.02, 0.05),
     };
     let (mut ctrl, obs, own) = setup_with(8, ControllerParams { predictor: kind, ..ControllerParams::default() });
     let mut t = 0.0;

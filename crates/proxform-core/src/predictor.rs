@@ -57,6 +57,25 @@ impl PredictorKind {
     /// α-β with α = 0.8 and the Benedict-Bordner β = α²/(2 − α).
     pub const DEFAULT: Self = PredictorKind::AlphaBeta { alpha: 0.8, beta: 0.8 * 0.8 / 1.2 };
 
+    /// Default manoeuvre acceleration σ_a of the Singer filter (m/s²).
+    pub const SINGER_ACCEL_SIGMA_MPS2: f64 = 1.0;
+    /// Default correlation time τ of the Singer filter (s).
+    pub const SINGER_TAU_S: f64 = 1.0;
+
+    /// The Singer filter with its default manoeuvre model (σ_a, τ) and attitude gains (those of
+    /// [`Self::DEFAULT`]), for sensors of the given noise.
+    pub const fn singer(position_sigma_m: f64, velocity_sigma_mps: f64) -> Self {
+        let PredictorKind::AlphaBeta { alpha, beta } = Self::DEFAULT else { unreachable!() };
+        PredictorKind::Singer {
+            accel_sigma_mps2: Self::SINGER_ACCEL_SIGMA_MPS2,
+            tau_s: Self::SINGER_TAU_S,
+            position_sigma_m,
+            velocity_sigma_mps,
+            alpha,
+            beta,
+        }
+    }
+
     /// Checks the gains.
     pub fn validate(&self) -> Result<(), ConfigError> {
         if let PredictorKind::Singer { accel_sigma_mps2, tau_s, position_sigma_m, velocity_sigma_mps, .. } = *self {
@@ -466,14 +485,7 @@ mod tests {
 
     #[test]
     fn a_singer_track_fuses_an_onboard_detection_and_a_radio_report_of_the_same_instant() {
-        let kind = PredictorKind::Singer {
-            accel_sigma_mps2: 1.0,
-            tau_s: 1.0,
-            position_sigma_m: 1.0,
-            velocity_sigma_mps: 0.5,
-            alpha: 0.8,
-            beta: 0.8 * 0.8 / 1.2,
-        };
+        let kind = PredictorKind::singer(1.0, 0.5);
         let mut one = NeighbourTracks::new(kind, 4, 1.0, 0.2);
         let mut two = NeighbourTracks::new(kind, 4, 1.0, 0.2);
         let at = |y: f64| {
@@ -507,17 +519,7 @@ mod tests {
     fn reports_of_one_instant_stamped_by_different_sums_give_no_rate() {
         // A neighbour flying 50 m/s along x, observed every 0.1 s; then the same instant again,
         // its stamp off by rounding (1e-14 s) and its position off by measurement noise (2 cm).
-        for kind in [
-            PredictorKind::default(),
-            PredictorKind::Singer {
-                accel_sigma_mps2: 1.0,
-                tau_s: 1.0,
-                position_sigma_m: 0.02,
-                velocity_sigma_mps: 0.05,
-                alpha: 0.8,
-                beta: 0.8 * 0.8 / 1.2,
-            },
-        ] {
+        for kind in [PredictorKind::default(), PredictorKind::singer(0.02, 0.05)] {
             let mut tracks = NeighbourTracks::new(kind, 4, 1.0, 0.2);
             let at = |t: f64, dy: f64| {
                 let mut s = State9::zeros();

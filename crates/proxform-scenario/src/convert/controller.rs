@@ -116,10 +116,15 @@ pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<Control
                 accel_sigma_mps2: or_default(
                     "controller.predictor_accel_sigma_mps2",
                     c.predictor_accel_sigma_mps2,
-                    1.0,
+                    PredictorKind::SINGER_ACCEL_SIGMA_MPS2,
                     positive,
                 )?,
-                tau_s: or_default("controller.predictor_tau_s", c.predictor_tau_s, 1.0, positive)?,
+                tau_s: or_default(
+                    "controller.predictor_tau_s",
+                    c.predictor_tau_s,
+                    PredictorKind::SINGER_TAU_S,
+                    positive,
+                )?,
                 // The measurement noise is the scenario's, filled in with it.
                 position_sigma_m: f64::NAN,
                 velocity_sigma_mps: f64::NAN,
