@@ -126,3 +126,25 @@ def test_the_vectorised_step_equals_single_steps(paper):
             assert list(inputs[i]) == d.input
     with pytest.raises(ValueError, match="add up"):
         many.step(10.0, x[1:], np.array([1, 1, 1, 1, 1]), np.array([1]), np.zeros((1, 9)))
+
+
+def test_the_robust_checks_report_what_they_did(paper):
+    """A stuck own sensor is refused (own_suspect) with controller.own_gate_m; a neighbour far
+    from the others is left out (isolated) with controller.isolation_gate."""
+    sc = paper.with_values({"controller": {"own_gate_m": 3.0, "isolation_gate": 1.0}})
+    c = proxform.Controller(sc, 5)
+    stuck = slot_states(sc, 1.0)[4]
+    for k in range(30):
+        x = slot_states(sc, 0.1 * k)
+        own = stuck if 10 <= k < 20 else x[4]
+        d = c.step(0.1 * k, own, neighbours_of(x, 4))
+        assert d.own_suspect == (11 <= k < 20), (k, d)
+        assert d.isolated == 0
+    # UAV2, one of UAV5's references, 10 m off to the left: left out.
+    x = slot_states(sc, 3.0)
+    nb = neighbours_of(x, 4)
+    nb[nb[:, 0] == 2, 2] += 10.0
+    assert c.step(3.0, x[4], nb).isolated == 1
+    # Without the checks neither is reported.
+    plain = proxform.Controller(paper, 5)
+    assert plain.step(0.0, x[4], nb).isolated == 0

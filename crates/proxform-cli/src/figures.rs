@@ -478,7 +478,70 @@ pub fn compare_plots(
         sweep_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), &title, x_desc, &curves)?;
         written.extend([png, svg]);
     }
+    // The pass fraction against loss on every channel, one line per method.
+    let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for m in &cmp.methods {
+        let mut pts: Vec<(f64, f64)> = cmp
+            .conditions
+            .iter()
+            .filter_map(|c| {
+                let x = 100.0 * c.channel_loss()?;
+                let cell = cells.iter().find(|s| s.method == m.name && s.condition == c.name)?;
+                Some((x, cell.pass_fraction))
+            })
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if pts.len() >= 2 {
+            lines.push((m.name.clone(), pts));
+        }
+    }
+    if !lines.is_empty() {
+        let title = format!("{}: runs within the allowable errors", cmp.base.name());
+        let x_desc = "loss on every channel: onboard detections and radio (%)";
+        let png = dir.join("pass_vs_channel_loss.png");
+        let svg = dir.join("pass_vs_channel_loss.svg");
+        pass_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), &title, x_desc, &lines)?;
+        pass_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), &title, x_desc, &lines)?;
+        written.extend([png, svg]);
+    }
     Ok(written)
+}
+
+/// Pass fraction (0 to 1) against a sweep, one line per method.
+fn pass_chart<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    x_desc: &str,
+    lines: &[(String, Vec<(f64, f64)>)],
+) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    let xs = || lines.iter().flat_map(|l| l.1.iter().map(|p| p.0));
+    let (x0, x1) = xs().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1.max(x0 + 1e-9), 0.0..1.02)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc("pass fraction")
+        .y_label_formatter(&|v| format!("{v:.1}"))
+        .draw()
+        .map_err(plot_err)?;
+    for (k, (name, pts)) in lines.iter().enumerate() {
+        let color = PALETTE[(k + 1) % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+            .map_err(plot_err)?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(plot_err)?;
+    }
+    legend_box(&mut chart, SeriesLabelPosition::LowerLeft)?;
+    root.present().map_err(plot_err)
 }
 
 fn sweep_chart<DB: DrawingBackend>(

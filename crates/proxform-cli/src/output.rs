@@ -41,6 +41,18 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
         .iter()
         .map(|s| s.to_string()),
     );
+    // Fault and isolation columns only for the runs that have them.
+    let faults = runs.first().is_some_and(|r| r.sensor_faults.is_some());
+    let isolation = runs.first().is_some_and(|r| r.isolation.is_some());
+    if faults {
+        header.extend(["healthy_pass", "rejoin_s"].map(String::from));
+    }
+    if isolation {
+        header.extend(
+            ["isolating_s_per_uav", "isolated_per_uav_s", "own_suspect_s_per_uav", "own_suspect_episodes"]
+                .map(String::from),
+        );
+    }
     w.write_record(&header)?;
     // Errors in the report's units: metres, and degrees for the attitudes.
     for r in runs {
@@ -62,6 +74,17 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
             format!("{:.6}", r.connectivity_min),
             format!("{:.3}", r.alone_s_per_uav),
         ]);
+        if let (true, Some(f)) = (faults, r.sensor_faults) {
+            rec.extend([u8::from(f.healthy_pass).to_string(), format!("{:.3}", f.rejoin_s)]);
+        }
+        if let (true, Some(i)) = (isolation, r.isolation) {
+            rec.extend([
+                format!("{:.3}", i.isolating_s_per_uav),
+                format!("{:.6}", i.isolated_per_uav_s),
+                format!("{:.3}", i.own_suspect_s_per_uav),
+                i.own_suspect_episodes.to_string(),
+            ]);
+        }
         w.write_record(&rec)?;
     }
     w.flush().with_context(|| format!("cannot write {}", path.display()))?;

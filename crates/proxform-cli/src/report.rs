@@ -101,6 +101,25 @@ pub fn print(
     if m.alone_s_per_uav > 0.0 {
         writeln!(out, "flown alone              {:.2} s per follower (nothing perceived)", m.alone_s_per_uav)?;
     }
+    if let Some(f) = &s.sensor_faults {
+        let healthy = result.runs.iter().filter(|r| r.sensor_faults.is_some_and(|f| f.healthy_pass)).count();
+        writeln!(
+            out,
+            "sensor faults            the other followers within the allowable errors in {} ({healthy} of {} runs); faulty UAVs back within them {} s after the fault (median), {} s (p99), {} s (max)",
+            fraction(f.healthy_pass_fraction),
+            s.runs,
+            number(f.rejoin_s_median),
+            number(f.rejoin_s_p99),
+            number(f.rejoin_s_max)
+        )?;
+    }
+    if let Some(i) = &s.isolation {
+        writeln!(
+            out,
+            "isolation                neighbours left out {:.3} s per follower ({:.4} per follower-second); own sensor refused {:.3} s per follower in {} episode(s)",
+            i.isolating_s_per_uav, i.isolated_per_uav_s, i.own_suspect_s_per_uav, i.own_suspect_episodes
+        )?;
+    }
     let updates = (s.uavs.saturating_sub(1) * s.runs) as f64 * scenario.steps() as f64;
     writeln!(out, "agent-updates per second {:.3e}", updates / elapsed.as_secs_f64().max(1e-9))?;
     Ok(())

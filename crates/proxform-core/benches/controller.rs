@@ -1,13 +1,12 @@
 //! Controller steps: against the number of perceived neighbours, the predictive horizon, and the method.
 
-use std::sync::Arc;
-
-use proxform_core::angle::kmh;
 use proxform_core::state::State9;
 use proxform_core::{
-    ControllerParams, ControllerSetup, DependencySet, Formation, FormationController, FormationFrame, FormationSlot,
-    KinematicModel, Method, Observation, ObservationSource, PredictorKind, ProximityController, UavId, VehicleModel,
+    ControllerParams, ControllerSetup, DependencySet, FormationController, KinematicModel, Method, Observation,
+    ObservationSource, PredictorKind, ProximityController, UavId, VehicleModel,
 };
+
+mod support;
 
 fn main() {
     divan::main();
@@ -20,36 +19,17 @@ fn setup(n: usize) -> (ProximityController, Vec<Observation>, State9) {
 
 /// [`setup`] with the given parameters.
 fn setup_with(n: usize, params: ControllerParams) -> (ProximityController, Vec<Observation>, State9) {
-    let mut slots = vec![FormationSlot::at(0.0, 0.0, 0.0)];
-    for k in 0..n {
-        let a = (k as f64 + 0.5) * std::f64::consts::TAU / 8.0;
-        slots.push(FormationSlot::at(100.0 * a.cos(), 100.0 * a.sin(), 0.0));
-    }
-    let formation = Arc::new(Formation { slots, frame: FormationFrame::World });
+    let formation = support::ring::formation(n);
     let deps = DependencySet::new(UavId(0), n + 1, vec![(UavId(1), 0.7)]).expect("valid");
+    let (obs, own) = support::ring::scene(&formation);
     let ctrl = ProximityController::standalone(
         UavId(0),
         params,
-        formation.clone(),
+        formation,
         deps,
         VehicleModel::Kinematic(KinematicModel::default()),
     )
     .expect("valid");
-    let state_of = |s: &FormationSlot| {
-        State9::from_column_slice(&[s.offset_m.x, s.offset_m.y, 0.0, kmh(250.0), 0.3, 0.0, 0.05, 0.02, 0.01])
-    };
-    let obs = formation.slots[1..]
-        .iter()
-        .enumerate()
-        .map(|(k, s)| Observation {
-            id: UavId(k as u32 + 1),
-            state: state_of(s),
-            age_s: 0.0,
-            source: ObservationSource::Onboard,
-        })
-        .collect();
-    let mut own = state_of(&formation.slots[0]);
-    own[1] += 0.7; // off its slot: the step adjusts
     (ctrl, obs, own)
 }
 
@@ -89,14 +69,7 @@ fn method_step(bencher: divan::Bencher, label: &str) {
     for o in &mut obs {
         o.source = ObservationSource::Radio;
     }
-    let formation = {
-        let mut slots = vec![FormationSlot::at(0.0, 0.0, 0.0)];
-        for k in 0..8 {
-            let a = (k as f64 + 0.5) * std::f64::consts::TAU / 8.0;
-            slots.push(FormationSlot::at(100.0 * a.cos(), 100.0 * a.sin(), 0.0));
-        }
-        Arc::new(Formation { slots, frame: FormationFrame::World })
-    };
+    let formation = support::ring::formation(8);
     let setup = ControllerSetup::new(ControllerParams::default(), VehicleModel::Kinematic(KinematicModel::default()))
         .expect("valid");
     let deps = DependencySet::new(UavId(0), 9, vec![(UavId(1), 0.7)]).expect("valid");
@@ -129,4 +102,13 @@ fn predictor_step(bencher: divan::Bencher, predictor: &str) {
         t += 0.1;
         divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
     });
+}
+
+/// One agent step (own-state handling and the controller) with 8 neighbours for each variant
+/// of the robust settings (docs/METHOD.md §8; `support/variants.rs`). Instruction counts of the
+/// same steps: `scripts/callgrind-agent.sh`.
+#[divan::bench(args = support::variants::VARIANTS)]
+fn agent_step_variant(bencher: divan::Bencher, variant: &str) {
+    let mut flight = support::variants::Flight::new(variant);
+    bencher.bench_local(|| divan::black_box(flight.step()));
 }

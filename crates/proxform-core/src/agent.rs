@@ -83,9 +83,18 @@ impl AgentSetup {
 pub struct Agent {
     controller: FormationController,
     /// The own state this UAV expects at the next step: the model applied to its estimate and
-    /// the input it chose (None before the first step, and when the own-state filter is off;
-    /// boxed so that agents without it stay small).
-    own_prediction: Option<Box<State9>>,
+    /// the input it chose (None before the first step, and when neither the own-state filter
+    /// nor the own-sensor check is on; boxed so that agents without them stay small).
+    own_prediction: Option<Box<OwnPrediction>>,
+}
+
+/// What the UAV expects of its own state, and for how long it has flown on that alone.
+#[derive(Debug, Clone, Copy)]
+struct OwnPrediction {
+    /// The model applied to the last estimate and the input chosen.
+    next: State9,
+    /// Time since a measurement of its own state was last accepted (s).
+    unaccepted_s: f64,
 }
 
 impl Agent {
@@ -104,31 +113,50 @@ impl Agent {
     }
 
     /// One update period at `now_s`: `own_measured` is the UAV's measurement of its own state,
-    /// `heard` what reached it (a UAV reported more than once counts once). The own-state
-    /// filter (gain < 1) blends the measurement with the UAV's own prediction before the
-    /// controller decides.
+    /// `heard` what reached it (a UAV reported more than once counts once). The own-sensor
+    /// check (`own_gate_m`) refuses a measurement too far from the UAV's own prediction and
+    /// flies on the prediction instead; the own-state filter (gain < 1) blends an accepted
+    /// measurement with the prediction; then the controller decides.
     pub fn step(&mut self, now_s: f64, own_measured: &State9, heard: &[Observation]) -> Decision {
         let setup = self.controller.setup();
-        let gain = setup.params().own_filter_gain;
-        let own = match self.own_prediction {
-            Some(ref pred) if gain < 1.0 => {
-                // Position and velocity are filtered; attitude, measured far more finely than
-                // its tolerances, is taken as measured (filtering it would only add lag).
-                let mut own = **pred + gain * state::difference(own_measured, pred);
-                for k in state::ALPHA..=state::GAMMA {
-                    own[k] = own_measured[k];
+        let params = setup.params();
+        let (gain, gate, dt) = (params.own_filter_gain, params.own_gate_m, params.dt_s);
+        let growth = params.own_gate_growth_mps;
+        let mut suspect = false;
+        let own = match self.own_prediction.as_deref_mut() {
+            Some(pred) => {
+                let innovation = (state::position(own_measured) - state::position(&pred.next)).norm();
+                if gate.is_some_and(|g| innovation.is_nan() || innovation > g + growth * pred.unaccepted_s) {
+                    // The measurement disagrees with where the UAV knows it flew: fly on that.
+                    suspect = true;
+                    pred.unaccepted_s += dt;
+                    pred.next
+                } else {
+                    pred.unaccepted_s = 0.0;
+                    if gain < 1.0 {
+                        // Position and velocity are filtered; attitude, measured far more finely
+                        // than its tolerances, is taken as measured (filtering it would only
+                        // add lag).
+                        let mut own = pred.next + gain * state::difference(own_measured, &pred.next);
+                        for k in state::ALPHA..=state::GAMMA {
+                            own[k] = own_measured[k];
+                        }
+                        own
+                    } else {
+                        *own_measured
+                    }
                 }
-                own
             }
-            _ => *own_measured,
+            None => *own_measured,
         };
-        let decision = self.controller.step(now_s, &own, heard);
-        if gain < 1.0 {
+        let mut decision = self.controller.step(now_s, &own, heard);
+        decision.own_suspect = suspect;
+        if gain < 1.0 || gate.is_some() {
             let setup = self.controller.setup();
             let next = setup.vehicle().propagate(&own, &decision.input, setup.params().dt_s);
             match &mut self.own_prediction {
-                Some(p) => **p = next,
-                None => self.own_prediction = Some(Box::new(next)),
+                Some(p) => p.next = next,
+                None => self.own_prediction = Some(Box::new(OwnPrediction { next, unaccepted_s: 0.0 })),
             }
         }
         decision
@@ -152,7 +180,7 @@ impl Agent {
 
     /// Bytes held on the heap (shared setup and formation excluded).
     pub fn heap_bytes(&self) -> usize {
-        self.controller.heap_bytes() + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<State9>())
+        self.controller.heap_bytes() + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<OwnPrediction>())
     }
 }
 

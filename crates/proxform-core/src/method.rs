@@ -119,7 +119,9 @@ impl FormationController {
         dependency: DependencySet,
     ) -> Result<Self, ConfigError> {
         Ok(match *method {
-            Method::Proximity => Self::Proximity(ProximityController::new(id, setup, formation, dependency)?),
+            Method::Proximity => {
+                Self::Proximity(ProximityController::new(id, setup, formation, dependency)?.with_navigator(leader))
+            }
             Method::LeaderFollower(g) => {
                 Self::LeaderFollower(Box::new(LeaderFollower::new(id, leader, g, setup, formation)?))
             }

@@ -141,6 +141,13 @@ pub struct PyDecision {
     /// Main references perceived.
     #[pyo3(get)]
     main_refs: u16,
+    /// Neighbours the robust fusion left out (scenario key `controller.isolation_gate`).
+    #[pyo3(get)]
+    isolated: u16,
+    /// True when the UAV refused its own measurement and decided on its own prediction
+    /// (scenario key `controller.own_gate_m`).
+    #[pyo3(get)]
+    own_suspect: bool,
 }
 
 impl From<Decision> for PyDecision {
@@ -157,6 +164,8 @@ impl From<Decision> for PyDecision {
             normalised_sq,
             occupied_areas: d.occupied_areas,
             main_refs: d.main_refs,
+            isolated: d.isolated,
+            own_suspect: d.own_suspect,
         }
     }
 }

@@ -117,4 +117,35 @@ mod tests {
         assert!(e.len() >= 2);
         assert!(swarm(1).is_err(), "one UAV is no swarm");
     }
+
+    #[test]
+    fn derived_tables_that_lean_on_the_navigator_make_it_broadcast() {
+        let v = |degree: f64| {
+            crate::load::parse(
+                &format!(
+                    "[formation.shape]\nkind = \"v\"\nuavs = 9\nspacing_m = 80.0\n\
+                     [formation.dependencies]\nnavigator_degree = {degree}\n"
+                ),
+                "v.toml",
+            )
+            .expect("valid")
+        };
+        assert_eq!(v(0.4).beacons(), &[proxform_core::UavId(0)]);
+        assert!(v(0.4).dependencies()[8].degree(proxform_core::UavId(0)).is_some());
+        assert!(v(0.0).beacons().is_empty());
+        assert!(v(0.4).warnings().is_empty());
+        // A radio that does not reach the rear of the V: those UAVs are named.
+        let short = crate::load::parse(
+            "[formation.shape]\nkind = \"v\"\nuavs = 9\nspacing_m = 100.0\n\
+             [formation.dependencies]\nnavigator_degree = 0.4\n[radio]\nrange_m = 260.0\n\
+             [controller]\nsensing_range_m = 250.0\n",
+            "v.toml",
+        )
+        .expect("valid");
+        let w: Vec<String> = short.warnings().iter().map(|w| w.to_string()).collect();
+        assert!(
+            w.iter().any(|w| w.contains("UAVs 6, 7, 8, 9 fly beyond the navigator's radio range (260 m)")),
+            "{w:?}"
+        );
+    }
 }

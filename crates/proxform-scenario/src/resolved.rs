@@ -146,6 +146,9 @@ fn controller(sc: &Scenario) -> ControllerSpec {
         own_filter_gain: Some(p.own_filter_gain),
         separation_m: p.separation_m,
         horizon: Some(i64::from(p.horizon)),
+        isolation_gate: Some(p.isolation_gate.unwrap_or(0.0)),
+        own_gate_m: Some(p.own_gate_m.unwrap_or(0.0)),
+        own_gate_growth_mps: p.own_gate_m.map(|_| p.own_gate_growth_mps),
         method: Some(method.label().into()),
         gains,
         thresholds: Some(ThresholdsSpec {

@@ -227,6 +227,12 @@ pub struct ControllerSpec {
     pub separation_m: Option<f64>,
     /// Horizon H of the predictive input (1 to 50). Default 1.
     pub horizon: Option<i64>,
+    /// Robust fusion's gate in permissible errors (> 0; 0 off). Default off.
+    pub isolation_gate: Option<f64>,
+    /// Own-sensor check's gate (m, > 0; 0 off). Default off.
+    pub own_gate_m: Option<f64>,
+    /// How fast the own-sensor gate widens while measurements are refused (m/s, ≥ 0). Default 1.
+    pub own_gate_growth_mps: Option<f64>,
     /// Formation control method: "proximity" (default), "leader_follower", "consensus" or
     /// "flocking" (baselines, default gains; the radio then carries what they need).
     pub method: Option<String>,

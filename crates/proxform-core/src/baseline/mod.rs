@@ -163,7 +163,7 @@ pub(crate) fn act(setup: &ControllerSetup, own: &State9, a: [f64; 3], attitude: 
     let r = state::difference(&hold, &target);
     let input = setup.input_toward(own, &r);
     let normalised_sq = setup.params().envelope.normalised_sq(&r);
-    Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas: 0, main_refs: 0 }
+    Decision::without_areas(Outcome::Adjusted { normalised_sq }, input)
 }
 
 /// Weighted mean attitude (wrapped around `base`) of desired states.

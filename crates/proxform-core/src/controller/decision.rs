@@ -38,11 +38,23 @@ pub struct Decision {
     pub occupied_areas: u16,
     /// Number of main references perceived.
     pub main_refs: u16,
+    /// Neighbours whose implied estimate X̂_ij the robust fusion left out this period
+    /// (`ControllerParams::isolation_gate`; always 0 without it).
+    pub isolated: u16,
+    /// The UAV did not trust its own measurement this period and flew on its own prediction
+    /// (`ControllerParams::own_gate_m`; always false without it).
+    pub own_suspect: bool,
 }
 
 impl Decision {
     /// Nothing perceived: fly on (METHOD §6 step 8, §8).
     pub fn alone() -> Self {
-        Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 }
+        Self::without_areas(Outcome::Alone, Input::zeros())
+    }
+
+    /// A decision that reports no areas, references or isolation (the baselines', a held
+    /// placeholder's).
+    pub fn without_areas(outcome: Outcome, input: Input) -> Self {
+        Decision { outcome, input, occupied_areas: 0, main_refs: 0, isolated: 0, own_suspect: false }
     }
 }

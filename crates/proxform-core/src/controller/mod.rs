@@ -16,6 +16,7 @@
 //! differences are then small and wrap correctly, and step 6's test is on `X_hold − O_i`.
 
 mod decision;
+mod fusion;
 mod params;
 mod setup;
 
@@ -24,6 +25,8 @@ use std::sync::Arc;
 pub use decision::{Decision, Outcome};
 pub use params::{ControllerParams, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
 pub use setup::ControllerSetup;
+
+use fusion::{Fusion, Implied};
 
 use crate::error::ConfigError;
 use crate::formation::{Formation, FormationSlot};
@@ -51,6 +54,11 @@ pub struct ProximityController {
     /// coasting track marked `TRACK`) and its squared distance (f32 is ample to rank
     /// neighbours). Working memory, allocated once.
     nearest: Box<[(u32, f32)]>,
+    /// Robust fusion's working memory (only with `isolation_gate`): allocated once.
+    fusion: Option<Box<Fusion>>,
+    /// The navigator, when known: the robust fusion never leaves it out, and weighs the others
+    /// against the UAVs no farther from it than this one.
+    navigator: Option<UavId>,
 }
 
 /// Steps 1-3 accumulated over the perceived neighbours, each estimate as `X̂_ij − X_hold`.
@@ -71,6 +79,8 @@ struct Estimates {
     main_refs: u16,
     /// Separation keeping: how far to move away from neighbours that come too close (m).
     push: [f64; 3],
+    /// Neighbours the robust fusion left out.
+    isolated: u16,
 }
 
 impl Estimates {
@@ -83,6 +93,30 @@ impl Estimates {
             c_sum: 0.0,
             main_refs: 0,
             push: [0.0; 3],
+            isolated: 0,
+        }
+    }
+
+    /// Adds one neighbour's estimate to the sums it belongs to: X̄_i's when it stands for an
+    /// area, X̂ᴰ_i's when it is a main reference.
+    fn add(&mut self, n: &Implied) {
+        if n.in_area {
+            self.sum_bar += n.f * n.x_hat;
+            self.w_bar += n.f;
+            self.n_bar += 1;
+        }
+        if let Some(c) = n.c {
+            self.add_reference(c, n.f, &n.x_hat);
+        }
+    }
+
+    /// Takes a neighbour's estimate: straight into the sums, or, with the robust fusion, into
+    /// its list to be weighed first.
+    #[inline]
+    fn take(&mut self, fusion: &mut Option<Box<Fusion>>, n: Implied) {
+        match fusion {
+            Some(fu) => fu.implied.push(n),
+            None => self.add(&n),
         }
     }
 
@@ -112,8 +146,30 @@ impl ProximityController {
         }
         let p = &setup.params;
         let m = p.areas.areas;
-        let tracks = NeighbourTracks::new(p.predictor, m + dependency.refs().len(), p.track_timeout_s, p.coast_accel_s);
-        Ok(Self { id, setup, formation, dependency, tracks, nearest: vec![(EMPTY, 0.0); m].into_boxed_slice() })
+        let slots = m + dependency.refs().len();
+        let tracks = NeighbourTracks::new(p.predictor, slots, p.track_timeout_s, p.coast_accel_s);
+        let fusion = p
+            .isolation_gate
+            .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
+        Ok(Self {
+            id,
+            setup,
+            formation,
+            dependency,
+            tracks,
+            nearest: vec![(EMPTY, 0.0); m].into_boxed_slice(),
+            fusion,
+            navigator: None,
+        })
+    }
+
+    /// Names the formation's navigator: the robust fusion (`isolation_gate`) never leaves it
+    /// out, and takes its median over the UAVs whose slots are no farther from the navigator's
+    /// than this UAV's own, so that the UAVs that follow this one cannot outvote those it
+    /// follows. Without it, every neighbour counts and may be left out.
+    pub fn with_navigator(mut self, navigator: UavId) -> Self {
+        self.navigator = self.formation.slot(navigator).map(|_| navigator);
+        self
     }
 
     /// A controller with its own [`ControllerSetup`] (convenient for a single UAV).
@@ -149,7 +205,13 @@ impl ProximityController {
 
     /// Bytes this controller holds on the heap (shared setup and formation excluded).
     pub fn heap_bytes(&self) -> usize {
-        self.tracks.heap_bytes() + std::mem::size_of_val(&*self.nearest)
+        self.tracks.heap_bytes()
+            + std::mem::size_of_val(&*self.nearest)
+            + self.fusion.as_ref().map_or(0, |f| {
+                std::mem::size_of::<Fusion>()
+                    + f.implied.capacity() * std::mem::size_of::<Implied>()
+                    + f.scratch.capacity() * std::mem::size_of::<f64>()
+            })
     }
 
     /// One update period at time `now_s`: `own` is the UAV's estimate of its own state X_i,
@@ -176,14 +238,16 @@ impl ProximityController {
         // Steps 5-6: keep the course while X_hold lies inside the envelope around O_i.
         let x_hold_minus_o = -o_i;
         let envelope = &params.envelope;
-        let (occupied_areas, main_refs) = (est.n_bar, est.main_refs);
+        let (occupied_areas, main_refs, isolated) = (est.n_bar, est.main_refs, est.isolated);
+        let decide =
+            |outcome, input| Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect: false };
         if envelope.contains(&x_hold_minus_o) {
-            return Decision { outcome: Outcome::Held, input: state::Input::zeros(), occupied_areas, main_refs };
+            return decide(Outcome::Held, state::Input::zeros());
         }
         // Step 7: the predictive input within the vehicle's limits.
         let normalised_sq = envelope.normalised_sq(&x_hold_minus_o);
         let input = setup.input_toward(own, &x_hold_minus_o);
-        Decision { outcome: Outcome::Adjusted { normalised_sq }, input, occupied_areas, main_refs }
+        decide(Outcome::Adjusted { normalised_sq }, input)
     }
 
     /// §2: fills S_i (`self.nearest`) with the nearest UAV per azimuth area, from the UAV's
@@ -251,8 +315,26 @@ impl ProximityController {
         x_hold: &State9,
         observations: &[Observation],
     ) -> Estimates {
-        let Self { setup, formation, dependency, tracks, nearest, .. } = self;
+        let Self { setup, formation, dependency, tracks, nearest, fusion, navigator, .. } = self;
         let (params, formation) = (&setup.params, &**formation);
+        let navigator = *navigator;
+        // The robust fusion's view of a neighbour: whether it may be left out, and whether it
+        // counts in the median.
+        let nav_slot = navigator.and_then(|n| formation.slot(n)).map(|s| s.offset_m);
+        let own_reach = nav_slot.map(|o| (slot_i.offset_m - o).norm());
+        let roles = |id: UavId| -> (bool, bool) {
+            if Some(id) == navigator {
+                return (false, true);
+            }
+            let upstream = match (nav_slot, own_reach, formation.slot(id)) {
+                (Some(o), Some(r), Some(s)) => (s.offset_m - o).norm() <= r + 1e-6,
+                _ => true,
+            };
+            (true, upstream)
+        };
+        if let Some(fu) = fusion {
+            fu.implied.clear();
+        }
         let dt = params.dt_s;
         let r2 = params.areas.sensing_range_m.powi(2);
         let separation = params.separation_m.unwrap_or(0.0);
@@ -277,13 +359,9 @@ impl ProximityController {
             if separation > 0.0 {
                 keep_apart(formation, id, &f_x_j, slot_i, x_hold, separation, &mut est.push);
             }
-            let Some(x_hat_ij) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
-            est.sum_bar += f * x_hat_ij;
-            est.w_bar += f;
-            est.n_bar += 1;
-            if let Some(c) = dependency.degree(id) {
-                est.add_reference(c, f, &x_hat_ij);
-            }
+            let Some(x_hat) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
+            let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
+            est.take(fusion, Implied { x_hat, f, c: dependency.degree(id), in_area: true, suspect, upstream });
         }
         // Step 3: main references perceived but not the nearest in their area.
         for r in 0..dependency.refs().len() {
@@ -313,8 +391,16 @@ impl ProximityController {
                     (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)))
                 }
             };
-            let Some(x_hat_ij) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
-            est.add_reference(c, f, &x_hat_ij);
+            let Some(x_hat) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
+            let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
+            est.take(fusion, Implied { x_hat, f, c: Some(c), in_area: false, suspect, upstream });
+        }
+        // Robust fusion: weigh each estimate by its distance from the others' median, then sum.
+        if let (Some(fu), Some(gate)) = (fusion, params.isolation_gate) {
+            est.isolated = fu.weigh(&params.envelope.thresholds, gate);
+            for n in fu.implied.iter().filter(|n| n.f > 0.0) {
+                est.add(n);
+            }
         }
         est
     }

@@ -60,6 +60,20 @@ pub struct ControllerParams {
     /// one-step input; H > 1 solves a quadratic program with Clarabel ([`crate::horizon`]).
     /// Default 1.
     pub horizon: u32,
+    /// Robust fusion (beyond the paper, METHOD §8), in permissible errors (> 0): with at least
+    /// three neighbours' estimates X̂_ij, each is compared with their per-axis median position;
+    /// one farther than `g`·Δ on some axis weighs less, linearly down to nothing at 2`g`·Δ, in
+    /// X̄_i and X̂ᴰ_i alike. `None` is the paper's plain means. Default `None`.
+    pub isolation_gate: Option<f64>,
+    /// Own-sensor check (beyond the paper, METHOD §8), in m (> 0): a measurement of the UAV's
+    /// own position farther than this from what its own model predicted (from its last
+    /// estimate and the input it applied) is suspect, and the UAV flies on that prediction
+    /// instead. `None` trusts every measurement. Default `None`.
+    pub own_gate_m: Option<f64>,
+    /// How fast the own-sensor check's gate widens while measurements are refused (m/s, ≥ 0),
+    /// the prediction's own drift: a measurement that stays away longer than the prediction can
+    /// be trusted is accepted again. Default 1 m/s.
+    pub own_gate_growth_mps: f64,
 }
 
 impl ControllerParams {
@@ -121,6 +135,19 @@ impl ControllerParams {
                 });
             }
         }
+        if let Some(g) = self.isolation_gate {
+            positive("isolation_gate", g)?;
+        }
+        if let Some(g) = self.own_gate_m {
+            positive("own_gate_m", g)?;
+        }
+        if !(self.own_gate_growth_mps.is_finite() && self.own_gate_growth_mps >= 0.0) {
+            return Err(ConfigError::OutOfRange {
+                field: "own_gate_growth_mps",
+                value: self.own_gate_growth_mps,
+                expected: "a finite speed ≥ 0 m/s",
+            });
+        }
         if !(1..=MAX_HORIZON).contains(&self.horizon) {
             return Err(ConfigError::OutOfRange {
                 field: "horizon",
@@ -166,6 +193,9 @@ impl Default for ControllerParams {
             own_filter_gain: 1.0,
             separation_m: None,
             horizon: 1,
+            isolation_gate: None,
+            own_gate_m: None,
+            own_gate_growth_mps: 1.0,
         }
     }
 }

@@ -209,7 +209,8 @@ pub fn encode(m: &Message) -> Vec<u8> {
             w.f64(c.t_s);
             w.f64(c.age_s);
             w.u8(outcome_code(&d.outcome));
-            w.pad(3);
+            w.u8(u8::from(d.own_suspect));
+            w.u16(d.isolated);
             w.u16(d.occupied_areas);
             w.u16(d.main_refs);
             w.f64(match d.outcome {
@@ -298,7 +299,12 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
         kind::COMMAND => {
             let (uav, run, k, t_s, age_s) = (r.uav("uav")?, r.u32()?, r.u64()?, r.f64()?, r.f64()?);
             let code = r.u8()?;
-            r.skip(3)?;
+            let own_suspect = match r.u8()? {
+                0 => false,
+                1 => true,
+                v => return Err(DecodeError::Field { field: "own_suspect", value: v.into() }),
+            };
+            let isolated = r.u16()?;
             let (occupied_areas, main_refs, normalised_sq) = (r.u16()?, r.u16()?, r.f64()?);
             let outcome = match code {
                 0 => Outcome::Held,
@@ -310,7 +316,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             for j in 0..input.len() {
                 input[j] = r.f64()?;
             }
-            let decision = Decision { outcome, input, occupied_areas, main_refs };
+            let decision = Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect };
             Message::Command(CommandMsg { uav, run, k, t_s, age_s, decision })
         }
         kind::CLOCK => {
@@ -392,16 +398,11 @@ mod tests {
                     input: Input::from_fn(|j, _| j as f64 * -0.01),
                     occupied_areas: 4,
                     main_refs: 2,
+                    isolated: 1,
+                    own_suspect: true,
                 },
             }),
-            Message::Command(CommandMsg {
-                uav: 5,
-                run: 1,
-                k: 4,
-                t_s: 0.4,
-                age_s: 0.0,
-                decision: Decision { outcome: Outcome::Alone, input: Input::zeros(), occupied_areas: 0, main_refs: 0 },
-            }),
+            Message::Command(CommandMsg { uav: 5, run: 1, k: 4, t_s: 0.4, age_s: 0.0, decision: Decision::alone() }),
             Message::Clock(ClockMsg {
                 mode: ClockMode::RealTime,
                 run: 2,

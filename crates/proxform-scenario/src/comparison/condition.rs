@@ -82,6 +82,12 @@ impl Condition {
         }
         sc.controller.method = Some(method.method.label().into());
         sc.controller.gains = method.gains.clone();
+        if let Some(extra) = &method.controller {
+            sc.controller = overlay(&sc.controller, extra);
+        }
+        if method.broadcast {
+            sc.radio.broadcast_all = Some(true);
+        }
         let base_name = base.name.as_deref().unwrap_or("scenario");
         sc.name = Some(format!("{base_name} / {} / {}", method.name, self.name));
         sc
@@ -95,4 +101,15 @@ impl Condition {
             source,
         })
     }
+}
+
+/// `base` with the keys of `extra` written over it (keys checked when the comparison was
+/// loaded; should one still not fit, the base is kept and the scenario check reports it).
+fn overlay(base: &crate::spec::ControllerSpec, extra: &toml::Table) -> crate::spec::ControllerSpec {
+    use serde::Deserialize as _;
+    let Ok(mut t) = toml::Table::try_from(base) else { return base.clone() };
+    for (k, v) in extra {
+        t.insert(k.clone(), v.clone());
+    }
+    crate::spec::ControllerSpec::deserialize(toml::Value::Table(t)).unwrap_or_else(|_| base.clone())
 }

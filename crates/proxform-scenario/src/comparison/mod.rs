@@ -9,6 +9,7 @@
 
 use proxform_core::controller::MAX_HORIZON;
 use proxform_core::{Method, UavId};
+use serde::Deserialize as _;
 
 mod condition;
 
@@ -53,7 +54,7 @@ fn value_error(file: &str, key: &str, message: String) -> CompareError {
 
 /// A method entry of a comparison file: a label, or a table with options.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, deny_unknown_fields)]
 pub enum MethodSpec {
     /// `"proximity"`, `"leader_follower"`, `"consensus"` or `"flocking"`, default gains.
     Label(String),
@@ -71,6 +72,12 @@ pub enum MethodSpec {
         /// The neighbour predictor: `"alpha_beta"` (default), `"constant_velocity"` or
         /// `"singer"` (the Kalman tracks, fed by every channel).
         predictor: Option<String>,
+        /// Further `[controller]` keys for this method, over the base scenario's, e.g.
+        /// `{ isolation_gate = 1.0, own_gate_m = 3.0 }`.
+        controller: Option<toml::Table>,
+        /// Every UAV broadcasts its state each period (`radio.broadcast_all`), so that the
+        /// method also hears its neighbours over the radio. Default false.
+        broadcast: Option<bool>,
     },
 }
 
@@ -133,6 +140,10 @@ pub struct MethodEntry {
     pub gains: Option<toml::Table>,
     /// The neighbour predictor (None: the base scenario's).
     pub predictor: Option<String>,
+    /// Further `[controller]` keys, as written (checked).
+    pub controller: Option<toml::Table>,
+    /// Every UAV broadcasts (the method hears its neighbours over the radio too).
+    pub broadcast: bool,
 }
 
 /// A checked comparison.
@@ -231,11 +242,17 @@ impl Comparison {
         }
         let mut methods = Vec::new();
         for (k, m) in spec.methods.iter().enumerate() {
-            let (label, name, horizon, gains, predictor) = match m {
-                MethodSpec::Label(l) => (l.as_str(), None, None, None, None),
-                MethodSpec::Table { method, name, horizon, gains, predictor } => {
-                    (method.as_str(), name.clone(), *horizon, gains.clone(), predictor.clone())
-                }
+            let (label, name, horizon, gains, predictor, controller, broadcast) = match m {
+                MethodSpec::Label(l) => (l.as_str(), None, None, None, None, None, None),
+                MethodSpec::Table { method, name, horizon, gains, predictor, controller, broadcast } => (
+                    method.as_str(),
+                    name.clone(),
+                    *horizon,
+                    gains.clone(),
+                    predictor.clone(),
+                    controller.clone(),
+                    *broadcast,
+                ),
             };
             let key = format!("methods[{}]", k + 1);
             let method = method_from(label, gains.as_ref())
@@ -262,7 +279,27 @@ impl Comparison {
             if methods.iter().any(|e: &MethodEntry| e.name == name) {
                 return Err(bad(key, format!("duplicate method name '{name}'")));
             }
-            methods.push(MethodEntry { name, method, horizon, gains, predictor });
+            if let Some(t) = &controller {
+                for reserved in ["method", "gains", "horizon", "predictor"] {
+                    if t.contains_key(reserved) {
+                        return Err(bad(
+                            format!("{key}.controller.{reserved}"),
+                            format!("give {reserved} as the method entry's own key"),
+                        ));
+                    }
+                }
+                crate::spec::ControllerSpec::deserialize(toml::Value::Table(t.clone()))
+                    .map_err(|e| bad(format!("{key}.controller"), e.message().to_string()))?;
+            }
+            methods.push(MethodEntry {
+                name,
+                method,
+                horizon,
+                gains,
+                predictor,
+                controller,
+                broadcast: broadcast.unwrap_or(false),
+            });
         }
         let mut conditions: Vec<Condition> = Vec::new();
         for (k, c) in spec.conditions.iter().enumerate() {
@@ -403,6 +440,12 @@ mod tests {
                 "methods[1]",
             ),
             (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
+                 methods = [{ method = 'proximity', controler = { isolation_gate = 1.0 } }]\n[[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods: each method is a name",
+            ),
+            (
                 "name = 'x'\nscenario = 'moon'\nseeds = 2\nmethods = ['proximity']\n[[condition]]\nname = 'a'\n".into(),
                 "scenario",
             ),
@@ -457,5 +500,30 @@ mod tests {
             m => panic!("{m:?}"),
         }
         assert_eq!(c.methods[0].name, "lf fast");
+    }
+
+    #[test]
+    fn controller_keys_and_broadcast_given_to_a_method_reach_its_cells() {
+        let text = "name = 'x'\nscenario = 'paper'\nseeds = 1\n\
+                    methods = ['proximity', { method = 'proximity', name = 'robust', broadcast = true, \
+                    controller = { isolation_gate = 1.5, own_gate_m = 2.0 } }]\n\
+                    [[condition]]\nname = 'a'\nradio_loss = 0.2\n";
+        let c = parse(text).expect("valid");
+        let sc = c.conditions[0].scenario(&c.base_spec, &c.methods[1]).expect("valid");
+        assert_eq!((sc.controller().isolation_gate, sc.controller().own_gate_m), (Some(1.5), Some(2.0)));
+        assert!(sc.radio().broadcast_all);
+        assert_eq!(sc.radio().loss, 0.2);
+        let plain = c.conditions[0].scenario(&c.base_spec, &c.methods[0]).expect("valid");
+        assert_eq!((plain.controller().isolation_gate, plain.radio().broadcast_all), (None, false));
+        for (bad, key) in [
+            ("isolation_gate = 1.5", "methods[2].controller"),
+            ("isolation_gate = 'high'", "methods[2].controller"),
+            ("predictor = 'singer'", "methods[2].controller.predictor"),
+        ] {
+            let text =
+                text.replace("isolation_gate = 1.5", &bad.replace("isolation_gate = 1.5", "isolation_gat = 1.5"));
+            let e = parse(&text).expect_err(key).to_string();
+            assert!(e.contains(key), "{e} should name {key}");
+        }
     }
 }

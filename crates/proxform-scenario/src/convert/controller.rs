@@ -88,6 +88,19 @@ pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<Control
         }
         p.own_filter_gain = v;
     }
+    if let Some(v) = c.isolation_gate {
+        p.isolation_gate = Some(non_negative("controller.isolation_gate", v)?).filter(|&g| g > 0.0);
+    }
+    if let Some(v) = c.own_gate_m {
+        let v = distance("controller.own_gate_m", non_negative("controller.own_gate_m", v)?)?;
+        p.own_gate_m = Some(v).filter(|&g| g > 0.0);
+    }
+    if let Some(v) = c.own_gate_growth_mps {
+        p.own_gate_growth_mps = non_negative("controller.own_gate_growth_mps", v)?;
+        if p.own_gate_m.is_none() {
+            return Err(err("controller.own_gate_growth_mps", "applies with controller.own_gate_m > 0 only"));
+        }
+    }
     let gains = || -> Result<(f64, f64), SpecError> {
         let alpha = c.predictor_alpha.unwrap_or(DEFAULT_ALPHA);
         let alpha = positive("controller.predictor_alpha", alpha)?;

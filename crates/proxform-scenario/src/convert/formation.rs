@@ -224,6 +224,35 @@ pub fn dependencies(
 
 /// Warnings for UAVs whose main references never lead, however far followed, to the navigator:
 /// they lean only on each other (or on nobody) and can drift away together.
+/// A warning naming the followers whose slots lie beyond both the radio's range and the
+/// sensing range of the navigator's slot: with `navigator_degree` they cannot hear it, and
+/// lean on their other references only.
+pub fn beyond_the_navigators_radio(
+    slots: &[FormationSlot],
+    navigator: UavId,
+    radio_range_m: f64,
+    sensing_range_m: f64,
+) -> Option<SpecError> {
+    let nav = slots.get(navigator.index())?.offset_m;
+    let reach = radio_range_m.max(sensing_range_m);
+    let far: Vec<usize> = (0..slots.len()).filter(|&i| (slots[i].offset_m - nav).norm() > reach).collect();
+    if far.is_empty() {
+        return None;
+    }
+    let shown: Vec<String> = far.iter().take(8).map(|i| (i + 1).to_string()).collect();
+    let more = if far.len() > 8 { format!(" and {} more", far.len() - 8) } else { String::new() };
+    Some(err(
+        "formation.dependencies.navigator_degree",
+        format!(
+            "UAV{} {}{more} fly beyond the navigator's radio range ({} m) and sensing range: they cannot hear it \
+             and lean on their other references only",
+            if far.len() > 1 { "s" } else { "" },
+            shown.join(", "),
+            super::values::show(radio_range_m)
+        ),
+    ))
+}
+
 pub fn drifting_groups(deps: &[DependencySet], navigator: UavId, f: &FormationSpec) -> Vec<SpecError> {
     let n = deps.len();
     // Who leans on whom, reversed: from the navigator, follow the UAVs that name each UAV

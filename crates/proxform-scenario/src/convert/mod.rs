@@ -116,6 +116,13 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let wind = world::wind(&spec.wind)?;
         let faults = world::faults(&spec.fault, n)?;
         let method = controller::method(&spec.controller)?;
+        // Derived tables that lean on the navigator hear it over the radio where it is out of
+        // sensing range: the navigator broadcasts.
+        let navigator_by_radio =
+            spec.formation.dependencies.as_ref().and_then(|d| d.navigator_degree).is_some_and(|v| v > 0.0);
+        if navigator_by_radio && !radio.broadcast_all && !beacons.contains(&navigator) {
+            beacons.push(navigator);
+        }
         // The radio carries what the method needs: the navigator's broadcasts or everybody's.
         match method.radio_need() {
             RadioNeed::None => {}
@@ -156,6 +163,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
         let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
         let mut warnings = world::faults_after(&faults, duration_s);
+        if navigator_by_radio {
+            warnings.extend(formation::beyond_the_navigators_radio(
+                &formation.slots,
+                navigator,
+                radio.range_m,
+                setup.params().areas.sensing_range_m,
+            ));
+        }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &spec.formation));
         let agents = AgentSetup::new(method, navigator, setup, formation, dependencies)
             .map_err(|e| err("controller.method", e.to_string()))?;

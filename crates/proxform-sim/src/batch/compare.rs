@@ -52,8 +52,10 @@ pub struct CompareRow {
 /// where nobody broadcasts, the radio's loss, delay and blackout change nothing, and are
 /// dropped so that such cells share their runs (bit-identical either way).
 pub fn effective(c: &Condition, method: &MethodEntry, base: &Scenario) -> Condition {
-    let deaf =
-        method.method.radio_need() == RadioNeed::None && base.beacons().is_empty() && !base.radio().broadcast_all;
+    let deaf = method.method.radio_need() == RadioNeed::None
+        && !method.broadcast
+        && base.beacons().is_empty()
+        && !base.radio().broadcast_all;
     if deaf {
         Condition { name: String::new(), radio_loss: 0.0, radio_delay_s: 0.0, blackout: false, ..c.clone() }
     } else {

@@ -98,6 +98,43 @@ pub struct Summary {
     pub per_uav_worst: Vec<AxisErrors>,
     /// Per follower: mean adjustments per run.
     pub per_uav_adjustments: Vec<f64>,
+    /// Faults of some UAVs' own sensors, when the scenario has any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensor_faults: Option<SensorFaultSummary>,
+    /// What the robust fusion and the own-sensor check did, when either is on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub isolation: Option<IsolationSummary>,
+}
+
+/// How the formations of a batch rode out faults of some UAVs' own sensors.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SensorFaultSummary {
+    /// Fraction of runs in which every follower without a sensor fault stayed within every
+    /// allowable error.
+    pub healthy_pass_fraction: f64,
+    /// Largest |error| of the followers without a sensor fault, over all runs.
+    pub healthy_worst_abs_error: AxisErrors,
+    /// Time from a fault's end until the slowest faulty UAV was back within its allowable
+    /// errors for good (s): median over runs.
+    pub rejoin_s_median: f64,
+    /// The same, 99th percentile (nearest rank; ∞ when some UAV never came back).
+    pub rejoin_s_p99: f64,
+    /// The same, largest.
+    pub rejoin_s_max: f64,
+}
+
+/// What the robust fusion and the own-sensor check did over a batch (means over runs, but the
+/// episodes, a total).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct IsolationSummary {
+    /// Seconds per follower in which its fusion left at least one neighbour out.
+    pub isolating_s_per_uav: f64,
+    /// Neighbours left out per follower-second.
+    pub isolated_per_uav_s: f64,
+    /// Seconds per follower flown on its own prediction.
+    pub own_suspect_s_per_uav: f64,
+    /// Episodes of refused own measurements, all runs and followers.
+    pub own_suspect_episodes: u64,
 }
 
 /// Swarm and control metrics of a batch (means over runs, but `close_pairs_max` and the
@@ -383,7 +420,50 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         per_uav: runs.first().map(|r| r.per_uav.iter().map(|u| u.uav + 1).collect()).unwrap_or_default(),
         per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
         per_uav_adjustments: per_uav_adj,
+        sensor_faults: sensor_fault_summary(runs),
+        isolation: runs
+            .iter()
+            .all(|r| r.isolation.is_some())
+            .then(|| {
+                let mean = |f: &dyn Fn(&crate::measure::metrics::IsolationMetrics) -> f64| {
+                    runs.iter().filter_map(|r| r.isolation.as_ref()).map(f).sum::<f64>() / n
+                };
+                IsolationSummary {
+                    isolating_s_per_uav: mean(&|m| m.isolating_s_per_uav),
+                    isolated_per_uav_s: mean(&|m| m.isolated_per_uav_s),
+                    own_suspect_s_per_uav: mean(&|m| m.own_suspect_s_per_uav),
+                    own_suspect_episodes: runs
+                        .iter()
+                        .filter_map(|r| r.isolation.as_ref())
+                        .map(|m| m.own_suspect_episodes)
+                        .sum(),
+                }
+            })
+            .filter(|_| !runs.is_empty()),
     }
+}
+
+/// The sensor-fault part of a batch's summary (None when its runs had no sensor fault).
+fn sensor_fault_summary(runs: &[RunSummary]) -> Option<SensorFaultSummary> {
+    let faults: Vec<_> = runs.iter().filter_map(|r| r.sensor_faults).collect();
+    if faults.is_empty() {
+        return None;
+    }
+    let mut worst = [0.0f64; 6];
+    for f in &faults {
+        for k in 0..6 {
+            worst[k] = worst[k].max(f.healthy_max_abs_error[k]);
+        }
+    }
+    let mut rejoin: Vec<f64> = faults.iter().map(|f| f.rejoin_s).collect();
+    let p99 = quantile_of(&mut rejoin, 0.99);
+    Some(SensorFaultSummary {
+        healthy_pass_fraction: faults.iter().filter(|f| f.healthy_pass).count() as f64 / faults.len() as f64,
+        healthy_worst_abs_error: AxisErrors::from_si(worst),
+        rejoin_s_median: crate::measure::stats::quantile(&rejoin, 0.5),
+        rejoin_s_p99: p99,
+        rejoin_s_max: rejoin.last().copied().unwrap_or(0.0),
+    })
 }
 
 #[cfg(test)]
@@ -415,6 +495,8 @@ mod tests {
             order_min: 1.0,
             connectivity_min: 1.0,
             alone_s_per_uav: 0.0,
+            sensor_faults: None,
+            isolation: None,
         }
     }
 

@@ -79,6 +79,35 @@ pub struct RunSummary {
     pub connectivity_min: f64,
     /// Seconds per follower flown alone (nothing perceived), mean.
     pub alone_s_per_uav: f64,
+    /// Faults of a UAV's own sensor (stuck or glitching), when the scenario has any.
+    pub sensor_faults: Option<SensorFaultMetrics>,
+    /// What the robust fusion and the own-sensor check did, when either is on.
+    pub isolation: Option<IsolationMetrics>,
+}
+
+/// How a formation rode out faults of some UAVs' own sensors.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SensorFaultMetrics {
+    /// Every follower without a sensor fault stayed within every allowable error.
+    pub healthy_pass: bool,
+    /// Largest |error| over the followers without a sensor fault: x, y, z (m), α, β, γ (rad).
+    pub healthy_max_abs_error: [f64; 6],
+    /// How long after its fault ended the slowest faulty UAV was back within every allowable
+    /// error for good (s; 0 when it never left them; ∞ when it was still out at the end).
+    pub rejoin_s: f64,
+}
+
+/// What the robust fusion and the own-sensor check did over a run.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct IsolationMetrics {
+    /// Seconds per follower in which its fusion left at least one neighbour out.
+    pub isolating_s_per_uav: f64,
+    /// Neighbours left out, summed over followers and steps, per follower-second.
+    pub isolated_per_uav_s: f64,
+    /// Seconds per follower flown on its own prediction (own measurement refused).
+    pub own_suspect_s_per_uav: f64,
+    /// Episodes of refused own measurements, all followers.
+    pub own_suspect_episodes: u64,
 }
 
 impl RunSummary {
@@ -98,6 +127,9 @@ struct Acc {
     within: u64,
     follower_steps: u64,
     effort: f64,
+    isolating: u64,
+    isolated: u64,
+    suspect: u64,
 }
 
 /// Observer accumulating a [`RunSummary`].
@@ -121,6 +153,18 @@ pub struct RunMetrics {
     connectivity_min: f64,
     dt: f64,
     grid: proxform_core::grid::NeighbourGrid,
+    /// UAVs with a sensor fault (sorted) and when their last one ends (s).
+    faulty: Vec<(usize, f64)>,
+    /// Per faulty UAV: the last time it was outside its allowable errors.
+    last_out: Vec<f64>,
+    /// Largest |error| of the followers without a sensor fault.
+    healthy_max: [f64; 6],
+    /// Whether the robust fusion or the own-sensor check is on.
+    isolating: bool,
+    /// Per UAV: whether it refused its own measurement in the previous step (episodes).
+    suspect_before: Vec<bool>,
+    suspect_episodes: u64,
+    t_last: f64,
 }
 
 /// Steps between connectivity samples for swarms larger than [`CONNECTIVITY_EVERY_STEP_UP_TO`].
@@ -153,6 +197,16 @@ impl RunMetrics {
             connectivity_min: f64::INFINITY,
             dt: scenario.dt_s(),
             grid: proxform_core::grid::NeighbourGrid::new(),
+            faulty: sensor_faulty(scenario),
+            last_out: vec![f64::NEG_INFINITY; sensor_faulty(scenario).len()],
+            healthy_max: [0.0; 6],
+            isolating: {
+                let p = scenario.controller();
+                p.isolation_gate.is_some() || p.own_gate_m.is_some()
+            },
+            suspect_before: Vec::new(),
+            suspect_episodes: 0,
+            t_last: 0.0,
         }
     }
 
@@ -222,6 +276,34 @@ impl RunMetrics {
             order_min: if self.order_min.is_finite() { self.order_min } else { 1.0 },
             connectivity_min: if self.connectivity_min.is_finite() { self.connectivity_min } else { 1.0 },
             alone_s_per_uav: self.total.alone as f64 * self.dt / self.followers.max(1) as f64,
+            sensor_faults: (!self.faulty.is_empty()).then(|| SensorFaultMetrics {
+                healthy_pass: self.total.follower_steps > 0
+                    && self.healthy_max.iter().zip(&self.allowable).all(|(v, a)| v <= a),
+                healthy_max_abs_error: self.healthy_max,
+                rejoin_s: self
+                    .faulty
+                    .iter()
+                    .zip(&self.last_out)
+                    .map(
+                        |(&(_, end), &out)| {
+                            if out >= self.t_last - 1e-9 {
+                                f64::INFINITY
+                            } else {
+                                (out + self.dt - end).max(0.0)
+                            }
+                        },
+                    )
+                    .fold(0.0, f64::max),
+            }),
+            isolation: self.isolating.then(|| {
+                let per = self.dt / self.followers.max(1) as f64;
+                IsolationMetrics {
+                    isolating_s_per_uav: self.total.isolating as f64 * per,
+                    isolated_per_uav_s: self.total.isolated as f64 / fs / self.dt,
+                    own_suspect_s_per_uav: self.total.suspect as f64 * per,
+                    own_suspect_episodes: self.suspect_episodes,
+                }
+            }),
             run,
             pass,
             followers: self.followers,
@@ -245,6 +327,27 @@ impl RunMetrics {
             duration_s,
         }
     }
+}
+
+/// The UAVs with a fault of their own sensor (stuck or glitching), sorted, each with the end of
+/// its last such fault (s).
+fn sensor_faulty(scenario: &Scenario) -> Vec<(usize, f64)> {
+    use proxform_scenario::faults::Fault;
+    let mut out: Vec<(usize, f64)> = Vec::new();
+    for f in scenario.faults() {
+        let (uav, end) = match *f {
+            Fault::Glitch { uav, at_s, duration_s, .. } | Fault::StuckSensor { uav, at_s, duration_s } => {
+                (uav.index(), at_s + duration_s)
+            }
+            _ => continue,
+        };
+        match out.iter_mut().find(|o| o.0 == uav) {
+            Some(o) => o.1 = o.1.max(end),
+            None => out.push((uav, end)),
+        }
+    }
+    out.sort_by_key(|o| o.0);
+    out
 }
 
 #[inline]
@@ -278,10 +381,12 @@ struct Partial {
     radio_used: u64,
     active: u64,
     heading: [f64; 3],
+    healthy_max: [f64; 6],
 }
 
 fn partial(
     nav: usize,
+    faulty: &[(usize, f64)],
     scenario: &Scenario,
     frame: &StepFrame<'_>,
     reference: &State9,
@@ -308,6 +413,14 @@ fn partial(
         }
         let e = formation_error_to(scenario, frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
+        if faulty.binary_search_by_key(&i, |f| f.0).is_err() {
+            for k in 0..6 {
+                p.healthy_max[k] = p.healthy_max[k].max(e[k].abs());
+            }
+        }
+        p.acc.isolating += u64::from(u.isolated > 0);
+        p.acc.isolated += u64::from(u.isolated);
+        p.acc.suspect += u64::from(u.own_suspect);
         if e.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a) {
             p.acc.within += 1;
         }
@@ -335,7 +448,9 @@ impl Observer for RunMetrics {
         self.separation.observe(frame.states, frame.active);
         self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
-        let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| partial(nav, scenario, frame, &reference, r));
+        let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| {
+            partial(nav, &self.faulty, scenario, frame, &reference, r)
+        });
         let mut active = 0u64;
         let mut heading = [0.0f64; 3];
         for p in parts {
@@ -349,6 +464,12 @@ impl Observer for RunMetrics {
             self.total.within += p.acc.within;
             self.total.follower_steps += p.acc.follower_steps;
             self.total.effort += p.acc.effort;
+            self.total.isolating += p.acc.isolating;
+            self.total.isolated += p.acc.isolated;
+            self.total.suspect += p.acc.suspect;
+            for k in 0..6 {
+                self.healthy_max[k] = self.healthy_max[k].max(p.healthy_max[k]);
+            }
             self.model_sq += p.model_sq;
             self.model_n += p.model_n;
             self.radio_used += p.radio_used;
@@ -364,6 +485,23 @@ impl Observer for RunMetrics {
         if n <= CONNECTIVITY_EVERY_STEP_UP_TO || frame.k % CONNECTIVITY_STRIDE == 0 {
             let c = self.connectivity(frame);
             self.connectivity_min = self.connectivity_min.min(c);
+        }
+        self.t_last = frame.t;
+        for (&(i, _), out) in self.faulty.iter().zip(self.last_out.iter_mut()) {
+            if !frame.active[i] {
+                continue;
+            }
+            let e = formation_error_to(scenario, frame.states, &reference, i);
+            if !e.iter().zip(&self.allowable).all(|(e, a)| e.abs() <= *a) {
+                *out = frame.t;
+            }
+        }
+        if self.isolating && self.total.suspect > 0 {
+            self.suspect_before.resize(n, false);
+            for (u, before) in frame.uavs.iter().zip(self.suspect_before.iter_mut()) {
+                self.suspect_episodes += u64::from(u.own_suspect && !*before);
+                *before = u.own_suspect;
+            }
         }
         for (i, acc) in self.sample.iter_mut() {
             if !frame.active[*i] {

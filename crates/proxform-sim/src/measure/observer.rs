@@ -38,6 +38,10 @@ pub struct UavStep {
     pub radio_used: u16,
     /// Size of its input: the root sum of squares of each input over its per-step limit.
     pub effort: f32,
+    /// Neighbours its robust fusion left out in the step.
+    pub isolated: u16,
+    /// It flew on its own prediction, its own measurement failing the own-sensor check.
+    pub own_suspect: bool,
 }
 
 /// Something that watches a run.

@@ -263,6 +263,8 @@ impl StepContext<'_> {
                 *next = sc.path().state_at(self.t + dt, self.start);
                 aux.outcome = None;
                 aux.model_error = [0.0; 9];
+                aux.isolated = 0;
+                aux.own_suspect = false;
                 continue;
             };
             let applied = s.applied[b];
@@ -302,6 +304,8 @@ impl StepContext<'_> {
             };
             aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
             aux.outcome = Some(decision.outcome);
+            aux.isolated = decision.isolated;
+            aux.own_suspect = decision.own_suspect;
             let scale = vehicle.input_scale(dt);
             aux.effort = (0..vehicle.n_inputs())
                 .map(|j| if scale[j] > 0.0 { (decision.input[j] / scale[j]).powi(2) } else { 0.0 })

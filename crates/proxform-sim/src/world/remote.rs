@@ -76,7 +76,7 @@ pub struct StepRequest<'a> {
 
 /// The decision of an agent that did not answer in time: hold the course (no new input).
 pub fn holding() -> Decision {
-    Decision { outcome: Outcome::Held, input: Input::zeros(), occupied_areas: 0, main_refs: 0 }
+    Decision::without_areas(Outcome::Held, Input::zeros())
 }
 
 /// Followers whose agents run outside the engine.

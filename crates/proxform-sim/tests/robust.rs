@@ -1,0 +1,138 @@
+//! The robust settings on the shipped scenarios that measure them (README, "Robust formation
+//! keeping"): each check fails when its mechanism is switched off.
+
+use proxform_scenario::load::{check, parse_spec};
+use proxform_scenario::{Scenario, ScenarioSpec};
+use proxform_sim::{run_batch, RunOptions, Summary};
+
+fn file(name: &str) -> (ScenarioSpec, String) {
+    let path = format!("{}/../../scenarios/{name}", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).expect("shipped scenario");
+    (parse_spec(&text, name).expect("valid"), text)
+}
+
+fn scenario(name: &str, edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
+    let (spec, text) = file(name);
+    check(spec.with(edit), &text, name).expect("valid")
+}
+
+fn batch(s: &Scenario, runs: u64) -> Summary {
+    run_batch(s, RunOptions::default(), 1, runs, None, &|| {}).summary
+}
+
+/// Switches off the robust settings: no navigator in the derived tables, plain means, every
+/// own measurement trusted.
+fn plain(s: &mut ScenarioSpec) {
+    if let Some(d) = s.formation.dependencies.as_mut() {
+        d.navigator_degree = Some(0.0);
+    }
+    s.controller.isolation_gate = Some(0.0);
+    s.controller.own_gate_m = Some(0.0);
+}
+
+#[test]
+fn a_stuck_sensor_and_a_glitch_leave_the_other_uavs_in_place() {
+    let robust = batch(&scenario("fault-triangle10.toml", |_| {}), 60);
+    let f = robust.sensor_faults.as_ref().expect("the scenario has sensor faults");
+    assert!(f.healthy_pass_fraction >= 0.98, "{f:?}");
+    assert!(f.rejoin_s_max <= 10.0, "{f:?}");
+    let i = robust.isolation.as_ref().expect("the checks are on");
+    // Two faults a run, each refused for its whole length: 5 s and 3 s over nine followers.
+    assert_eq!(i.own_suspect_episodes, 2 * 60, "{i:?}");
+    assert!((i.own_suspect_s_per_uav - 8.0 / 9.0).abs() < 0.05, "{i:?}");
+
+    let without = batch(&scenario("fault-triangle10.toml", plain), 20);
+    let f = without.sensor_faults.as_ref().expect("sensor faults");
+    assert!(f.healthy_pass_fraction <= 0.1, "{f:?}");
+    assert!(f.rejoin_s_max > 10.0, "{f:?}");
+    assert!(without.isolation.is_none());
+}
+
+#[test]
+fn the_robust_fusion_alone_keeps_the_others_from_following_a_uav_that_flies_off() {
+    // The paper's formation; UAV2's own sensor sticks for 5 s at 40 s and nothing checks it:
+    // UAV2 believes the reading and flies off by tens of metres. UAV3 weighs it against the
+    // navigator, UAVs 5 and 6 against the median of the three UAVs ahead of them. Separation
+    // keeping is off, so that what the test sees is the fusion (with it on, the others also
+    // move aside as UAV2 passes).
+    let worst_of = |s: &Summary, uavs: &[u32]| {
+        uavs.iter()
+            .map(|&u| {
+                let k = s.per_uav.iter().position(|&v| v == u).expect("detail");
+                let w = s.per_uav_worst[k].as_array();
+                w[0].max(w[1]).max(w[2])
+            })
+            .fold(0.0, f64::max)
+    };
+    let paper = |gate: f64| {
+        Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
+            s.controller.isolation_gate = Some(gate);
+            s.controller.separation_m = Some(0.0);
+            s.fault = vec![proxform_scenario::spec::FaultSpec {
+                kind: Some("stuck_sensor".into()),
+                uav: Some(2),
+                at_s: Some(40.0),
+                duration_s: Some(5.0),
+                offset_m: None,
+            }];
+        }))
+        .expect("valid")
+    };
+    let fused = batch(&paper(1.0), 20);
+    let plain = batch(&paper(0.0), 20);
+    assert!(worst_of(&fused, &[3, 5, 6]) < 1.5, "{}", worst_of(&fused, &[3, 5, 6]));
+    assert!(worst_of(&plain, &[3, 5, 6]) > 10.0, "{}", worst_of(&plain, &[3, 5, 6]));
+    assert!(fused.isolation.as_ref().is_some_and(|i| i.isolated_per_uav_s > 0.5), "{:?}", fused.isolation);
+}
+
+#[test]
+fn the_navigator_in_the_tables_keeps_the_errors_of_the_last_rank_near_the_first() {
+    // depth-v20: the first rank is UAVs 2 and 3, the last UAV 20 (per-UAV detail in the summary).
+    let ratio = |s: &Summary| {
+        let worst = |uav: u32| {
+            let k = s.per_uav.iter().position(|&u| u == uav).expect("detail");
+            let (w, a) = (s.per_uav_worst[k].as_array(), s.allowable_error.as_array());
+            (0..6).map(|j| w[j] / a[j]).fold(0.0, f64::max)
+        };
+        worst(20) / worst(2).max(worst(3))
+    };
+    let robust = batch(&scenario("depth-v20.toml", |_| {}), 30);
+    assert!(ratio(&robust) <= 1.5, "{}", ratio(&robust));
+    let without = batch(&scenario("depth-v20.toml", plain), 30);
+    assert!(ratio(&without) > 4.0, "{}", ratio(&without));
+}
+
+#[test]
+fn the_paper_under_loss_on_every_channel_holds_with_the_robust_settings() {
+    let robust = batch(&scenario("paper-robust-loss30.toml", |_| {}), 300);
+    assert!(robust.pass_fraction >= 0.99, "{}", robust.pass_fraction);
+    // The same loss on the paper's own method: onboard sensing only, plain means.
+    let paper = batch(
+        &scenario("paper-robust-loss30.toml", |s| {
+            plain(s);
+            s.radio.broadcast_all = Some(false);
+        }),
+        300,
+    );
+    assert!(paper.pass_fraction < 0.9, "{}", paper.pass_fraction);
+    // Undisturbed, the robust settings cost nothing measurable: p99 within 10 % of the paper's.
+    let calm = |s: &mut ScenarioSpec| {
+        s.sensing.dropout = Some(0.0);
+        s.radio.loss = Some(0.0);
+    };
+    let robust = batch(&scenario("paper-robust-loss30.toml", calm), 300);
+    let paper = batch(&Scenario::try_from(proxform_scenario::builtin::paper_spec()).expect("valid"), 300);
+    assert_eq!(robust.pass_fraction, 1.0);
+    let (r, p) = (robust.p99_abs_error.as_array(), paper.p99_abs_error.as_array());
+    for k in 0..6 {
+        assert!(r[k] <= 1.1 * p[k], "axis {k}: {} against {}", r[k], p[k]);
+    }
+}
+
+#[test]
+fn the_navigator_where_perceivable_lifts_the_paper_under_onboard_loss() {
+    let with = batch(&scenario("paper-dropout30-navigator.toml", |_| {}), 400);
+    let without = batch(&scenario("paper-dropout30.toml", |_| {}), 400);
+    assert!(with.pass_fraction >= 0.975, "{}", with.pass_fraction);
+    assert!(without.pass_fraction < 0.85, "{}", without.pass_fraction);
+}
