@@ -20,6 +20,13 @@ fn batch(s: &Scenario, runs: u64) -> Summary {
     run_batch(s, RunOptions::default(), 1, runs, None, &|| {}).summary
 }
 
+/// UAV `uav`'s largest error over its allowable error, worst axis, over a batch.
+fn worst_over_allowable(s: &Summary, uav: u32) -> f64 {
+    let k = s.per_uav.iter().position(|&u| u == uav).expect("per-UAV detail");
+    let (w, a) = (s.per_uav_worst[k].as_array(), s.allowable_error.as_array());
+    (0..6).map(|j| w[j] / a[j]).fold(0.0, f64::max)
+}
+
 /// Switches off the robust settings: no navigator in the derived tables, plain means, every
 /// own measurement trusted.
 fn plain(s: &mut ScenarioSpec) {
@@ -88,18 +95,32 @@ fn the_robust_fusion_alone_keeps_the_others_from_following_a_uav_that_flies_off(
 #[test]
 fn the_navigator_in_the_tables_keeps_the_errors_of_the_last_rank_near_the_first() {
     // depth-v20: the first rank is UAVs 2 and 3, the last UAV 20 (per-UAV detail in the summary).
-    let ratio = |s: &Summary| {
-        let worst = |uav: u32| {
-            let k = s.per_uav.iter().position(|&u| u == uav).expect("detail");
-            let (w, a) = (s.per_uav_worst[k].as_array(), s.allowable_error.as_array());
-            (0..6).map(|j| w[j] / a[j]).fold(0.0, f64::max)
-        };
-        worst(20) / worst(2).max(worst(3))
-    };
+    let ratio = |s: &Summary| worst_over_allowable(s, 20) / worst_over_allowable(s, 2).max(worst_over_allowable(s, 3));
     let robust = batch(&scenario("depth-v20.toml", |_| {}), 30);
     assert!(ratio(&robust) <= 1.5, "{}", ratio(&robust));
     let without = batch(&scenario("depth-v20.toml", plain), 30);
     assert!(ratio(&without) > 4.0, "{}", ratio(&without));
+    // Another shape and gust: a column of 12 (first rank UAV2, last UAV12), the gust from
+    // behind-right and climbing.
+    let column = |s: &mut ScenarioSpec| {
+        if let Some(shape) = s.formation.shape.as_mut() {
+            shape.kind = Some("column".into());
+            shape.uavs = Some(12);
+            shape.angle_deg = None;
+        }
+        s.wind.gust_peak_kmh = Some([-15.0, -40.0, 8.0]);
+    };
+    let column_ratio = |s: &Summary| worst_over_allowable(s, 12) / worst_over_allowable(s, 2);
+    let robust = batch(&scenario("depth-v20.toml", column), 30);
+    assert!(column_ratio(&robust) <= 1.5, "{}", column_ratio(&robust));
+    let without = batch(
+        &scenario("depth-v20.toml", |s| {
+            column(s);
+            plain(s);
+        }),
+        30,
+    );
+    assert!(column_ratio(&without) > 4.0, "{}", column_ratio(&without));
 }
 
 #[test]
