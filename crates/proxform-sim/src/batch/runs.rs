@@ -114,8 +114,9 @@ pub struct SensorFaultSummary {
     pub healthy_pass_fraction: f64,
     /// Largest |error| of the followers without a sensor fault, over all runs.
     pub healthy_worst_abs_error: AxisErrors,
-    /// Time from a fault's end until the slowest faulty UAV was back within its allowable
-    /// errors for good (s): median over runs.
+    /// Time from a fault's end until its UAV was back within its allowable errors, until its
+    /// next fault or the end of the flight, the slowest of each run's faults (s): median over
+    /// runs.
     pub rejoin_s_median: f64,
     /// The same, 99th percentile (nearest rank; ∞ when some UAV never came back).
     pub rejoin_s_p99: f64,

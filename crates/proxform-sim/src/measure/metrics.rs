@@ -92,8 +92,9 @@ pub struct SensorFaultMetrics {
     pub healthy_pass: bool,
     /// Largest |error| over the followers without a sensor fault: x, y, z (m), α, β, γ (rad).
     pub healthy_max_abs_error: [f64; 6],
-    /// How long after its fault ended the slowest faulty UAV was back within every allowable
-    /// error for good (s; 0 when it never left them; ∞ when it was still out at the end).
+    /// How long after a fault ended its UAV was back within every allowable error, until its
+    /// next fault or the end of the flight (s; the slowest of the run's faults; 0 when it
+    /// never left them; ∞ when it was still out at the end).
     pub rejoin_s: f64,
 }
 
@@ -153,10 +154,12 @@ pub struct RunMetrics {
     connectivity_min: f64,
     dt: f64,
     grid: proxform_core::grid::NeighbourGrid,
-    /// UAVs with a sensor fault (sorted) and when their last one ends (s).
-    faulty: Vec<(usize, f64)>,
-    /// Per faulty UAV: the last time it was outside its allowable errors.
-    last_out: Vec<f64>,
+    /// UAVs with a sensor fault, sorted, each once.
+    faulty: Vec<usize>,
+    /// Each sensor fault's aftermath: its UAV, when the fault ends, when the UAV's next
+    /// sensor fault starts (∞ for its last), and the last time in between that the UAV was
+    /// outside its allowable errors.
+    aftermaths: Vec<Aftermath>,
     /// Largest |error| of the followers without a sensor fault.
     healthy_max: [f64; 6],
     /// Whether the robust fusion or the own-sensor check is on.
@@ -197,8 +200,12 @@ impl RunMetrics {
             connectivity_min: f64::INFINITY,
             dt: scenario.dt_s(),
             grid: proxform_core::grid::NeighbourGrid::new(),
-            faulty: sensor_faulty(scenario),
-            last_out: vec![f64::NEG_INFINITY; sensor_faulty(scenario).len()],
+            faulty: {
+                let mut u: Vec<usize> = aftermaths(scenario).iter().map(|a| a.uav).collect();
+                u.dedup();
+                u
+            },
+            aftermaths: aftermaths(scenario),
             healthy_max: [0.0; 6],
             isolating: {
                 let p = scenario.controller();
@@ -281,18 +288,15 @@ impl RunMetrics {
                     && self.healthy_max.iter().zip(&self.allowable).all(|(v, a)| v <= a),
                 healthy_max_abs_error: self.healthy_max,
                 rejoin_s: self
-                    .faulty
+                    .aftermaths
                     .iter()
-                    .zip(&self.last_out)
-                    .map(
-                        |(&(_, end), &out)| {
-                            if out >= self.t_last - 1e-9 {
-                                f64::INFINITY
-                            } else {
-                                (out + self.dt - end).max(0.0)
-                            }
-                        },
-                    )
+                    .map(|a| {
+                        if a.last_out >= self.t_last - 1e-9 {
+                            f64::INFINITY
+                        } else {
+                            (a.last_out + self.dt - a.end_s).max(0.0)
+                        }
+                    })
                     .fold(0.0, f64::max),
             }),
             isolation: self.isolating.then(|| {
@@ -329,25 +333,36 @@ impl RunMetrics {
     }
 }
 
-/// The UAVs with a fault of their own sensor (stuck or glitching), sorted, each with the end of
-/// its last such fault (s).
-fn sensor_faulty(scenario: &Scenario) -> Vec<(usize, f64)> {
+/// The time after one sensor fault of a UAV, until its next one.
+#[derive(Debug, Clone, Copy)]
+struct Aftermath {
+    uav: usize,
+    end_s: f64,
+    until_s: f64,
+    last_out: f64,
+}
+
+/// Every fault of a UAV's own sensor (stuck or glitching), by UAV and time.
+fn aftermaths(scenario: &Scenario) -> Vec<Aftermath> {
     use proxform_scenario::faults::Fault;
-    let mut out: Vec<(usize, f64)> = Vec::new();
-    for f in scenario.faults() {
-        let (uav, end) = match *f {
+    let mut out: Vec<(usize, f64, f64)> = scenario
+        .faults()
+        .iter()
+        .filter_map(|f| match *f {
             Fault::Glitch { uav, at_s, duration_s, .. } | Fault::StuckSensor { uav, at_s, duration_s } => {
-                (uav.index(), at_s + duration_s)
+                Some((uav.index(), at_s, at_s + duration_s))
             }
-            _ => continue,
-        };
-        match out.iter_mut().find(|o| o.0 == uav) {
-            Some(o) => o.1 = o.1.max(end),
-            None => out.push((uav, end)),
-        }
-    }
-    out.sort_by_key(|o| o.0);
-    out
+            _ => None,
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    (0..out.len())
+        .map(|k| {
+            let (uav, _, end_s) = out[k];
+            let until_s = out.get(k + 1).filter(|n| n.0 == uav).map_or(f64::INFINITY, |n| n.1);
+            Aftermath { uav, end_s, until_s, last_out: f64::NEG_INFINITY }
+        })
+        .collect()
 }
 
 #[inline]
@@ -386,7 +401,7 @@ struct Partial {
 
 fn partial(
     nav: usize,
-    faulty: &[(usize, f64)],
+    faulty: &[usize],
     scenario: &Scenario,
     frame: &StepFrame<'_>,
     reference: &State9,
@@ -413,7 +428,7 @@ fn partial(
         }
         let e = formation_error_to(scenario, frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
-        if faulty.binary_search_by_key(&i, |f| f.0).is_err() {
+        if faulty.binary_search(&i).is_err() {
             for k in 0..6 {
                 p.healthy_max[k] = p.healthy_max[k].max(e[k].abs());
             }
@@ -487,13 +502,14 @@ impl Observer for RunMetrics {
             self.connectivity_min = self.connectivity_min.min(c);
         }
         self.t_last = frame.t;
-        for (&(i, _), out) in self.faulty.iter().zip(self.last_out.iter_mut()) {
-            if !frame.active[i] {
+        for a in self.aftermaths.iter_mut() {
+            let t = frame.t;
+            if !frame.active[a.uav] || t < a.end_s - 1e-9 || t >= a.until_s - 1e-9 {
                 continue;
             }
-            let e = formation_error_to(scenario, frame.states, &reference, i);
-            if !e.iter().zip(&self.allowable).all(|(e, a)| e.abs() <= *a) {
-                *out = frame.t;
+            let e = formation_error_to(scenario, frame.states, &reference, a.uav);
+            if !e.iter().zip(&self.allowable).all(|(e, al)| e.abs() <= *al) {
+                a.last_out = t;
             }
         }
         if self.isolating && self.total.suspect > 0 {
@@ -533,6 +549,48 @@ mod tests {
 
     fn step(outcome: Outcome, effort: f32) -> UavStep {
         UavStep { outcome: Some(outcome), effort, radio_used: 1, ..UavStep::default() }
+    }
+
+    #[test]
+    fn a_faulty_uav_is_judged_apart_and_its_return_timed_after_each_fault() {
+        use proxform_scenario::spec::FaultSpec;
+        let glitch = |at_s: f64| FaultSpec {
+            kind: Some("glitch".into()),
+            uav: Some(3),
+            at_s: Some(at_s),
+            duration_s: Some(1.0),
+            offset_m: Some([0.0, 5.0, 0.0]),
+        };
+        let sc = Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
+            s.fault = vec![glitch(1.0), glitch(5.0)];
+        }))
+        .expect("valid");
+        let good = in_slots(&sc);
+        let uavs = vec![UavStep::default(); 6];
+        let active = [true; 6];
+        let mut m = RunMetrics::new(&sc);
+        for k in 0..80u64 {
+            let t = k as f64 * 0.1;
+            let mut states = good.clone();
+            // UAV3 is 2 m off its slot from 1.0 s to 3.4 s (back at 3.5 s, 1.5 s after its first
+            // fault ended) and from 6.0 s to 6.4 s (back 0.5 s after the second): the slower
+            // return counts, though a later fault followed it.
+            if (1.0 - 1e-9..3.45).contains(&t) || (6.0 - 1e-9..6.45).contains(&t) {
+                states[2][Y] += 2.0;
+            }
+            // UAV4, without a fault, 0.1 m off at 4 s: within its allowable errors.
+            if (4.0 - 1e-9..4.05).contains(&t) {
+                states[3][Y] += 0.1;
+            }
+            m.on_step(&sc, &frame(k, &states, &uavs, &active));
+        }
+        let r = m.finish(0, 8.0);
+        assert!(!r.pass, "UAV3 left its allowable errors");
+        let f = r.sensor_faults.expect("sensor faults");
+        assert!(f.healthy_pass, "{f:?}");
+        assert!((f.healthy_max_abs_error[1] - 0.1).abs() < 1e-9, "{f:?}");
+        assert!((f.rejoin_s - 1.5).abs() < 1e-9, "{f:?}");
+        assert!(r.isolation.is_none(), "no robust check on");
     }
 
     #[test]
