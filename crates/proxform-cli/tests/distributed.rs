@@ -214,3 +214,27 @@ fn a_transport_delay_past_the_period_holds_every_decision_in_real_time() {
     assert_eq!(missing(0.095, "long"), 150);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn relaying_the_navigator_is_refused_before_anything_starts() {
+    let dir = out("relay");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("relay.toml");
+    std::fs::write(
+        &file,
+        "[formation.shape]\nkind = \"v\"\nuavs = 5\nspacing_m = 80.0\n\
+         [formation.dependencies]\nnavigator_degree = 0.5\n[radio]\nrelay_navigator = true\n",
+    )
+    .expect("written");
+    let o = Command::new(bin())
+        .arg("run")
+        .arg(&file)
+        .args(["--distributed", "--no-figures", "-q", "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .expect("proxform runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("radio.relay_navigator") && stderr.contains("without --distributed"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}

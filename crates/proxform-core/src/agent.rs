@@ -168,6 +168,12 @@ impl Agent {
         self.own_prediction = None;
     }
 
+    /// What this UAV knows of the navigator at `now_s`, to forward (its state at its last
+    /// measurement and that measurement's age, s): see `radio.relay_navigator`.
+    pub fn navigator_report(&self, now_s: f64) -> Option<(State9, f64)> {
+        self.controller.navigator_report(now_s)
+    }
+
     /// The vehicle model.
     pub fn vehicle(&self) -> &VehicleModel {
         self.controller.setup().vehicle()

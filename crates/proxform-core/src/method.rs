@@ -141,6 +141,15 @@ impl FormationController {
         }
     }
 
+    /// What the UAV knows of the navigator to forward over the radio (the proximity method's
+    /// track of it; the baselines forward nothing).
+    pub fn navigator_report(&self, now_s: f64) -> Option<(State9, f64)> {
+        match self {
+            Self::Proximity(c) => c.navigator_report(now_s),
+            _ => None,
+        }
+    }
+
     /// The shared setup: parameters, vehicle model.
     pub fn setup(&self) -> &ControllerSetup {
         match self {

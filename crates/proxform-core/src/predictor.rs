@@ -312,6 +312,16 @@ impl NeighbourTracks {
         (id != FREE && age >= SAME_INSTANT_S && age <= max_s.min(self.timeout_s) + SAME_INSTANT_S).then_some(UavId(id))
     }
 
+    /// What the tracks know of UAV `id` at `now`: its filtered state at its last measurement
+    /// and how long ago that was (s); None without a track, or one older than the timeout
+    /// (and always with the plain transition, which keeps no tracks).
+    pub fn report(&self, id: UavId, now: f64) -> Option<(State9, f64)> {
+        let s = self.ids.iter().position(|t| t.0 == id.0 && t.0 != FREE)?;
+        let tr = &self.tracks[s];
+        let age = now - tr.t;
+        (age >= -SAME_INSTANT_S && age <= self.timeout_s).then(|| (extrapolate(tr, 0.0), age.max(0.0)))
+    }
+
     /// Seconds since track slot `s` was last measured, at `now`.
     pub fn age(&self, s: usize, now: f64) -> f64 {
         now - self.tracks[s].t
@@ -428,6 +438,25 @@ fn extrapolate(tr: &Track, h: f64) -> State9 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_track_reports_its_last_measurement_and_its_age() {
+        let mut tracks = NeighbourTracks::new(PredictorKind::default(), 4, 1.0, 0.2);
+        let mut s = State9::zeros();
+        s[VX] = 70.0;
+        let obs =
+            |s: State9| Observation { id: UavId(7), state: s, age_s: 0.0, source: crate::ObservationSource::Onboard };
+        tracks.predict(&obs(s), 0.0, 0.1);
+        s[X] = 7.0;
+        tracks.predict(&obs(s), 0.1, 0.1);
+        let (state, age) = tracks.report(UavId(7), 0.4).expect("tracked");
+        assert!((age - 0.3).abs() < 1e-12, "{age}");
+        assert!((state[X] - 7.0).abs() < 1e-9 && (state[VX] - 70.0).abs() < 1e-9, "{state:?}");
+        assert!(tracks.report(UavId(8), 0.4).is_none(), "no track");
+        assert!(tracks.report(UavId(7), 1.2).is_none(), "older than the timeout");
+        let plain = NeighbourTracks::new(PredictorKind::ConstantVelocity, 4, 1.0, 0.2);
+        assert!(plain.report(UavId(7), 0.0).is_none(), "the plain transition keeps no tracks");
+    }
     use crate::observation::ObservationSource;
     use approx::assert_relative_eq;
 

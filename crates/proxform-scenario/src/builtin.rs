@@ -144,8 +144,18 @@ mod tests {
         .expect("valid");
         let w: Vec<String> = short.warnings().iter().map(|w| w.to_string()).collect();
         assert!(
-            w.iter().any(|w| w.contains("UAVs 6, 7, 8, 9 fly beyond the navigator's radio range (260 m)")),
+            w.iter().any(|w| w.contains("UAVs 6, 7, 8, 9 fly beyond the reach of the navigator's radio (260 m)")),
             "{w:?}"
         );
+        // Relayed hop by hop, the navigator's state reaches every UAV of the V.
+        let relayed = crate::load::parse(
+            "[formation.shape]\nkind = \"v\"\nuavs = 9\nspacing_m = 100.0\n\
+             [formation.dependencies]\nnavigator_degree = 0.4\n[radio]\nrange_m = 260.0\nrelay_navigator = true\n\
+             [controller]\nsensing_range_m = 250.0\n",
+            "v.toml",
+        )
+        .expect("valid");
+        assert!(relayed.warnings().is_empty(), "{:?}", relayed.warnings());
+        assert!(relayed.radio().relay_navigator);
     }
 }

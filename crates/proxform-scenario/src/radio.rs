@@ -6,7 +6,9 @@
 //! are i.i.d. with probability `loss`, plus, when `burst` is set, a Gilbert-Elliott channel per
 //! receiver: a two-state Markov chain (good, bad) stepped once per period, which loses each
 //! message with `loss_bad` in the bad state. Broadcasting from every UAV costs O(N²) per step;
-//! large swarms name a few broadcasters (`beacons`) instead.
+//! large swarms name a few broadcasters (`beacons`) instead. With `relay_navigator`, every UAV
+//! also forwards, each period, what it knows of the navigator (its track of it, with its age),
+//! so that the navigator's state reaches UAVs beyond its radio range hop by hop.
 
 /// Gilbert-Elliott bursty loss (per receiver).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -32,11 +34,21 @@ pub struct RadioModel {
     pub loss: f64,
     /// Optional bursty loss.
     pub burst: Option<GilbertElliott>,
+    /// Every UAV forwards its latest knowledge of the navigator each period (one more message
+    /// per UAV and period).
+    pub relay_navigator: bool,
 }
 
 impl Default for RadioModel {
     fn default() -> Self {
-        Self { broadcast_all: false, range_m: f64::INFINITY, delay_steps: 0, loss: 0.0, burst: None }
+        Self {
+            broadcast_all: false,
+            range_m: f64::INFINITY,
+            delay_steps: 0,
+            loss: 0.0,
+            burst: None,
+            relay_navigator: false,
+        }
     }
 }
 

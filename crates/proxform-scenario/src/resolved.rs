@@ -221,6 +221,7 @@ fn radio(sc: &Scenario) -> RadioSpec {
         burst_p_good_to_bad: r.burst.map(|b| b.p_good_to_bad),
         burst_p_bad_to_good: r.burst.map(|b| b.p_bad_to_good),
         burst_loss_bad: r.burst.map(|b| b.loss_bad),
+        relay_navigator: Some(r.relay_navigator),
     }
 }
 

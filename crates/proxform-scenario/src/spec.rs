@@ -381,6 +381,9 @@ pub struct RadioSpec {
     pub burst_p_bad_to_good: Option<f64>,
     /// … loss probability in the bad state. Default 1.
     pub burst_loss_bad: Option<f64>,
+    /// Every UAV forwards what it knows of the navigator (its track, with its age) each period.
+    /// Default false.
+    pub relay_navigator: Option<bool>,
 }
 
 /// `[allowable]`: pass criterion, all > 0.

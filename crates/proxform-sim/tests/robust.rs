@@ -124,6 +124,24 @@ fn the_navigator_in_the_tables_keeps_the_errors_of_the_last_rank_near_the_first(
 }
 
 #[test]
+fn relayed_hop_by_hop_the_navigator_reaches_a_v_longer_than_its_radio_range() {
+    // The radio reaches 300 m; the V's last ranks fly 500-700 m behind the navigator.
+    let ratio = |s: &Summary| worst_over_allowable(s, 20) / worst_over_allowable(s, 2).max(worst_over_allowable(s, 3));
+    let short = |relay: bool| {
+        move |s: &mut ScenarioSpec| {
+            s.radio.range_m = Some(300.0);
+            s.radio.relay_navigator = Some(relay);
+        }
+    };
+    let relayed = batch(&scenario("depth-v20.toml", short(true)), 30);
+    assert!(ratio(&relayed) <= 1.5, "{}", ratio(&relayed));
+    let unrelayed = batch(&scenario("depth-v20.toml", short(false)), 30);
+    assert!(ratio(&unrelayed) > 4.0, "{}", ratio(&unrelayed));
+    // Each follower forwards one message a period on top of the navigator's.
+    assert!(relayed.swarm.radio_sent_per_uav_s > 9.0, "{}", relayed.swarm.radio_sent_per_uav_s);
+}
+
+#[test]
 fn the_paper_under_loss_on_every_channel_holds_with_the_robust_settings() {
     let robust = batch(&scenario("paper-robust-loss30.toml", |_| {}), 300);
     assert!(robust.pass_fraction >= 0.99, "{}", robust.pass_fraction);

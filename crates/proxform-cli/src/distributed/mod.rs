@@ -63,6 +63,12 @@ pub fn run(
     if runs > u64::from(u32::MAX) {
         bail!("--runs: at most {} runs in a distributed batch", u32::MAX);
     }
+    if scenario.radio().relay_navigator {
+        bail!(
+            "radio.relay_navigator: the relays come from the agents' tracks, which a distributed run keeps in \
+             the agents' processes; relaying is not part of the wire yet: fly it without --distributed"
+        );
+    }
     let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
     let (session, endpoint) = serve(args.listen.as_deref())?;
     let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;

@@ -172,6 +172,13 @@ impl ProximityController {
         self
     }
 
+    /// What this UAV knows of the navigator at `now` (its track: the filtered state at its
+    /// last measurement, and that measurement's age in s), to forward over the radio
+    /// (`radio.relay_navigator`); None when the navigator is not named or not tracked.
+    pub fn navigator_report(&self, now: f64) -> Option<(State9, f64)> {
+        self.tracks.report(self.navigator?, now)
+    }
+
     /// A controller with its own [`ControllerSetup`] (convenient for a single UAV).
     pub fn standalone(
         id: UavId,

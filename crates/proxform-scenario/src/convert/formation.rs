@@ -224,18 +224,37 @@ pub fn dependencies(
 
 /// Warnings for UAVs whose main references never lead, however far followed, to the navigator:
 /// they lean only on each other (or on nobody) and can drift away together.
-/// A warning naming the followers whose slots lie beyond both the radio's range and the
-/// sensing range of the navigator's slot: with `navigator_degree` they cannot hear it, and
-/// lean on their other references only.
+/// A warning naming the followers the navigator's state cannot reach: slots beyond both the
+/// radio's range and the sensing range of the navigator's slot, or, when every UAV relays
+/// (`relay_navigator`), of every slot the navigator's state reaches hop by hop. With
+/// `navigator_degree` they lean on their other references only.
 pub fn beyond_the_navigators_radio(
     slots: &[FormationSlot],
     navigator: UavId,
     radio_range_m: f64,
     sensing_range_m: f64,
+    relay: bool,
 ) -> Option<SpecError> {
-    let nav = slots.get(navigator.index())?.offset_m;
     let reach = radio_range_m.max(sensing_range_m);
-    let far: Vec<usize> = (0..slots.len()).filter(|&i| (slots[i].offset_m - nav).norm() > reach).collect();
+    if !reach.is_finite() || slots.get(navigator.index()).is_none() {
+        return None;
+    }
+    let at = |i: usize| [slots[i].offset_m.x, slots[i].offset_m.y, slots[i].offset_m.z];
+    let mut reached = vec![false; slots.len()];
+    reached[navigator.index()] = true;
+    let mut grid = proxform_core::grid::NeighbourGrid::new();
+    grid.rebuild((0..slots.len()).map(at), reach);
+    let mut queue = vec![navigator.index()];
+    while let Some(i) = queue.pop() {
+        grid.for_each_within(at(i), reach, |j, _, _| {
+            let j = j as usize;
+            if !reached[j] && (relay || i == navigator.index()) {
+                reached[j] = true;
+                queue.push(j);
+            }
+        });
+    }
+    let far: Vec<usize> = (0..slots.len()).filter(|&i| !reached[i]).collect();
     if far.is_empty() {
         return None;
     }
@@ -244,11 +263,13 @@ pub fn beyond_the_navigators_radio(
     Some(err(
         "formation.dependencies.navigator_degree",
         format!(
-            "UAV{} {}{more} fly beyond the navigator's radio range ({} m) and sensing range: they cannot hear it \
-             and lean on their other references only",
+            "UAV{} {}{more} fly beyond the reach of the navigator's radio ({} m) and sensing range{}: they cannot \
+             hear it and lean on their other references only{}",
             if far.len() > 1 { "s" } else { "" },
             shown.join(", "),
-            super::values::show(radio_range_m)
+            super::values::show(radio_range_m),
+            if relay { ", even relayed" } else { "" },
+            if relay { "" } else { " (radio.relay_navigator = true forwards it hop by hop)" }
         ),
     ))
 }

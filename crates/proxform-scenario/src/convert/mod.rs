@@ -135,7 +135,13 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         // Every receiver checks every message: all-to-all broadcast is O(N²) a step, and a delayed
         // radio keeps every message of the delay.
-        let senders = if radio.broadcast_all { n } else { beacons.len() };
+        if radio.relay_navigator && n > MAX_BROADCAST_ALL_UAVS {
+            return Err(err(
+                "radio.relay_navigator",
+                format!("{n} UAVs all relaying is {n}² message checks a step: at most {MAX_BROADCAST_ALL_UAVS} UAVs"),
+            ));
+        }
+        let senders = if radio.broadcast_all { n } else { beacons.len() } + if radio.relay_navigator { n } else { 0 };
         if radio.broadcast_all && n > MAX_BROADCAST_ALL_UAVS {
             return Err(err(
                 "radio.broadcast_all",
@@ -169,6 +175,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 navigator,
                 radio.range_m,
                 setup.params().areas.sensing_range_m,
+                radio.relay_navigator,
             ));
         }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &spec.formation));

@@ -139,7 +139,11 @@ pub fn radio(r: &RadioSpec, dt_s: f64, n: usize) -> Result<(RadioModel, Vec<UavI
         Some(b) => b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?,
         None => Vec::new(),
     };
-    let mut m = RadioModel { broadcast_all: r.broadcast_all.unwrap_or(false), ..Default::default() };
+    let mut m = RadioModel {
+        broadcast_all: r.broadcast_all.unwrap_or(false),
+        relay_navigator: r.relay_navigator.unwrap_or(false),
+        ..Default::default()
+    };
     if let Some(v) = r.range_m {
         m.range_m = super::values::distance("radio.range_m", positive("radio.range_m", v)?)?;
     }

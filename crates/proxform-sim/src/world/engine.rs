@@ -196,7 +196,7 @@ impl<'s> Simulation<'s> {
             }
             self.world.index_positions();
             let key = self.world.run.at(WARMUP_STEP_BASE + w);
-            self.world.send_radio(key, 0, false);
+            self.world.send_radio((key, t), 0, false, &self.agents);
             let world = &self.world;
             let ctx = world.context(key, t, Mode::Warm(&ideal));
             let parallel = world.parallel;
@@ -265,7 +265,7 @@ impl<'s> Simulation<'s> {
         }
         w.advance_environment();
         let delay = w.scenario.radio().delay_steps as usize;
-        w.send_radio(w.run.at(w.k), delay, true);
+        w.send_radio((w.run.at(w.k), w.t()), delay, true, &self.agents);
         let w = &self.world;
         let ctx = w.context(w.run.at(w.k), w.t(), Mode::Fly);
         let (areas, parallel) = (w.scenario.controller().areas.areas, w.parallel);
@@ -441,9 +441,10 @@ impl<'s> World<'s> {
     }
 
     /// Phase 4, radio: every broadcasting UAV sends its own measurement (in flight with its
-    /// position-fix bias and sensor faults); the messages sent `delay` steps ago arrive now
+    /// position-fix bias and sensor faults), and, with `relay_navigator`, every follower what
+    /// its agent knows of the navigator at `t`; the messages sent `delay` steps ago arrive now
     /// (none before the first arrive).
-    fn send_radio(&mut self, key: StreamKey, delay: usize, flight: bool) {
+    fn send_radio(&mut self, (key, t): (StreamKey, f64), delay: usize, flight: bool, agents: &[Option<Agent>]) {
         let sensors = OwnSensors {
             sigma: self.scenario.noise().sigma(),
             key,
@@ -452,6 +453,7 @@ impl<'s> World<'s> {
         };
         let mut now = if self.history.len() > delay { self.history.pop_front() } else { None }.unwrap_or_default();
         measurement::compose(self.scenario, &self.current, &sensors, self.parallel, &mut now);
+        measurement::relays(self.scenario, &self.current, &self.active, agents, t, &mut now);
         self.sent_now = now.len();
         if delay == 0 {
             std::mem::swap(&mut self.arriving, &mut now);

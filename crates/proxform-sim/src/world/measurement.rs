@@ -43,15 +43,28 @@ impl OwnSensors<'_> {
     }
 }
 
-/// One radio message: who sent it, what it believed of itself, and where it truly was.
+/// One radio message: who sent it, about whom, what it said, and where the sender truly was.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Message {
     /// The sender.
     pub sender: u32,
-    /// The sender's measurement of its own state when it sent.
+    /// The UAV the message is about: the sender itself (its own measured state), or the
+    /// navigator when the sender relays what it knows of it.
+    pub about: u32,
+    /// The state it reports: the sender's measurement of itself when it sent, or its track of
+    /// the navigator.
     pub state: State9,
-    /// Its true position then (for the radio's range).
+    /// How old that state was when sent (s): 0 for the sender's own.
+    pub age_s: f64,
+    /// The sender's true position then (for the radio's range).
     pub at: [f64; 3],
+}
+
+impl Message {
+    /// Whether the sender forwards what it knows of another UAV.
+    pub fn is_relay(&self) -> bool {
+        self.about != self.sender
+    }
 }
 
 /// Fills `out` with the messages sent now from the true states `states`: the beacons first,
@@ -68,7 +81,7 @@ pub fn compose(sc: &Scenario, states: &[State9], sensors: &OwnSensors<'_>, paral
             .map(|b| b.index())
             .chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)))
             .filter(|&j| j < n)
-            .map(|j| Message { sender: j as u32, state: State9::zeros(), at: [0.0; 3] }),
+            .map(|j| Message { sender: j as u32, about: j as u32, state: State9::zeros(), age_s: 0.0, at: [0.0; 3] }),
     );
     crate::parallel::for_each_mut(out, parallel, |_, m| {
         let j = m.sender as usize;
@@ -76,4 +89,34 @@ pub fn compose(sc: &Scenario, states: &[State9], sensors: &OwnSensors<'_>, paral
         m.state = sensors.measure(j, s);
         m.at = [s[state::X], s[state::Y], s[state::Z]];
     });
+}
+
+/// Appends to `out` the relays of this step (`radio.relay_navigator`): every active follower
+/// whose agent knows the navigator forwards that knowledge (its track's state and age at
+/// `t`). Nothing without relaying, or when the agents run outside the engine.
+pub fn relays(
+    sc: &Scenario,
+    states: &[State9],
+    active: &[bool],
+    agents: &[Option<proxform_core::Agent>],
+    t: f64,
+    out: &mut Vec<Message>,
+) {
+    if !sc.radio().relay_navigator {
+        return;
+    }
+    let nav = sc.navigator().0;
+    for (j, agent) in agents.iter().enumerate() {
+        let Some(agent) = agent.as_ref().filter(|_| active.get(j).copied().unwrap_or(false)) else { continue };
+        if let Some((state, age_s)) = agent.navigator_report(t) {
+            let s = &states[j];
+            out.push(Message {
+                sender: j as u32,
+                about: nav,
+                state,
+                age_s,
+                at: [s[state::X], s[state::Y], s[state::Z]],
+            });
+        }
+    }
 }

@@ -154,19 +154,29 @@ impl ProximitySensor {
             }
         }
         // Messages heard over the radio (crate::radio), unless the sender is perceived onboard.
+        // Of the relays (what others know of the navigator), the freshest heard counts, when
+        // nothing fresher of the navigator came onboard or from the navigator itself.
         if link.radio_up {
             let radio = link.radio;
             let r2 = radio.range_m * radio.range_m;
             let n = states.len();
+            let mut relayed: Option<&Message> = None;
             for m in link.messages {
                 let j = m.sender as usize;
-                let seen = !link.fuse && out[start..].iter().any(|o| o.id.index() == j);
-                if j == i || j >= n || !link.active[j] || seen {
+                let about = m.about as usize;
+                let seen = !link.fuse && out[start..].iter().any(|o| o.id.index() == about);
+                if j == i || about == i || j >= n || about >= n || !link.active[j] || seen {
                     continue;
                 }
                 let q = &m.at;
                 let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
                 if d2 > r2 || !super::radio::delivered(radio, link.channel_bad, &mut draws.radio) {
+                    continue;
+                }
+                if m.is_relay() {
+                    if relayed.is_none_or(|r| m.age_s < r.age_s) {
+                        relayed = Some(m);
+                    }
                     continue;
                 }
                 out.push(Observation {
@@ -175,6 +185,18 @@ impl ProximitySensor {
                     age_s: link.delay_s,
                     source: ObservationSource::Radio,
                 });
+            }
+            if let Some(m) = relayed {
+                let age_s = link.delay_s + m.age_s;
+                let fresher = out[start..].iter().any(|o| o.id.0 == m.about && o.age_s <= age_s);
+                if !fresher {
+                    out.push(Observation {
+                        id: UavId(m.about),
+                        state: m.state,
+                        age_s,
+                        source: ObservationSource::Radio,
+                    });
+                }
             }
         }
     }
@@ -315,7 +337,13 @@ mod tests {
         assert!(seen.iter().all(|o| o.source == ObservationSource::Onboard && o.state == states[o.id.index()]));
         // A radio message of a UAV seen onboard is not counted twice; one of a UAV out of
         // range is heard.
-        let message = |j: usize| Message { sender: j as u32, state: states[j], at: [states[j][0], states[j][1], 0.0] };
+        let message = |j: usize| Message {
+            sender: j as u32,
+            about: j as u32,
+            state: states[j],
+            age_s: 0.0,
+            at: [states[j][0], states[j][1], 0.0],
+        };
         let heard = perceive(&states, &deps, 0.0, &[message(1), message(4)]);
         let radio: Vec<u32> = heard.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
         assert_eq!(radio, vec![4]);
@@ -329,5 +357,35 @@ mod tests {
         let mut turned = states.clone();
         turned[0][BETA] = std::f64::consts::PI;
         assert_eq!(perceive(&turned, &deps, 0.0, &[]).len(), 3);
+    }
+
+    #[test]
+    fn of_the_relays_the_freshest_counts_unless_something_fresher_came() {
+        let (states, deps) = setup();
+        // UAVs 1 and 3 forward what they know of UAV 4 (out of range of UAV 0's sensors).
+        let relay = |sender: usize, about: usize, age_s: f64| {
+            let mut state = states[about];
+            state[1] += age_s; // tells the reports apart
+            Message {
+                sender: sender as u32,
+                about: about as u32,
+                state,
+                age_s,
+                at: [states[sender][0], states[sender][1], 0.0],
+            }
+        };
+        let of_4 = |heard: &[Observation]| -> Vec<(f64, f64)> {
+            heard.iter().filter(|o| o.id.0 == 4).map(|o| (o.age_s, o.state[1] - states[4][1])).collect()
+        };
+        let heard = perceive(&states, &deps, 0.0, &[relay(1, 4, 0.3), relay(3, 4, 0.1)]);
+        assert_eq!(of_4(&heard), vec![(0.1, 0.1)], "{heard:?}");
+        assert!(heard.iter().filter(|o| o.id.0 == 4).all(|o| o.source == ObservationSource::Radio));
+        // UAV 4's own message is fresher: the relays add nothing.
+        let own = Message { sender: 4, about: 4, state: states[4], age_s: 0.0, at: [states[4][0], states[4][1], 0.0] };
+        assert_eq!(of_4(&perceive(&states, &deps, 0.0, &[own, relay(3, 4, 0.1)])), vec![(0.0, 0.0)]);
+        // A relay about a UAV seen onboard, or about the receiver itself, adds nothing.
+        let heard = perceive(&states, &deps, 0.0, &[relay(3, 1, 0.2), relay(3, 0, 0.2)]);
+        assert_eq!(heard.len(), 3, "{heard:?}");
+        assert!(heard.iter().all(|o| o.source == ObservationSource::Onboard));
     }
 }
