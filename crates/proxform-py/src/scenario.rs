@@ -137,7 +137,9 @@ impl PyScenario {
         self.inner.safety_distance_m()
     }
 
-    /// Every UAV's initial state, shape (uavs, 9): x, y, z (m), vx, vy, vz (m/s), α, β, γ (rad).
+    /// Every UAV's initial state in its slot, shape (uavs, 9): x, y, z (m), vx, vy, vz (m/s),
+    /// α, β, γ (rad). With `initial.placement` other than "slots" a run starts elsewhere (random
+    /// starts are drawn per run from its seed).
     fn initial_states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let rows: Vec<Vec<f64>> = self.inner.initial().iter().map(|s| s.iter().copied().collect()).collect();
         PyArray2::from_vec2(py, &rows).map_err(|e| PyRuntimeError::new_err(e.to_string()))

@@ -16,6 +16,7 @@ pub mod faults;
 pub mod formation;
 pub mod load;
 pub mod path;
+pub mod placement;
 pub mod radio;
 pub mod resolved;
 pub mod scenario;

@@ -37,9 +37,7 @@ pub fn resolved(sc: &Scenario) -> ScenarioSpec {
         warmup_s: Some(sc.warmup_s()),
         formation: formation(sc),
         path: path(sc.path()),
-        initial: InitialSpec {
-            speed_kmh: Some(kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()]))),
-        },
+        initial: initial(sc),
         controller: controller(sc),
         vehicle: vehicle(sc.vehicle()),
         noise: noise(sc),
@@ -207,6 +205,27 @@ fn noise(sc: &Scenario) -> NoiseSpec {
         scale: None,
         gnss_bias_m: sc.gnss_bias().map(|g| g.sigma_m),
         gnss_tau_s: sc.gnss_bias().map(|g| g.tau_s),
+    }
+}
+
+fn initial(sc: &Scenario) -> InitialSpec {
+    use crate::placement::Placement;
+    let speed_kmh = Some(kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()])));
+    let base = InitialSpec { speed_kmh, ..InitialSpec::default() };
+    match sc.placement() {
+        Placement::Slots => InitialSpec { placement: Some("slots".into()), ..base },
+        Placement::Box { size_m } => InitialSpec { placement: Some("box".into()), box_m: Some(*size_m), ..base },
+        Placement::Disc { radius_m, height_m } => {
+            InitialSpec { placement: Some("disc".into()), radius_m: Some(*radius_m), height_m: Some(*height_m), ..base }
+        }
+        Placement::Explicit(list) => InitialSpec {
+            placement: Some("explicit".into()),
+            uavs: list
+                .iter()
+                .map(|(id, p)| crate::spec::InitialUavSpec { id: Some(id.0 + 1), position_m: Some(*p) })
+                .collect(),
+            ..base
+        },
     }
 }
 

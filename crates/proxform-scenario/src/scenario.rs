@@ -82,6 +82,7 @@ pub struct Scenario {
     pub(crate) agents: Arc<AgentSetup>,
     pub(crate) path: NavigatorPath,
     pub(crate) initial: Vec<State9>,
+    pub(crate) placement: crate::placement::Placement,
     pub(crate) noise: MeasurementNoise,
     pub(crate) gnss_bias: Option<CorrelatedNoise>,
     pub(crate) actuation_error: f64,
@@ -171,6 +172,12 @@ impl Scenario {
     /// Initial state of every UAV.
     pub fn initial(&self) -> &[State9] {
         &self.initial
+    }
+
+    /// Where the followers start (`[initial] placement`); [`Scenario::initial`] is every UAV
+    /// in its slot, from which the simulator draws or sets the other starts.
+    pub fn placement(&self) -> &crate::placement::Placement {
+        &self.placement
     }
 
     /// Dependency table of every UAV (the navigator's is unused).

@@ -181,6 +181,28 @@ pub struct SegmentSpec {
 pub struct InitialSpec {
     /// Forward speed of every UAV (km/h). Default: the navigator's.
     pub speed_kmh: Option<f64>,
+    /// Where the followers start: "slots" (default), "box", "disc" or "explicit".
+    pub placement: Option<String>,
+    /// "box": its size along x (the initial course), y (left) and z (up), m.
+    pub box_m: Option<[f64; 3]>,
+    /// "disc": its radius (m).
+    pub radius_m: Option<f64>,
+    /// "disc": the height of its band (m). Default 0.
+    pub height_m: Option<f64>,
+    /// "explicit": `[[initial.uav]]` entries, `id` and `position_m` (relative to the
+    /// navigator's start, world axes).
+    #[serde(default, rename = "uav", skip_serializing_if = "Vec::is_empty")]
+    pub uavs: Vec<InitialUavSpec>,
+}
+
+/// `[[initial.uav]]`: one follower's explicit start.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialUavSpec {
+    /// UAV number (from 1, not the navigator).
+    pub id: Option<u32>,
+    /// Position relative to the navigator's start: x (the initial course), y (left), z (up), m.
+    pub position_m: Option<[f64; 3]>,
 }
 
 /// `[controller]`.

@@ -10,6 +10,7 @@ mod controller;
 mod feasibility;
 mod formation;
 mod path;
+mod placement;
 mod values;
 mod vehicle;
 mod world;
@@ -100,6 +101,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
 
         let path = path::path(&spec.path)?;
         let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
+        let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m)?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
 
         let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
@@ -189,6 +191,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             agents: Arc::new(agents),
             path,
             initial,
+            placement,
             noise,
             gnss_bias,
             actuation_error,

@@ -26,6 +26,8 @@ pub enum Source {
     Wind = 5,
     /// The slowly varying bias of its own position fix.
     Gnss = 6,
+    /// Where it starts, when the scenario scatters the formation.
+    Placement = 7,
 }
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;

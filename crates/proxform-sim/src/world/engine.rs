@@ -147,12 +147,13 @@ impl<'s> Simulation<'s> {
         let nav = scenario.navigator().index();
         let s0 = scenario.initial()[nav];
         let areas = scenario.controller().areas;
+        let starts = super::placement::initial_states(scenario, RunKey::new(seed, run));
         let world = World {
             scenario,
             options,
             run: RunKey::new(seed, run),
             k: 0,
-            current: scenario.initial().to_vec(),
+            current: starts.clone(),
             env: super::environment::initial(scenario),
             grid: NeighbourGrid::new(),
             arriving: Vec::new(),
@@ -164,7 +165,7 @@ impl<'s> Simulation<'s> {
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
         };
-        Self { world, agents, outside, next: scenario.initial().to_vec(), uavs: vec![UavStep::default(); n] }
+        Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] }
     }
 
     fn warmed(mut self) -> Self {
@@ -179,7 +180,8 @@ impl<'s> Simulation<'s> {
     /// established flight rather than from a standing start.
     fn warm_up(&mut self) {
         let sc = self.world.scenario;
-        let steps = (sc.warmup_s() / sc.dt_s()).round() as u64;
+        // A scattered formation has no established flight to watch: its agents start cold.
+        let steps = if sc.placement().in_slots() { (sc.warmup_s() / sc.dt_s()).round() as u64 } else { 0 };
         if steps == 0 {
             return;
         }

@@ -7,6 +7,7 @@ pub mod faults;
 pub mod measurement;
 pub mod options;
 pub mod phases;
+pub mod placement;
 pub mod radio;
 pub mod remote;
 pub mod sensing;

@@ -1,0 +1,139 @@
+//! `[initial]`'s placement: where the followers start, checked before anything flies. Random
+//! regions must hold the formation's UAVs the safety distance apart with room to spare (the
+//! simulator draws each start away from those already placed); explicit starts must keep every
+//! pair of UAVs the safety distance apart.
+
+use proxform_core::state::{self, State9};
+use proxform_core::UavId;
+
+use super::values::{distance, err, non_negative, positive, show, SpecError};
+use crate::placement::Placement;
+use crate::spec::InitialSpec;
+
+/// A random region must offer at least this many cells of the safety distance (twice over) per
+/// UAV: random sequential placement jams at about half of a dense packing.
+const ROOM_PER_UAV: f64 = 2.0;
+
+/// The placement of `[initial]`, for `initial` (every UAV in its slot) and the navigator.
+pub fn placement(
+    spec: &InitialSpec,
+    initial: &[State9],
+    navigator: UavId,
+    safety_distance_m: f64,
+) -> Result<Placement, SpecError> {
+    let kind = spec.placement.as_deref().unwrap_or("slots");
+    let only = |key: &str, given: bool, for_kind: &str| -> Result<(), SpecError> {
+        if given && kind != for_kind {
+            return Err(err(format!("initial.{key}"), format!("applies to placement = \"{for_kind}\" only")));
+        }
+        Ok(())
+    };
+    only("box_m", spec.box_m.is_some(), "box")?;
+    only("radius_m", spec.radius_m.is_some(), "disc")?;
+    only("height_m", spec.height_m.is_some(), "disc")?;
+    only("uav", !spec.uavs.is_empty(), "explicit")?;
+    let n = initial.len() as f64;
+    let cell = 2.0 * safety_distance_m;
+    let room = |extent: [f64; 3]| extent.iter().map(|e| (e / cell).floor() + 1.0).product::<f64>();
+    match kind {
+        "slots" => Ok(Placement::Slots),
+        "box" => {
+            let Some(b) = spec.box_m else {
+                return Err(err("initial.box_m", "is required with placement = \"box\": its size [x, y, z] in m"));
+            };
+            let mut size_m = [0.0; 3];
+            for k in 0..3 {
+                size_m[k] = distance("initial.box_m", non_negative("initial.box_m", b[k])?)?;
+            }
+            if room(size_m) < ROOM_PER_UAV * n {
+                return Err(err(
+                    "initial.box_m",
+                    format!(
+                        "a box of {} × {} × {} m is too small to scatter {} UAVs {} m apart (the safety distance): \
+                         make it larger",
+                        show(size_m[0]),
+                        show(size_m[1]),
+                        show(size_m[2]),
+                        initial.len(),
+                        show(safety_distance_m)
+                    ),
+                ));
+            }
+            Ok(Placement::Box { size_m })
+        }
+        "disc" => {
+            let Some(r) = spec.radius_m else {
+                return Err(err("initial.radius_m", "is required with placement = \"disc\""));
+            };
+            let radius_m = distance("initial.radius_m", positive("initial.radius_m", r)?)?;
+            let height_m =
+                distance("initial.height_m", non_negative("initial.height_m", spec.height_m.unwrap_or(0.0))?)?;
+            let cells = std::f64::consts::PI * radius_m * radius_m / (cell * cell) * ((height_m / cell).floor() + 1.0);
+            if cells < ROOM_PER_UAV * n {
+                return Err(err(
+                    "initial.radius_m",
+                    format!(
+                        "a disc of radius {} m is too small to scatter {} UAVs {} m apart (the safety distance): \
+                         make it larger",
+                        show(radius_m),
+                        initial.len(),
+                        show(safety_distance_m)
+                    ),
+                ));
+            }
+            Ok(Placement::Disc { radius_m, height_m })
+        }
+        "explicit" => {
+            if spec.uavs.is_empty() {
+                return Err(err("initial.uav", "give at least one [[initial.uav]] with placement = \"explicit\""));
+            }
+            let nav = &initial[navigator.index()];
+            let mut at: Vec<[f64; 3]> = initial.iter().map(|s| [s[state::X], s[state::Y], s[state::Z]]).collect();
+            let mut listed = Vec::new();
+            for (k, u) in spec.uavs.iter().enumerate() {
+                let key = |f: &str| format!("initial.uav[{}].{f}", k + 1);
+                let Some(id) = u.id else { return Err(err(key("id"), "is required")) };
+                if id == 0 || id as usize > initial.len() {
+                    return Err(err(key("id"), format!("UAV {id} is not in the formation (1 to {})", initial.len())));
+                }
+                let uav = UavId(id - 1);
+                if uav == navigator {
+                    return Err(err(key("id"), format!("UAV {id} is the navigator, which starts on its path")));
+                }
+                if listed.iter().any(|(v, _): &(UavId, [f64; 3])| *v == uav) {
+                    return Err(err(key("id"), format!("UAV {id} is listed twice")));
+                }
+                let Some(p) = u.position_m else { return Err(err(key("position_m"), "is required")) };
+                let mut q = [0.0; 3];
+                for j in 0..3 {
+                    q[j] = distance(&key("position_m"), p[j])?;
+                }
+                at[uav.index()] = [nav[state::X] + q[0], nav[state::Y] + q[1], nav[state::Z] + q[2]];
+                listed.push((uav, q));
+            }
+            for (k, &(uav, _)) in listed.iter().enumerate() {
+                let p = at[uav.index()];
+                for (j, q) in at.iter().enumerate() {
+                    let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+                    if j != uav.index() && d < safety_distance_m {
+                        return Err(err(
+                            format!("initial.uav[{}].position_m", k + 1),
+                            format!(
+                                "UAV {} starts {} m from UAV {}, closer than the safety distance {} m",
+                                uav.0 + 1,
+                                show((d * 10.0).round() / 10.0),
+                                j + 1,
+                                show(safety_distance_m)
+                            ),
+                        ));
+                    }
+                }
+            }
+            Ok(Placement::Explicit(listed))
+        }
+        other => Err(err(
+            "initial.placement",
+            format!("unknown placement \"{other}\" (expected \"slots\", \"box\", \"disc\" or \"explicit\")"),
+        )),
+    }
+}

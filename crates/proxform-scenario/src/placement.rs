@@ -1,0 +1,42 @@
+//! Where the UAVs start: in their slots (the default, and the paper's), scattered at random in
+//! a box or a disc around the formation, or at explicit positions. Random starts are drawn by
+//! the simulator for each run (a seeded stream of its own), so that every run of a batch starts
+//! differently and the same seed starts the same way.
+
+use proxform_core::UavId;
+
+/// How the followers are placed at t = 0 (the navigator starts on its path).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Placement {
+    /// Every UAV in its slot, on the navigator's initial state.
+    Slots,
+    /// Uniformly in a box centred on the followers' slots' centre: its size along the world
+    /// x (the initial course), y (left) and z (up), m.
+    Box {
+        /// Size along x, y and z (m).
+        size_m: [f64; 3],
+    },
+    /// Uniformly in a horizontal disc centred on the followers' slots' centre, spread evenly
+    /// over a height band.
+    Disc {
+        /// Radius (m).
+        radius_m: f64,
+        /// Height of the band (m).
+        height_m: f64,
+    },
+    /// The listed followers at their positions (m, relative to the navigator's start, world
+    /// axes); the others in their slots.
+    Explicit(Vec<(UavId, [f64; 3])>),
+}
+
+impl Placement {
+    /// True when every UAV starts in its slot.
+    pub fn in_slots(&self) -> bool {
+        matches!(self, Placement::Slots)
+    }
+
+    /// True when the simulator draws the starts at random.
+    pub fn is_random(&self) -> bool {
+        matches!(self, Placement::Box { .. } | Placement::Disc { .. })
+    }
+}

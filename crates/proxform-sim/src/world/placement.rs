@@ -1,0 +1,128 @@
+//! The starting states of one run: every UAV in its slot, or the followers scattered at random
+//! in the scenario's box or disc (each start drawn from the UAV's own placement stream, again
+//! until it is the safety distance from every UAV already placed, the navigator first), or at
+//! the scenario's explicit positions. Velocities and attitudes are the in-slot ones: the
+//! navigator's.
+
+use proxform_core::state::{State9, X, Y, Z};
+use proxform_scenario::placement::Placement;
+use proxform_scenario::Scenario;
+
+use crate::random::{RunKey, Source};
+use crate::world::radio::uniform;
+
+/// Draws per UAV before a start is kept whatever its distance (the loader admits only regions
+/// with room to spare, where this is not reached).
+const MAX_DRAWS: u32 = 10_000;
+
+/// Every UAV's state at t = 0 in run `run`.
+pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
+    let mut states = sc.initial().to_vec();
+    let nav = sc.navigator().index();
+    let n = states.len();
+    let at = |s: &State9| [s[X], s[Y], s[Z]];
+    let nav_at = at(&states[nav]);
+    match sc.placement() {
+        Placement::Slots => {}
+        Placement::Explicit(list) => {
+            for (id, p) in list {
+                let s = &mut states[id.index()];
+                for k in 0..3 {
+                    s[X + k] = nav_at[k] + p[k];
+                }
+            }
+        }
+        region => {
+            // The centre of the followers' slots.
+            let followers = (0..n).filter(|&i| i != nav);
+            let m = (n - 1).max(1) as f64;
+            let mut centre = [0.0; 3];
+            for i in followers.clone() {
+                for k in 0..3 {
+                    centre[k] += states[i][X + k] / m;
+                }
+            }
+            let d2 = sc.safety_distance_m().powi(2);
+            let key = run.at(0);
+            let mut placed: Vec<[f64; 3]> = vec![nav_at];
+            for i in followers {
+                let mut rng = key.rng(i as u64, Source::Placement);
+                let mut p = centre;
+                for _ in 0..MAX_DRAWS {
+                    let u = [uniform(&mut rng), uniform(&mut rng), uniform(&mut rng)];
+                    p = match *region {
+                        Placement::Box { size_m } => std::array::from_fn(|k| centre[k] + (u[k] - 0.5) * size_m[k]),
+                        Placement::Disc { radius_m, height_m } => {
+                            let (r, a) = (radius_m * u[0].sqrt(), std::f64::consts::TAU * u[1]);
+                            [centre[0] + r * a.cos(), centre[1] + r * a.sin(), centre[2] + (u[2] - 0.5) * height_m]
+                        }
+                        _ => centre,
+                    };
+                    let apart = placed.iter().all(|q| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>() >= d2);
+                    if apart {
+                        break;
+                    }
+                }
+                placed.push(p);
+                for k in 0..3 {
+                    states[i][X + k] = p[k];
+                }
+            }
+        }
+    }
+    states
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_scenario::builtin::paper_spec;
+
+    fn scattered(edit: impl FnOnce(&mut proxform_scenario::ScenarioSpec)) -> Scenario {
+        Scenario::try_from(paper_spec().with(edit)).expect("valid")
+    }
+
+    #[test]
+    fn random_starts_are_seeded_apart_and_inside_their_region() {
+        let sc = scattered(|s| {
+            s.initial.placement = Some("disc".into());
+            s.initial.radius_m = Some(1000.0);
+            s.initial.height_m = Some(100.0);
+        });
+        let a = initial_states(&sc, RunKey::new(1, 0));
+        assert_eq!(a, initial_states(&sc, RunKey::new(1, 0)), "same seed, same starts");
+        assert_ne!(a, initial_states(&sc, RunKey::new(1, 1)), "another run, other starts");
+        let slots = sc.initial();
+        assert_eq!(a[0], slots[0], "the navigator starts on its path");
+        let centre: Vec<f64> = (0..3).map(|k| (1..6).map(|i| slots[i][X + k]).sum::<f64>() / 5.0).collect();
+        for r in 0..50 {
+            let s = initial_states(&sc, RunKey::new(7, r));
+            for i in 0..6 {
+                assert_eq!(&s[i].as_slice()[3..], &slots[i].as_slice()[3..], "velocity and attitude as in the slot");
+                if i > 0 {
+                    assert!((s[i][X] - centre[0]).hypot(s[i][Y] - centre[1]) <= 1000.0 + 1e-9);
+                    assert!((s[i][Z] - centre[2]).abs() <= 50.0 + 1e-9);
+                }
+                for j in 0..i {
+                    let d = (0..3).map(|k| (s[i][X + k] - s[j][X + k]).powi(2)).sum::<f64>().sqrt();
+                    assert!(d >= sc.safety_distance_m(), "run {r}: UAVs {i} and {j} start {d} m apart");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn explicit_starts_are_where_the_file_puts_them_and_slots_stay_the_default() {
+        let sc = scattered(|s| {
+            s.initial.placement = Some("explicit".into());
+            s.initial.uavs =
+                vec![proxform_scenario::spec::InitialUavSpec { id: Some(3), position_m: Some([-500.0, 300.0, 40.0]) }];
+        });
+        let s = initial_states(&sc, RunKey::new(1, 0));
+        let nav = sc.initial()[0];
+        assert_eq!([s[2][X] - nav[X], s[2][Y] - nav[Y], s[2][Z] - nav[Z]], [-500.0, 300.0, 40.0]);
+        assert_eq!(s[1], sc.initial()[1], "the others in their slots");
+        let paper = Scenario::try_from(paper_spec()).expect("valid");
+        assert_eq!(initial_states(&paper, RunKey::new(1, 0)), paper.initial());
+    }
+}
