@@ -44,8 +44,12 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     // Fault and isolation columns only for the runs that have them.
     let faults = runs.first().is_some_and(|r| r.sensor_faults.is_some());
     let isolation = runs.first().is_some_and(|r| r.isolation.is_some());
+    let forming = runs.first().is_some_and(|r| r.forming.is_some());
     if faults {
         header.extend(["healthy_pass", "rejoin_s"].map(String::from));
+    }
+    if forming {
+        header.extend(["time_to_form_s", "transient_error_ratio", "path_length_m_per_uav"].map(String::from));
     }
     if isolation {
         header.extend(
@@ -76,6 +80,13 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
         ]);
         if let (true, Some(f)) = (faults, r.sensor_faults) {
             rec.extend([u8::from(f.healthy_pass).to_string(), format!("{:.3}", f.rejoin_s)]);
+        }
+        if let (true, Some(f)) = (forming, r.forming) {
+            rec.extend([
+                format!("{:.3}", f.time_to_form_s),
+                format!("{:.4}", f.transient_error_ratio),
+                format!("{:.1}", f.path_length_m_per_uav),
+            ]);
         }
         if let (true, Some(i)) = (isolation, r.isolation) {
             rec.extend([

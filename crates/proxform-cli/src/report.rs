@@ -113,6 +113,20 @@ pub fn print(
             number(f.rejoin_s_max)
         )?;
     }
+    if let Some(f) = &s.forming {
+        let formed = result.runs.iter().filter(|r| r.forming.is_some_and(|f| f.time_to_form_s.is_finite())).count();
+        writeln!(
+            out,
+            "forming                  formed (every follower within the allowable errors to the end) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable; {} m flown per follower",
+            fraction(f.formed_fraction),
+            s.runs,
+            number(f.time_to_form_s_median),
+            number(f.time_to_form_s_p99),
+            number(f.time_to_form_s_max),
+            number(f.transient_error_ratio_max),
+            number(f.path_length_m_per_uav)
+        )?;
+    }
     if let Some(i) = &s.isolation {
         writeln!(
             out,

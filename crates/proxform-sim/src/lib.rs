@@ -19,10 +19,10 @@ pub mod world;
 
 pub use batch::compare;
 pub use batch::runs::{
-    run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, IsolationSummary,
-    SensorFaultSummary, Summary, SwarmMetrics,
+    run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FormingSummary,
+    IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics,
 };
-pub use measure::metrics::{IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics};
+pub use measure::metrics::{FormingMetrics, IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics};
 pub use measure::observer::{Observer, StepFrame};
 pub use measure::trajectory::{Trajectory, TrajectoryRow};
 pub use world::engine::Simulation;

@@ -104,6 +104,27 @@ pub struct Summary {
     /// What the robust fusion and the own-sensor check did, when either is on.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub isolation: Option<IsolationSummary>,
+    /// How the formations formed, when they did not start in their slots.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forming: Option<FormingSummary>,
+}
+
+/// How the formations of a batch formed (scattered starts, UAVs joining).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FormingSummary {
+    /// Fraction of runs in which every follower was within every allowable error at the end.
+    pub formed_fraction: f64,
+    /// Time from which every follower stayed within its allowable errors (s): median over
+    /// runs (∞ counts for a run that did not form).
+    pub time_to_form_s_median: f64,
+    /// The same, 99th percentile (nearest rank).
+    pub time_to_form_s_p99: f64,
+    /// The same, largest.
+    pub time_to_form_s_max: f64,
+    /// Largest error over its allowable error before forming, over all runs.
+    pub transient_error_ratio_max: f64,
+    /// Distance flown per follower (m), mean over runs.
+    pub path_length_m_per_uav: f64,
 }
 
 /// How the formations of a batch rode out faults of some UAVs' own sensors.
@@ -422,6 +443,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
         per_uav_adjustments: per_uav_adj,
         sensor_faults: sensor_fault_summary(runs),
+        forming: forming_summary(runs),
         isolation: runs
             .iter()
             .all(|r| r.isolation.is_some())
@@ -442,6 +464,25 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
             })
             .filter(|_| !runs.is_empty()),
     }
+}
+
+/// The forming part of a batch's summary (None when its runs started in their slots).
+fn forming_summary(runs: &[RunSummary]) -> Option<FormingSummary> {
+    let f: Vec<_> = runs.iter().filter_map(|r| r.forming).collect();
+    if f.is_empty() {
+        return None;
+    }
+    let mut t: Vec<f64> = f.iter().map(|m| m.time_to_form_s).collect();
+    let p99 = quantile_of(&mut t, 0.99);
+    let n = f.len() as f64;
+    Some(FormingSummary {
+        formed_fraction: f.iter().filter(|m| m.time_to_form_s.is_finite()).count() as f64 / n,
+        time_to_form_s_median: crate::measure::stats::quantile(&t, 0.5),
+        time_to_form_s_p99: p99,
+        time_to_form_s_max: t.last().copied().unwrap_or(0.0),
+        transient_error_ratio_max: f.iter().map(|m| m.transient_error_ratio).fold(0.0, f64::max),
+        path_length_m_per_uav: f.iter().map(|m| m.path_length_m_per_uav).sum::<f64>() / n,
+    })
 }
 
 /// The sensor-fault part of a batch's summary (None when its runs had no sensor fault).
@@ -498,6 +539,7 @@ mod tests {
             alone_s_per_uav: 0.0,
             sensor_faults: None,
             isolation: None,
+            forming: None,
         }
     }
 

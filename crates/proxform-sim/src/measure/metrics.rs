@@ -83,6 +83,21 @@ pub struct RunSummary {
     pub sensor_faults: Option<SensorFaultMetrics>,
     /// What the robust fusion and the own-sensor check did, when either is on.
     pub isolation: Option<IsolationMetrics>,
+    /// How the formation formed, when it did not start in its slots (scattered starts, UAVs
+    /// joining).
+    pub forming: Option<FormingMetrics>,
+}
+
+/// How a formation that did not start in its slots came together.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct FormingMetrics {
+    /// From this time on (s) every follower stayed within every allowable error: 0 when none
+    /// ever left them, ∞ when some follower was outside them at the end (not formed).
+    pub time_to_form_s: f64,
+    /// Largest error over its allowable error (any axis, any follower) before that time.
+    pub transient_error_ratio: f64,
+    /// Distance flown per follower (m, mean).
+    pub path_length_m_per_uav: f64,
 }
 
 /// How a formation rode out faults of some UAVs' own sensors.
@@ -168,6 +183,13 @@ pub struct RunMetrics {
     suspect_before: Vec<bool>,
     suspect_episodes: u64,
     t_last: f64,
+    /// Forming: measured at all, the last time a follower was outside its allowable errors,
+    /// the largest error ratio so far and at that time, and the distance flown by all.
+    forming: bool,
+    last_out_any: f64,
+    ratio_so_far: f64,
+    ratio_before_formed: f64,
+    path_m: f64,
 }
 
 /// Steps between connectivity samples for swarms larger than [`CONNECTIVITY_EVERY_STEP_UP_TO`].
@@ -214,6 +236,12 @@ impl RunMetrics {
             suspect_before: Vec::new(),
             suspect_episodes: 0,
             t_last: 0.0,
+            forming: !scenario.placement().in_slots()
+                || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. })),
+            last_out_any: f64::NEG_INFINITY,
+            ratio_so_far: 0.0,
+            ratio_before_formed: 0.0,
+            path_m: 0.0,
         }
     }
 
@@ -298,6 +326,15 @@ impl RunMetrics {
                         }
                     })
                     .fold(0.0, f64::max),
+            }),
+            forming: self.forming.then(|| FormingMetrics {
+                time_to_form_s: if self.last_out_any >= self.t_last - 1e-9 {
+                    f64::INFINITY
+                } else {
+                    (self.last_out_any + self.dt).max(0.0)
+                },
+                transient_error_ratio: self.ratio_before_formed,
+                path_length_m_per_uav: self.path_m / self.followers.max(1) as f64,
             }),
             isolation: self.isolating.then(|| {
                 let per = self.dt / self.followers.max(1) as f64;
@@ -397,6 +434,10 @@ struct Partial {
     active: u64,
     heading: [f64; 3],
     healthy_max: [f64; 6],
+    /// Largest error over its allowable error among the chunk's followers.
+    max_ratio: f64,
+    /// Sum of the followers' speeds (m/s).
+    speed_sum: f64,
 }
 
 fn partial(
@@ -428,6 +469,8 @@ fn partial(
         }
         let e = formation_error_to(scenario, frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
+        p.speed_sum += speed;
+        p.max_ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(p.max_ratio, f64::max);
         if faulty.binary_search(&i).is_err() {
             for k in 0..6 {
                 p.healthy_max[k] = p.healthy_max[k].max(e[k].abs());
@@ -468,6 +511,7 @@ impl Observer for RunMetrics {
         });
         let mut active = 0u64;
         let mut heading = [0.0f64; 3];
+        let (mut step_ratio, mut speeds) = (0.0f64, 0.0f64);
         for p in parts {
             for k in 0..6 {
                 self.total.max_abs[k] = self.total.max_abs[k].max(p.acc.max_abs[k]);
@@ -485,6 +529,8 @@ impl Observer for RunMetrics {
             for k in 0..6 {
                 self.healthy_max[k] = self.healthy_max[k].max(p.healthy_max[k]);
             }
+            step_ratio = step_ratio.max(p.max_ratio);
+            speeds += p.speed_sum;
             self.model_sq += p.model_sq;
             self.model_n += p.model_n;
             self.radio_used += p.radio_used;
@@ -492,6 +538,17 @@ impl Observer for RunMetrics {
             active += p.active;
             for k in 0..3 {
                 heading[k] += p.heading[k];
+            }
+        }
+        if self.forming {
+            // Distance flown over the period that ends here (none before the first frame).
+            if frame.k > 0 {
+                self.path_m += speeds * self.dt;
+            }
+            self.ratio_so_far = self.ratio_so_far.max(step_ratio);
+            if step_ratio > 1.0 {
+                self.last_out_any = frame.t;
+                self.ratio_before_formed = self.ratio_so_far;
             }
         }
         let order = (heading[0].powi(2) + heading[1].powi(2) + heading[2].powi(2)).sqrt() / (active.max(1) as f64);
@@ -591,6 +648,39 @@ mod tests {
         assert!((f.healthy_max_abs_error[1] - 0.1).abs() < 1e-9, "{f:?}");
         assert!((f.rejoin_s - 1.5).abs() < 1e-9, "{f:?}");
         assert!(r.isolation.is_none(), "no robust check on");
+    }
+
+    #[test]
+    fn a_formation_forms_when_its_last_follower_is_back_within_its_allowable_errors() {
+        let sc = Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
+            s.initial.placement = Some("disc".into());
+            s.initial.radius_m = Some(1000.0);
+        }))
+        .expect("valid");
+        let good = in_slots(&sc);
+        let uavs = vec![UavStep::default(); 6];
+        let active = [true; 6];
+        let mut m = RunMetrics::new(&sc);
+        for k in 0..30u64 {
+            let t = k as f64 * 0.1;
+            let mut states = good.clone();
+            // UAV3 3 m to the left (5× its 0.6 m) until 0.9 s, then 1.2 m (2×) until 1.9 s.
+            if t < 0.95 {
+                states[2][Y] += 3.0;
+            } else if t < 1.95 {
+                states[2][Y] += 1.2;
+            }
+            m.on_step(&sc, &frame(k, &states, &uavs, &active));
+        }
+        let f = m.finish(0, 3.0).forming.expect("a scattered start is measured");
+        assert!((f.time_to_form_s - 2.0).abs() < 1e-9, "{f:?}");
+        assert!((f.transient_error_ratio - 5.0).abs() < 1e-9, "{f:?}");
+        // Every follower at 70 m/s for the 29 periods after the first frame.
+        assert!((f.path_length_m_per_uav - 70.0 * 0.1 * 29.0).abs() < 1e-6, "{f:?}");
+        // In the slots from the start (the paper), nothing is measured.
+        let mut plain = RunMetrics::new(&paper());
+        plain.on_step(&paper(), &frame(0, &good, &uavs, &active));
+        assert!(plain.finish(0, 0.1).forming.is_none());
     }
 
     #[test]
