@@ -1,7 +1,9 @@
 //! Where the UAVs start: in their slots (the default, and the paper's), scattered at random in
 //! a box or a disc around the formation, or at explicit positions. Random starts are drawn by
 //! the simulator for each run (a seeded stream of its own), so that every run of a batch starts
-//! differently and the same seed starts the same way.
+//! differently and the same seed starts the same way. With `assign_slots`, the followers are
+//! not bound to the slots nearest their draw order: the drawn starts are assigned to the slots
+//! so that the total distance from start to slot is least (Kuhn-Munkres).
 
 use proxform_core::UavId;
 
@@ -15,6 +17,8 @@ pub enum Placement {
     Box {
         /// Size along x, y and z (m).
         size_m: [f64; 3],
+        /// Slots assigned to the drawn starts to minimise the total distance to them.
+        assign: bool,
     },
     /// Uniformly in a horizontal disc centred on the followers' slots' centre, spread evenly
     /// over a height band.
@@ -23,6 +27,8 @@ pub enum Placement {
         radius_m: f64,
         /// Height of the band (m).
         height_m: f64,
+        /// Slots assigned to the drawn starts to minimise the total distance to them.
+        assign: bool,
     },
     /// The listed followers at their positions (m, relative to the navigator's start, world
     /// axes); the others in their slots.

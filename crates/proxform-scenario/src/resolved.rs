@@ -214,10 +214,16 @@ fn initial(sc: &Scenario) -> InitialSpec {
     let base = InitialSpec { speed_kmh, ..InitialSpec::default() };
     match sc.placement() {
         Placement::Slots => InitialSpec { placement: Some("slots".into()), ..base },
-        Placement::Box { size_m } => InitialSpec { placement: Some("box".into()), box_m: Some(*size_m), ..base },
-        Placement::Disc { radius_m, height_m } => {
-            InitialSpec { placement: Some("disc".into()), radius_m: Some(*radius_m), height_m: Some(*height_m), ..base }
+        Placement::Box { size_m, assign } => {
+            InitialSpec { placement: Some("box".into()), box_m: Some(*size_m), assign_slots: Some(*assign), ..base }
         }
+        Placement::Disc { radius_m, height_m, assign } => InitialSpec {
+            placement: Some("disc".into()),
+            radius_m: Some(*radius_m),
+            height_m: Some(*height_m),
+            assign_slots: Some(*assign),
+            ..base
+        },
         Placement::Explicit(list) => InitialSpec {
             placement: Some("explicit".into()),
             uavs: list

@@ -189,6 +189,9 @@ pub struct InitialSpec {
     pub radius_m: Option<f64>,
     /// "disc": the height of its band (m). Default 0.
     pub height_m: Option<f64>,
+    /// "box", "disc": assign the drawn starts to the slots so that the total distance from
+    /// start to slot is least (else in draw order). Default false.
+    pub assign_slots: Option<bool>,
     /// "explicit": `[[initial.uav]]` entries, `id` and `position_m` (relative to the
     /// navigator's start, world axes).
     #[serde(default, rename = "uav", skip_serializing_if = "Vec::is_empty")]

@@ -32,6 +32,10 @@ pub fn placement(
     only("radius_m", spec.radius_m.is_some(), "disc")?;
     only("height_m", spec.height_m.is_some(), "disc")?;
     only("uav", !spec.uavs.is_empty(), "explicit")?;
+    let assign = spec.assign_slots.unwrap_or(false);
+    if spec.assign_slots.is_some() && !matches!(kind, "box" | "disc") {
+        return Err(err("initial.assign_slots", "applies to placement = \"box\" or \"disc\" only"));
+    }
     let n = initial.len() as f64;
     let cell = 2.0 * safety_distance_m;
     let room = |extent: [f64; 3]| extent.iter().map(|e| (e / cell).floor() + 1.0).product::<f64>();
@@ -59,7 +63,7 @@ pub fn placement(
                     ),
                 ));
             }
-            Ok(Placement::Box { size_m })
+            Ok(Placement::Box { size_m, assign })
         }
         "disc" => {
             let Some(r) = spec.radius_m else {
@@ -81,7 +85,7 @@ pub fn placement(
                     ),
                 ));
             }
-            Ok(Placement::Disc { radius_m, height_m })
+            Ok(Placement::Disc { radius_m, height_m, assign })
         }
         "explicit" => {
             if spec.uavs.is_empty() {

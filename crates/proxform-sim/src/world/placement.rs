@@ -2,7 +2,9 @@
 //! in the scenario's box or disc (each start drawn from the UAV's own placement stream, again
 //! until it is the safety distance from every UAV already placed, the navigator first), or at
 //! the scenario's explicit positions. Velocities and attitudes are the in-slot ones: the
-//! navigator's.
+//! navigator's. With `assign_slots` the drawn starts go to the followers whose slots make the
+//! total distance from start to slot least (Kuhn-Munkres, from the `pathfinding` crate, on
+//! distances in millimetres).
 
 use proxform_core::state::{State9, X, Y, Z};
 use proxform_scenario::placement::Placement;
@@ -45,14 +47,14 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
             let d2 = sc.safety_distance_m().powi(2);
             let key = run.at(0);
             let mut placed: Vec<[f64; 3]> = vec![nav_at];
-            for i in followers {
+            for i in followers.clone() {
                 let mut rng = key.rng(i as u64, Source::Placement);
                 let mut p = centre;
                 for _ in 0..MAX_DRAWS {
                     let u = [uniform(&mut rng), uniform(&mut rng), uniform(&mut rng)];
                     p = match *region {
-                        Placement::Box { size_m } => std::array::from_fn(|k| centre[k] + (u[k] - 0.5) * size_m[k]),
-                        Placement::Disc { radius_m, height_m } => {
+                        Placement::Box { size_m, .. } => std::array::from_fn(|k| centre[k] + (u[k] - 0.5) * size_m[k]),
+                        Placement::Disc { radius_m, height_m, .. } => {
                             let (r, a) = (radius_m * u[0].sqrt(), std::f64::consts::TAU * u[1]);
                             [centre[0] + r * a.cos(), centre[1] + r * a.sin(), centre[2] + (u[2] - 0.5) * height_m]
                         }
@@ -64,6 +66,17 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
                     }
                 }
                 placed.push(p);
+            }
+            let followers: Vec<usize> = (0..n).filter(|&i| i != nav).collect();
+            let starts = &placed[1..];
+            let order = match region {
+                Placement::Box { assign: true, .. } | Placement::Disc { assign: true, .. } => {
+                    assigned(starts, &followers, &states)
+                }
+                _ => (0..followers.len()).collect(),
+            };
+            for (f, &i) in followers.iter().enumerate() {
+                let p = starts[order[f]];
                 for k in 0..3 {
                     states[i][X + k] = p[k];
                 }
@@ -71,6 +84,18 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
         }
     }
     states
+}
+
+/// For each follower (in `followers` order), the index of the start it takes: the assignment of
+/// starts to the followers' slots (their positions in `slots`) with the least total distance.
+fn assigned(starts: &[[f64; 3]], followers: &[usize], slots: &[State9]) -> Vec<usize> {
+    let cost = pathfinding::matrix::Matrix::from_fn(followers.len(), starts.len(), |(f, s)| {
+        let slot = &slots[followers[f]];
+        let d = (0..3).map(|k| (slot[X + k] - starts[s][k]).powi(2)).sum::<f64>().sqrt();
+        // Millimetres: exact enough, and far from i64's range for flights of up to 1000 km.
+        (d * 1000.0).round() as i64
+    });
+    pathfinding::kuhn_munkres::kuhn_munkres_min(&cost).1
 }
 
 #[cfg(test)]
@@ -109,6 +134,34 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn assigned_slots_take_the_same_starts_with_the_least_total_distance() {
+        let disc = |assign: bool| {
+            scattered(|s| {
+                s.initial.placement = Some("disc".into());
+                s.initial.radius_m = Some(1000.0);
+                s.initial.assign_slots = Some(assign);
+            })
+        };
+        let (free, fixed) = (disc(true), disc(false));
+        let total = |s: &[State9]| -> f64 {
+            (1..6).map(|i| (0..3).map(|k| (s[i][X + k] - fixed.initial()[i][X + k]).powi(2)).sum::<f64>().sqrt()).sum()
+        };
+        let mut better = 0;
+        for r in 0..40 {
+            let (a, b) = (initial_states(&free, RunKey::new(3, r)), initial_states(&fixed, RunKey::new(3, r)));
+            // The same starts, each taken once.
+            let mut pa: Vec<[f64; 3]> = a[1..].iter().map(|s| [s[X], s[Y], s[Z]]).collect();
+            let mut pb: Vec<[f64; 3]> = b[1..].iter().map(|s| [s[X], s[Y], s[Z]]).collect();
+            pa.sort_by(|x, y| x.partial_cmp(y).expect("finite"));
+            pb.sort_by(|x, y| x.partial_cmp(y).expect("finite"));
+            assert_eq!(pa, pb, "run {r}");
+            assert!(total(&a) <= total(&b) + 1e-3 * 5.0, "run {r}: {} > {}", total(&a), total(&b));
+            better += usize::from(total(&a) < total(&b) - 1.0);
+        }
+        assert!(better > 30, "the assignment shortens the approach in most runs ({better} of 40)");
     }
 
     #[test]
