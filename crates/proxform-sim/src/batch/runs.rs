@@ -444,26 +444,24 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         per_uav_adjustments: per_uav_adj,
         sensor_faults: sensor_fault_summary(runs),
         forming: forming_summary(runs),
-        isolation: runs
-            .iter()
-            .all(|r| r.isolation.is_some())
-            .then(|| {
-                let mean = |f: &dyn Fn(&crate::measure::metrics::IsolationMetrics) -> f64| {
-                    runs.iter().filter_map(|r| r.isolation.as_ref()).map(f).sum::<f64>() / n
-                };
-                IsolationSummary {
-                    isolating_s_per_uav: mean(&|m| m.isolating_s_per_uav),
-                    isolated_per_uav_s: mean(&|m| m.isolated_per_uav_s),
-                    own_suspect_s_per_uav: mean(&|m| m.own_suspect_s_per_uav),
-                    own_suspect_episodes: runs
-                        .iter()
-                        .filter_map(|r| r.isolation.as_ref())
-                        .map(|m| m.own_suspect_episodes)
-                        .sum(),
-                }
-            })
-            .filter(|_| !runs.is_empty()),
+        isolation: isolation_summary(runs),
     }
+}
+
+/// The isolation part of a batch's summary (None when its runs had neither robust check on).
+fn isolation_summary(runs: &[RunSummary]) -> Option<IsolationSummary> {
+    let m: Vec<_> = runs.iter().filter_map(|r| r.isolation).collect();
+    if m.is_empty() {
+        return None;
+    }
+    let n = m.len() as f64;
+    let mean = |f: fn(&crate::measure::metrics::IsolationMetrics) -> f64| m.iter().map(f).sum::<f64>() / n;
+    Some(IsolationSummary {
+        isolating_s_per_uav: mean(|m| m.isolating_s_per_uav),
+        isolated_per_uav_s: mean(|m| m.isolated_per_uav_s),
+        own_suspect_s_per_uav: mean(|m| m.own_suspect_s_per_uav),
+        own_suspect_episodes: m.iter().map(|m| m.own_suspect_episodes).sum(),
+    })
 }
 
 /// The forming part of a batch's summary (None when its runs started in their slots).

@@ -201,6 +201,7 @@ impl RunMetrics {
     /// Metrics for `scenario`.
     pub fn new(scenario: &Scenario) -> Self {
         let nav = scenario.navigator().index();
+        let aftermaths = aftermaths(scenario);
         let sample =
             (0..scenario.len()).filter(|&i| i != nav).take(PER_UAV_SAMPLE).map(|i| (i, Acc::default())).collect();
         Self {
@@ -223,11 +224,11 @@ impl RunMetrics {
             dt: scenario.dt_s(),
             grid: proxform_core::grid::NeighbourGrid::new(),
             faulty: {
-                let mut u: Vec<usize> = aftermaths(scenario).iter().map(|a| a.uav).collect();
+                let mut u: Vec<usize> = aftermaths.iter().map(|a| a.uav).collect();
                 u.dedup();
                 u
             },
-            aftermaths: aftermaths(scenario),
+            aftermaths,
             healthy_max: [0.0; 6],
             isolating: {
                 let p = scenario.controller();
