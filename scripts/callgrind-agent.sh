@@ -15,7 +15,7 @@ count() {
     callgrind_annotate "$out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }'
     rm -f "$out"
 }
-for v in paper isolation own_check robust robust_singer; do
+for v in paper avoid isolation own_check robust robust_singer; do
     a=$(count "$v" "$n")
     b=$(count "$v" $((2 * n)))
     echo "$v: $(( (b - a) / n )) instructions per step"

@@ -96,6 +96,8 @@ pub fn list() -> Result<ExitCode> {
     println!("  swarm   N UAVs (--uavs N, default 1000) in a multi-level lattice, for large-swarm runs");
     println!("  fixed-wing-v  12 fixed-wing UAVs in a V: climb and 180° turn in moderate turbulence;");
     println!("                also scenarios/fixed-wing-v.toml");
+    println!("  aggregate     the paper's six from random starts within 1 km, forming, then the paper's");
+    println!("                path; also scenarios/aggregate.toml");
     println!("\nScenario files in scenarios/ run with `proxform run FILE.toml`; `proxform init` writes an");
     println!("annotated example; docs/scenarios.md lists every key.");
     Ok(ExitCode::SUCCESS)

@@ -13,13 +13,15 @@ use crate::spec::{AutoDepsSpec, FormationSpec, ScenarioSpec, ShapeSpec};
 pub const PAPER: &str = include_str!("../scenarios/paper.toml");
 /// `scenarios/fixed-wing-v.toml`: 12 fixed wings in a V, climb and 180° turn in turbulence.
 pub const FIXED_WING_V: &str = include_str!("../scenarios/fixed-wing-v.toml");
+/// `scenarios/aggregate.toml`: the paper's six from random starts within 1 km, then its path.
+pub const AGGREGATE: &str = include_str!("../scenarios/aggregate.toml");
 /// `scenarios/example.toml`: the annotated example `proxform init` writes.
 pub const EXAMPLE: &str = include_str!("../scenarios/example.toml");
 /// `scenarios/compare-paper.toml`: the built-in comparison.
 pub const COMPARE_PAPER: &str = include_str!("../scenarios/compare-paper.toml");
 
 /// Names of the built-in scenarios.
-pub const NAMES: [&str; 3] = ["paper", "swarm", "fixed-wing-v"];
+pub const NAMES: [&str; 4] = ["paper", "swarm", "fixed-wing-v", "aggregate"];
 
 /// Horizontal spacing of the swarm's lattice (m).
 pub const SWARM_SPACING_M: f64 = 50.0;
@@ -92,7 +94,12 @@ pub fn spec_by_name(name: &str, uavs: Option<usize>) -> Result<ScenarioSpec, Str
         ("fixed-wing-v", None) => {
             Ok(crate::load::parse_spec(FIXED_WING_V, "fixed-wing-v.toml").expect("the built-in file parses"))
         }
-        ("paper" | "fixed-wing-v", Some(_)) => Err(format!("--uavs applies to --scenario swarm only, not to {name}")),
+        ("aggregate", None) => {
+            Ok(crate::load::parse_spec(AGGREGATE, "aggregate.toml").expect("the built-in file parses"))
+        }
+        ("paper" | "fixed-wing-v" | "aggregate", Some(_)) => {
+            Err(format!("--uavs applies to --scenario swarm only, not to {name}"))
+        }
         (other, _) => Err(format!("unknown scenario '{other}' (built-in: {})", NAMES.join(", "))),
     }
 }

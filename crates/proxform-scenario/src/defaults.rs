@@ -20,6 +20,12 @@ pub const SAFETY_DISTANCE_M: f64 = 50.0;
 pub const WARMUP_S: f64 = 1.0;
 /// Separation keeping distance, in safety distances (when `controller.separation_m` is unset).
 pub const SEPARATION_PER_SAFETY: f64 = 2.0;
+/// A formation not starting in its slots must have formed by this time to pass (s).
+pub const FORM_WITHIN_S: f64 = 120.0;
+/// Collision avoidance distance, in safety distances (when `controller.avoid_m` is unset): a
+/// quarter more, since the avoidance holds its distance only to within the lag of the UAVs'
+/// rate-limited inputs.
+pub const AVOID_PER_SAFETY: f64 = 1.25;
 
 /// Position noise 1σ (m).
 pub const NOISE_POSITION_M: f64 = 0.02;

@@ -85,6 +85,7 @@ fn path(p: &NavigatorPath) -> PathSpec {
             pitch_swing_deg: Some(p.pitch_swing_rad.to_degrees()),
             yaw_amplitude_deg: Some(p.yaw_amplitude_rad.to_degrees()),
             roll_amplitude_deg: Some(p.roll_amplitude_rad.to_degrees()),
+            lead_in_s: (p.lead_in_s > 0.0).then_some(p.lead_in_s),
             ..PathSpec::default()
         },
         NavigatorPath::Segments(p) => PathSpec {
@@ -141,8 +142,10 @@ fn controller(sc: &Scenario) -> ControllerSpec {
         coast_accel_s: Some(p.coast_accel_s),
         coast_decay_s: Some(p.coast_decay_s),
         bank_turn_feedforward: Some(p.bank_turn_feedforward),
+        stop_closing: Some(p.stop_closing),
         own_filter_gain: Some(p.own_filter_gain),
         separation_m: p.separation_m,
+        avoid_m: p.avoid_m,
         horizon: Some(i64::from(p.horizon)),
         isolation_gate: Some(p.isolation_gate.unwrap_or(0.0)),
         own_gate_m: Some(p.own_gate_m.unwrap_or(0.0)),
@@ -211,7 +214,7 @@ fn noise(sc: &Scenario) -> NoiseSpec {
 fn initial(sc: &Scenario) -> InitialSpec {
     use crate::placement::Placement;
     let speed_kmh = Some(kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()])));
-    let base = InitialSpec { speed_kmh, ..InitialSpec::default() };
+    let base = InitialSpec { speed_kmh, form_within_s: sc.form_within_s(), ..InitialSpec::default() };
     match sc.placement() {
         Placement::Slots => InitialSpec { placement: Some("slots".into()), ..base },
         Placement::Box { size_m, assign } => {
@@ -339,6 +342,7 @@ mod tests {
                 assert!(close(p.envelope.thresholds[k], q.envelope.thresholds[k]), "threshold {k}");
             }
             assert!(close(p.separation_m.unwrap_or(0.0), q.separation_m.unwrap_or(0.0)));
+            assert!(close(p.avoid_m.unwrap_or(0.0), q.avoid_m.unwrap_or(0.0)));
             for (a, b) in sc.initial().iter().zip(again.initial()) {
                 for k in 0..9 {
                     assert!(close(a[k], b[k]), "initial state {k}: {} vs {}", a[k], b[k]);

@@ -83,6 +83,7 @@ pub struct Scenario {
     pub(crate) path: NavigatorPath,
     pub(crate) initial: Vec<State9>,
     pub(crate) placement: crate::placement::Placement,
+    pub(crate) form_within_s: Option<f64>,
     pub(crate) noise: MeasurementNoise,
     pub(crate) gnss_bias: Option<CorrelatedNoise>,
     pub(crate) actuation_error: f64,
@@ -178,6 +179,12 @@ impl Scenario {
     /// in its slot, from which the simulator draws or sets the other starts.
     pub fn placement(&self) -> &crate::placement::Placement {
         &self.placement
+    }
+
+    /// For a formation that does not start in its slots: the time (s) by which a run must have
+    /// formed to pass (`[initial] form_within_s`); None for in-slot starts.
+    pub fn form_within_s(&self) -> Option<f64> {
+        self.form_within_s
     }
 
     /// Dependency table of every UAV (the navigator's is unused).

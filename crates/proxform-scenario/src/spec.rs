@@ -156,6 +156,8 @@ pub struct PathSpec {
     pub yaw_amplitude_deg: Option<f64>,
     /// Paper path: roll amplitude (deg). Default 30.
     pub roll_amplitude_deg: Option<f64>,
+    /// Paper path: time flown before the profile starts (s). Default 0.
+    pub lead_in_s: Option<f64>,
     /// Segments path: the pieces, flown in order; after the last, straight on.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub segment: Vec<SegmentSpec>,
@@ -192,6 +194,9 @@ pub struct InitialSpec {
     /// "box", "disc": assign the drawn starts to the slots so that the total distance from
     /// start to slot is least (else in draw order). Default false.
     pub assign_slots: Option<bool>,
+    /// Not in the slots: a run passes when its formation has formed (every follower within its
+    /// allowable errors from then to the end) by this time (s). Default 120.
+    pub form_within_s: Option<f64>,
     /// "explicit": `[[initial.uav]]` entries, `id` and `position_m` (relative to the
     /// navigator's start, world axes).
     #[serde(default, rename = "uav", skip_serializing_if = "Vec::is_empty")]
@@ -246,10 +251,15 @@ pub struct ControllerSpec {
     /// Course frame: add the slots' turn velocity from the reference's bank. Default: on for
     /// the fixed wing, off for the kinematic vehicle.
     pub bank_turn_feedforward: Option<bool>,
+    /// Limit the closing velocity to what braking stops within the gap. Default: on for the
+    /// kinematic vehicle, off for the fixed wing.
+    pub stop_closing: Option<bool>,
     /// Gain of the own-state filter, in (0, 1]; 1 uses raw measurements. Default 1.
     pub own_filter_gain: Option<f64>,
     /// Separation keeping distance (m, ≥ 0; 0 off). Default twice `safety_distance_m`.
     pub separation_m: Option<f64>,
+    /// Collision avoidance distance (m); 0 switches it off. Default: the safety distance.
+    pub avoid_m: Option<f64>,
     /// Horizon H of the predictive input (1 to 50). Default 1.
     pub horizon: Option<i64>,
     /// Robust fusion's gate in permissible errors (> 0; 0 off). Default off.

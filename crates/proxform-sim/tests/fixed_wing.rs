@@ -90,16 +90,24 @@ fn separation_keeping_holds_a_wide_v_apart_where_formation_keeping_alone_does_no
     // A V of half-angle 45°: through the turn its inner arm must slow to 42 m/s, and in one run
     // in a hundred its tail catches up with the UAV ahead (4 of 400 runs of seed 1 come within
     // 15 m without separation keeping, the closest, run 135, at 8.0 m; with it none comes
-    // closer than 17.4 m).
+    // closer than 17.4 m; with collision avoidance only, none closer than 15 m either).
     let text = FIXED_WING_V.replace("angle_deg = 30.0", "angle_deg = 45.0");
     let wide = parse(&text, "wide-v.toml").expect("valid");
     assert_eq!(wide.controller().separation_m, Some(30.0), "by default twice the safety distance, 30 m");
     let spec = parse_spec(&text, "wide-v.toml").expect("parses");
-    let off = Scenario::try_from(spec.with(|s| s.controller.separation_m = Some(0.0))).expect("valid");
+    let off = Scenario::try_from(spec.clone().with(|s| {
+        s.controller.separation_m = Some(0.0);
+        s.controller.avoid_m = Some(0.0);
+    }))
+    .expect("valid");
+    // Collision avoidance alone (on by default, 1.25 × 15 m) also keeps them apart.
+    let avoid_only = Scenario::try_from(spec.with(|s| s.controller.separation_m = Some(0.0))).expect("valid");
     let with = run_one(&wide, 1, 135);
     let without = run_one(&off, 1, 135);
+    let avoiding = run_one(&avoid_only, 1, 135);
     assert!(without.min_separation_m < 10.0, "{}", without.min_separation_m);
     assert!(with.min_separation_m > 15.0, "{}", with.min_separation_m);
+    assert!(avoiding.min_separation_m > 15.0, "{}", avoiding.min_separation_m);
 }
 
 #[test]

@@ -1,5 +1,6 @@
 //! One agent in a ring of 8 neighbours, flying straight on, for each variant of the robust
-//! settings (docs/METHOD.md §8): the paper's, the robust fusion (`isolation_gate = 1`), the
+//! settings (docs/METHOD.md §8): the paper's, with the collision avoidance checked (as the
+//! simulator flies it), the robust fusion (`isolation_gate = 1`), the
 //! own-sensor check (`own_gate_m = 3`), both, and both with the Kalman tracks. The navigator is
 //! the first neighbour, so the fusion has three estimates upstream to take its median over.
 //! Shared by `benches/controller.rs` (`agent_step_variant`) and `examples/agent_steps.rs`
@@ -12,11 +13,15 @@ use proxform_core::{
 };
 
 /// The variants, by name.
-pub const VARIANTS: [&str; 5] = ["paper", "isolation", "own_check", "robust", "robust_singer"];
+pub const VARIANTS: [&str; 6] = ["paper", "avoid", "isolation", "own_check", "robust", "robust_singer"];
 
 /// The controller parameters of `variant`.
 pub fn params(variant: &str) -> ControllerParams {
     let mut p = ControllerParams::default();
+    if variant == "avoid" {
+        // What the simulator sets for the paper's 50 m safety distance (not binding here).
+        p.avoid_m = Some(62.5);
+    }
     if matches!(variant, "isolation" | "robust" | "robust_singer") {
         p.isolation_gate = Some(1.0);
     }

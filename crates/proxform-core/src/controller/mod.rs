@@ -15,6 +15,7 @@
 //! it keeps its course: `X̂_ij − X_hold`, and so the centre `O_i − X_hold`. Attitude
 //! differences are then small and wrap correctly, and step 6's test is on `X_hold − O_i`.
 
+mod avoid;
 mod decision;
 mod fusion;
 mod params;
@@ -23,9 +24,10 @@ mod setup;
 use std::sync::Arc;
 
 pub use decision::{Decision, Outcome};
-pub use params::{ControllerParams, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
+pub use params::{ControllerParams, AVOID_BRAKING_SHARE, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
 pub use setup::ControllerSetup;
 
+use avoid::Avoidance;
 use fusion::{Fusion, Implied};
 
 use crate::error::ConfigError;
@@ -59,6 +61,8 @@ pub struct ProximityController {
     /// The navigator, when known: the robust fusion never leaves it out, and weighs the others
     /// against the UAVs no farther from it than this one.
     navigator: Option<UavId>,
+    /// Collision avoidance's working memory (only with `avoid_m` > 0): allocated once.
+    avoidance: Option<Box<Avoidance>>,
 }
 
 /// Steps 1-3 accumulated over the perceived neighbours, each estimate as `X̂_ij − X_hold`.
@@ -151,6 +155,10 @@ impl ProximityController {
         let fusion = p
             .isolation_gate
             .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
+        let avoidance = p
+            .avoid_m
+            .filter(|&d| d > 0.0)
+            .map(|d| Box::new(Avoidance::new(d, 0.5 * setup.vehicle.braking_mps2(), slots)));
         Ok(Self {
             id,
             setup,
@@ -160,6 +168,7 @@ impl ProximityController {
             nearest: vec![(EMPTY, 0.0); m].into_boxed_slice(),
             fusion,
             navigator: None,
+            avoidance,
         })
     }
 
@@ -219,6 +228,7 @@ impl ProximityController {
                     + f.implied.capacity() * std::mem::size_of::<Implied>()
                     + f.scratch.capacity() * std::mem::size_of::<f64>()
             })
+            + self.avoidance.as_ref().map_or(0, |a| a.heap_bytes())
     }
 
     /// One update period at time `now_s`: `own` is the UAV's estimate of its own state X_i,
@@ -241,7 +251,12 @@ impl ProximityController {
             return Decision::alone();
         }
         // Step 4: the envelope centre O_i (as O_i − X_hold).
-        let o_i = envelope_centre(params, &est);
+        let mut o_i = envelope_centre(params, &est, setup.stopping_mps2);
+        // Collision avoidance (beyond the paper): no closing faster than braking can stop.
+        if let Some(av) = &mut self.avoidance {
+            av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);
+            av.limit(vehicle, &x_hold, params.dt_s, &mut o_i);
+        }
         // Steps 5-6: keep the course while X_hold lies inside the envelope around O_i.
         let x_hold_minus_o = -o_i;
         let envelope = &params.envelope;
@@ -254,6 +269,7 @@ impl ProximityController {
         // Step 7: the predictive input within the vehicle's limits.
         let normalised_sq = envelope.normalised_sq(&x_hold_minus_o);
         let input = setup.input_toward(own, &x_hold_minus_o);
+
         decide(Outcome::Adjusted { normalised_sq }, input)
     }
 
@@ -416,8 +432,10 @@ impl ProximityController {
 /// Step 4: `O_i − X_hold` with `O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i` (O_i = X̄_i when no main reference
 /// is perceived, X̂ᴰ_i when only main references are), moved away from neighbours that come
 /// too close (separation keeping, beyond the paper), and with the velocity part of W closing
-/// the remaining position gap over τ (paper §2.3).
-fn envelope_centre(params: &ControllerParams, est: &Estimates) -> State9 {
+/// the remaining position gap over τ (paper §2.3), never faster than braking at `stopping`
+/// (m/s²) can stop within the gap: `min(|e|/τ, √(2·a·|e|))` per axis (beyond the paper; it
+/// binds only on gaps wider than 2·a·τ², metres, never in formation).
+fn envelope_centre(params: &ControllerParams, est: &Estimates, stopping: Option<f64>) -> State9 {
     let lambda = params.lambda;
     let x_bar = if est.n_bar > 0 { est.sum_bar / est.w_bar } else { est.sum_dep / est.c_sum };
     let mut o_i = if est.main_refs > 0 {
@@ -431,7 +449,11 @@ fn envelope_centre(params: &ControllerParams, est: &Estimates) -> State9 {
     }
     if let Some(tau) = params.closing_time_s {
         for k in X..VX {
-            o_i[k + 3] += o_i[k] / tau;
+            let e = o_i[k];
+            o_i[k + 3] += match stopping {
+                Some(a) if e.abs() > 2.0 * a * tau * tau => e.signum() * (2.0 * a * e.abs()).sqrt(),
+                _ => e / tau,
+            };
         }
     }
     o_i

@@ -22,6 +22,13 @@ pub struct ControllerParams {
     /// of W, "determined by the current speed and relative position of proximal UAVs"
     /// (paper §2.3). `None` gives METHOD §4's zero velocity offset. Default 1 s.
     pub closing_time_s: Option<f64>,
+    /// Limit the velocity that closes a position gap to what braking can stop within the gap,
+    /// `min(|e|/τ, √(2·a·|e|))` on each axis, `a` the collision avoidance's share of the
+    /// vehicle's braking (beyond the paper, METHOD §8): a UAV far from its slot (scattered
+    /// starts, a change of formation, a UAV joining) arrives without overshooting it. It binds
+    /// only on gaps wider than 2·a·τ² (5 m for the paper's vehicle), never in formation.
+    /// Default true.
+    pub stop_closing: bool,
     /// Input penalty (dimensionless, ≥ 0), applied to each input normalised by its per-step
     /// rate limit. Default 0.01.
     pub input_weight: f64,
@@ -56,6 +63,16 @@ pub struct ControllerParams {
     /// the choice to the caller (the simulator uses twice the scenario's safety distance) and
     /// is off for a controller on its own. Default `None`.
     pub separation_m: Option<f64>,
+    /// Collision avoidance (beyond the paper, METHOD §8), in m (≥ 0): no perceived neighbour
+    /// may come closer than this (nor than [`SEPARATION_SLOT_FRACTION`] of the distance between
+    /// the two slots). The UAV limits the speed at which it closes on each neighbour to what
+    /// its own braking ([`crate::VehicleModel::braking_mps2`]) can stop before that distance,
+    /// `√(2·a·(d − d_min))`; while a limit binds it flies the limited velocity instead of
+    /// its envelope centre's position. It binds only on UAVs closing fast or already too
+    /// close, as in forming from scattered starts and in formation changes. 0 switches it off;
+    /// `None` leaves the choice to the caller (the simulator uses the scenario's safety
+    /// distance) and is off for a controller on its own. Default `None`.
+    pub avoid_m: Option<f64>,
     /// Horizon H of the predictive input (updates, 1 to 50). 1 is the paper's closed-form
     /// one-step input; H > 1 solves a quadratic program with Clarabel ([`crate::horizon`]).
     /// Default 1.
@@ -135,6 +152,15 @@ impl ControllerParams {
                 });
             }
         }
+        if let Some(d) = self.avoid_m {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(ConfigError::OutOfRange {
+                    field: "avoid_m",
+                    value: d,
+                    expected: "a finite distance ≥ 0 m",
+                });
+            }
+        }
         if let Some(g) = self.isolation_gate {
             positive("isolation_gate", g)?;
         }
@@ -172,6 +198,12 @@ impl ControllerParams {
 /// between its slot and the UAV's own (see [`ControllerParams::separation_m`]).
 pub const SEPARATION_SLOT_FRACTION: f64 = 0.8;
 
+/// Collision avoidance counts on this share of the vehicle's braking
+/// ([`crate::VehicleModel::braking_mps2`]): the limit it follows is then twice the distance
+/// the UAV needs to stop, room for the lag of its rate-limited inputs and for a neighbour that
+/// does not give way (the navigator).
+pub const AVOID_BRAKING_SHARE: f64 = 0.5;
+
 /// Longest horizon accepted (updates).
 pub const MAX_HORIZON: u32 = 50;
 
@@ -183,6 +215,7 @@ impl Default for ControllerParams {
             lambda: 0.8,
             envelope: Envelope { thresholds: Self::paper_thresholds(), rho: 0.4 },
             closing_time_s: Some(1.0),
+            stop_closing: true,
             input_weight: 0.01,
             predictor: PredictorKind::default(),
             track_timeout_s: 1.0,
@@ -192,6 +225,7 @@ impl Default for ControllerParams {
             bank_turn_feedforward: false,
             own_filter_gain: 1.0,
             separation_m: None,
+            avoid_m: None,
             horizon: 1,
             isolation_gate: None,
             own_gate_m: None,

@@ -65,6 +65,43 @@ impl VehicleModel {
         }
     }
 
+    /// The deceleration (m/s²) the collision avoidance counts on to stop closing on a
+    /// neighbour: the kinematic vehicle's smallest adjusting rate of vx, vy, vz; for the fixed
+    /// wing, half the lateral acceleration of its steepest allowed bank (it avoids by turning,
+    /// and must roll into the turn first).
+    pub fn braking_mps2(&self) -> f64 {
+        match self {
+            VehicleModel::Kinematic(m) => m.limits.accel_max_mps2.min(),
+            VehicleModel::FixedWing(m) => {
+                let bank = m.bank_max_rad.min((1.0 / m.load_factor_max).acos());
+                0.5 * G * bank.tan()
+            }
+        }
+    }
+
+    /// The velocity nearest `v` (m/s, world frame) that the vehicle can fly: the kinematic
+    /// vehicle's vx, |vy|, |vz| limits; for the fixed wing, `v` scaled into its speed range.
+    pub fn clamp_velocity(&self, v: [f64; 3]) -> [f64; 3] {
+        match self {
+            VehicleModel::Kinematic(m) => {
+                let l = &m.limits;
+                [
+                    v[0].clamp(l.vx_min_mps, l.vx_max_mps),
+                    v[1].clamp(-l.vy_max_mps, l.vy_max_mps),
+                    v[2].clamp(-l.vz_max_mps, l.vz_max_mps),
+                ]
+            }
+            VehicleModel::FixedWing(m) => {
+                let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if speed < 1e-9 {
+                    return v;
+                }
+                let k = speed.clamp(m.stall_speed_mps, m.max_speed_mps) / speed;
+                [v[0] * k, v[1] * k, v[2] * k]
+            }
+        }
+    }
+
     /// `F·X`: the state after `dt` when no new input is given.
     #[inline]
     pub fn hold(&self, x: &State9, dt: f64) -> State9 {

@@ -78,6 +78,9 @@ pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<Control
     if let Some(v) = c.separation_m {
         p.separation_m = Some(distance("controller.separation_m", non_negative("controller.separation_m", v)?)?);
     }
+    if let Some(v) = c.avoid_m {
+        p.avoid_m = Some(distance("controller.avoid_m", non_negative("controller.avoid_m", v)?)?);
+    }
     if let Some(v) = c.own_filter_gain {
         let v = positive("controller.own_filter_gain", v)?;
         if v > 1.0 {
@@ -153,6 +156,8 @@ pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<Control
         }
     };
     p.bank_turn_feedforward = c.bank_turn_feedforward.unwrap_or(fixed_wing);
+    // The fixed wing's braking is a rough figure (it avoids by turning): off unless asked.
+    p.stop_closing = c.stop_closing.unwrap_or(!fixed_wing);
     if let Some(t) = &c.thresholds {
         let mut d = p.envelope.thresholds;
         let keys: [ThresholdKey; 9] = [

@@ -102,6 +102,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let path = path::path(&spec.path)?;
         let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
         let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m)?;
+        let form_within_s = placement::form_within(&spec.initial, &placement, duration_s)?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
 
         let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
@@ -169,6 +170,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
+        params.avoid_m = Some(params.avoid_m.unwrap_or(defaults::AVOID_PER_SAFETY * safety_distance_m));
         let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
         let mut warnings = world::faults_after(&faults, duration_s);
         if navigator_by_radio {
@@ -192,6 +194,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             path,
             initial,
             placement,
+            form_within_s,
             noise,
             gnss_bias,
             actuation_error,

@@ -8,11 +8,16 @@ use crate::path::waypoints::waypoint_segments;
 use crate::path::{NavigatorPath, PaperPath, Segment, SegmentsPath};
 use crate::spec::PathSpec;
 
+/// Longest lead-in of the paper path (s): about eleven days, far beyond any flight, and small
+/// enough that the profile's positions stay finite.
+const MAX_LEAD_IN_S: f64 = 1e6;
+
 fn paper_keys(p: &PathSpec) -> bool {
     p.height_amplitude_m.is_some()
         || p.pitch_swing_deg.is_some()
         || p.yaw_amplitude_deg.is_some()
         || p.roll_amplitude_deg.is_some()
+        || p.lead_in_s.is_some()
 }
 
 /// The navigator's path, covering the flight.
@@ -38,11 +43,17 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
                 pitch_swing_rad: amplitude("pitch_swing_deg", p.pitch_swing_deg, d.pitch_swing_rad, deg)?,
                 yaw_amplitude_rad: amplitude("yaw_amplitude_deg", p.yaw_amplitude_deg, d.yaw_amplitude_rad, deg)?,
                 roll_amplitude_rad: amplitude("roll_amplitude_deg", p.roll_amplitude_deg, d.roll_amplitude_rad, deg)?,
+                lead_in_s: match p.lead_in_s {
+                    Some(v) if v > MAX_LEAD_IN_S => {
+                        return Err(err("path.lead_in_s", format!("must be at most {MAX_LEAD_IN_S:e} s, found {v:e}")))
+                    }
+                    v => amplitude("lead_in_s", v, d.lead_in_s, id)?,
+                },
                 ..d
             }))
         }
         Some("segments") | Some("waypoints") if paper_keys(p) => {
-            Err(err("path", "amplitudes apply to the paper path only (kind = \"paper\")"))
+            Err(err("path", "amplitudes and lead_in_s apply to the paper path only (kind = \"paper\")"))
         }
         Some("segments") => {
             let v0 = kmh(speed_kmh(

@@ -14,6 +14,24 @@ use crate::spec::InitialSpec;
 /// UAV: random sequential placement jams at about half of a dense packing.
 const ROOM_PER_UAV: f64 = 2.0;
 
+/// `[initial] form_within_s`: for a formation not starting in its slots, the time by which it
+/// must have formed (default [`crate::defaults::FORM_WITHIN_S`], at most the flight; a longer
+/// one given asks for a formation formed by the end).
+pub fn form_within(spec: &InitialSpec, placement: &Placement, duration_s: f64) -> Result<Option<f64>, SpecError> {
+    if placement.in_slots() {
+        if spec.form_within_s.is_some() {
+            return Err(err("initial.form_within_s", "applies to formations that do not start in their slots"));
+        }
+        return Ok(None);
+    }
+    let t = match spec.form_within_s {
+        // Longer than the flight: the formation must have formed by its end.
+        Some(v) => positive("initial.form_within_s", v)?,
+        None => crate::defaults::FORM_WITHIN_S.min(duration_s),
+    };
+    Ok(Some(t))
+}
+
 /// The placement of `[initial]`, for `initial` (every UAV in its slot) and the navigator.
 pub fn placement(
     spec: &InitialSpec,

@@ -84,6 +84,11 @@ pub struct PaperPath {
     pub roll_amplitude_rad: f64,
     /// T of the attitude profiles (s): 100 s.
     pub attitude_period_s: f64,
+    /// Time flown before the profile's t = 0 (s, ≥ 0): the profile continued backward (steady
+    /// speed and side position, the height and attitude oscillations going on), so that a
+    /// formation can gather before the experiment proper starts. Default 0.
+    #[serde(default)]
+    pub lead_in_s: f64,
 }
 
 impl Default for PaperPath {
@@ -107,6 +112,7 @@ impl Default for PaperPath {
             yaw_phase_rad: 0.2f64.asin(),
             roll_amplitude_rad: deg(30.0),
             attitude_period_s: 100.0,
+            lead_in_s: 0.0,
         }
     }
 }
@@ -114,6 +120,17 @@ impl Default for PaperPath {
 impl PaperPath {
     /// The navigator's state at time `t` (s), starting from position `start` (m).
     pub fn state_at(&self, t: f64, start: [f64; 3]) -> State9 {
+        if self.lead_in_s > 0.0 {
+            // The profile at t − lead-in, moved so that the flight still starts at `start`.
+            let first = self.profile_at(-self.lead_in_s, [0.0; 3]);
+            let from = [start[0] - first[state::X], start[1] - first[state::Y], start[2] - first[state::Z]];
+            return self.profile_at(t - self.lead_in_s, from);
+        }
+        self.profile_at(t, start)
+    }
+
+    /// METHOD §9's profile at its own time `t` (s; before 0 it continues backward).
+    fn profile_at(&self, t: f64, start: [f64; 3]) -> State9 {
         let mut s = State9::zeros();
         s[state::VX] = self.vx0_mps + self.speed_ramps.iter().map(|r| r.value(t)).sum::<f64>();
         s[state::X] = start[0] + self.vx0_mps * t + self.speed_ramps.iter().map(|r| r.integral(t)).sum::<f64>();

@@ -1,0 +1,333 @@
+//! Collision avoidance (beyond the paper, METHOD §8): how fast a UAV may close on each
+//! neighbour it perceives.
+//!
+//! The paper's envelope centre pulls a UAV toward its slot with nothing to keep it off the UAVs
+//! between it and that slot: harmless in formation, where every UAV is near its slot, but from
+//! scattered starts or through a change of formation the paths cross. Separation keeping
+//! (`separation_m`) pushes the centre away from close neighbours by a few tens of metres, which
+//! a centre a kilometre away outweighs. This rule is a limit instead: the speed at which the
+//! UAV closes on neighbour j, `c = −(v_des − v_j)·n̂` with `n̂` from j to the UAV, may not
+//! exceed `√(2·a·(d − d_min − c·Δt))`, what the UAV's own braking `a` stops before `d_min`
+//! (and, once within `d_min`, it must open at `(d_min − d)` per second). Where the centre's
+//! velocity `v_des` closes faster, the excess along `n̂` is taken out, within the velocities the vehicle can fly
+//! (every neighbour four times over, alternating with the vehicle's limits); while a limit binds, the UAV flies that velocity instead of the
+//! centre's position (the position part of the target becomes the velocity's own step), so the
+//! remaining pull toward the slot slides it around the neighbour, at least as fast as the
+//! closing speed taken out, and to its right when nothing else decides the side (two UAVs
+//! head-on, each blocking the other's way to its slot, would otherwise stop nose to nose). Each UAV brakes as if the
+//! other did not: two that both apply it keep twice the margin, and the navigator, which does
+//! not apply it, is avoided all the same.
+
+use crate::formation::{Formation, FormationSlot};
+use crate::observation::{Observation, ObservationSource, UavId};
+use crate::state::{State9, VX, X};
+use crate::vehicle::VehicleModel;
+
+use super::{ControllerParams, SEPARATION_SLOT_FRACTION};
+
+/// One perceived neighbour, predicted to the next update: position, velocity, and how close
+/// it may come (m).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Near {
+    id: UavId,
+    pos: [f64; 3],
+    vel: [f64; 3],
+    /// The slots' share of the distance (`None`: the avoidance distance alone).
+    slot_limit: Option<f64>,
+    /// Distance from the UAV's own next position (m), to order the limits.
+    d: f64,
+}
+
+impl Near {
+    /// Neighbour `id` observed at `x_j`, `dt` s before the next update, for the UAV in `slot_i`
+    /// that will then be at `x_hold`.
+    #[inline]
+    fn new(formation: &Formation, id: UavId, x_j: &State9, dt: f64, slot_i: &FormationSlot, x_hold: &State9) -> Self {
+        let pos = [x_j[X] + dt * x_j[VX], x_j[X + 1] + dt * x_j[VX + 1], x_j[X + 2] + dt * x_j[VX + 2]];
+        let p = [x_hold[X] - pos[0], x_hold[X + 1] - pos[1], x_hold[X + 2] - pos[2]];
+        Self {
+            id,
+            pos,
+            vel: [x_j[VX], x_j[VX + 1], x_j[VX + 2]],
+            slot_limit: formation.slot(id).map(|s| SEPARATION_SLOT_FRACTION * (s.offset_m - slot_i.offset_m).norm()),
+            d: (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt(),
+        }
+    }
+}
+
+/// The rule's parameters and its list of neighbours, allocated once.
+#[derive(Debug, Clone)]
+pub(super) struct Avoidance {
+    /// `avoid_m`: no neighbour closer (m).
+    distance_m: f64,
+    /// `a`: the deceleration counted on (m/s²).
+    braking_mps2: f64,
+    /// This step's perceived neighbours.
+    near: Vec<Near>,
+    /// The side on which the UAV passes each neighbour whose limit bound in the last update
+    /// (a unit vector): kept while the limit binds, so that the UAV does not turn this way and
+    /// that as the geometry wavers.
+    sides: Vec<(UavId, [f64; 3])>,
+    /// The neighbours whose limit bound in this update (working memory).
+    bound_now: Vec<UavId>,
+}
+
+/// When a neighbour's limit first binds, a UAV already sliding past it at this share of the
+/// closing speed taken out (and faster than [`SLIDE_NOISE_MPS`]) passes it on that side;
+/// slower than that, on the right.
+const SLIDE_COMMITTED: f64 = 0.25;
+/// Slides slower than this (m/s) do not decide the side.
+const SLIDE_NOISE_MPS: f64 = 1.0;
+
+/// Most passes over the neighbours (a later limit, or the vehicle's, can undo part of an
+/// earlier one); the nearest neighbour's limit comes last in each, so it is the one that holds
+/// when not all can.
+const PASSES: usize = 8;
+
+impl Avoidance {
+    pub(super) fn new(distance_m: f64, braking_mps2: f64, capacity: usize) -> Self {
+        Self {
+            distance_m,
+            braking_mps2,
+            near: Vec::with_capacity(capacity),
+            sides: Vec::with_capacity(capacity),
+            bound_now: Vec::with_capacity(capacity),
+        }
+    }
+
+    pub(super) fn heap_bytes(&self) -> usize {
+        std::mem::size_of::<Self>()
+            + self.near.capacity() * std::mem::size_of::<Near>()
+            + self.sides.capacity() * std::mem::size_of::<(UavId, [f64; 3])>()
+            + self.bound_now.capacity() * std::mem::size_of::<UavId>()
+    }
+
+    /// Takes this update's neighbours: every UAV perceived, not only the nearest of each
+    /// azimuth area (one hidden behind another in its area may be the one closing fastest),
+    /// each once (its first report), extrapolated to the next update at its velocity.
+    pub(super) fn perceive(
+        &mut self,
+        formation: &Formation,
+        me: UavId,
+        slot_i: &FormationSlot,
+        x_hold: &State9,
+        params: &ControllerParams,
+        observations: &[Observation],
+    ) {
+        self.near.clear();
+        let r2 = params.areas.sensing_range_m.powi(2);
+        for (k, o) in observations.iter().enumerate() {
+            if o.id == me || observations[..k].iter().any(|p| p.id == o.id) {
+                continue;
+            }
+            let n = Near::new(formation, o.id, &o.state, params.dt_s, slot_i, x_hold);
+            if o.source == ObservationSource::Onboard && n.d * n.d > r2 {
+                continue;
+            }
+            self.near.push(n);
+        }
+    }
+
+    /// Limits the centre `o_i` (as `O_i − X_hold`, X_hold the UAV's state next update if it
+    /// keeps its course) so that the UAV closes on no neighbour faster than it can stop.
+    /// True when a limit bound.
+    pub(super) fn limit(&mut self, vehicle: &VehicleModel, x_hold: &State9, dt: f64, o_i: &mut State9) -> bool {
+        // The velocity the centre asks for, as far as the vehicle can fly it: limits on a
+        // velocity it cannot reach would bind on nothing.
+        let v_des =
+            vehicle.clamp_velocity([x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]]);
+        // Where the centre is, from X_hold.
+        let goal = [o_i[X], o_i[X + 1], o_i[X + 2]];
+        if self.near.iter().all(|n| self.excess(n, x_hold, dt, &v_des).is_none()) {
+            self.sides.clear();
+            return false;
+        }
+        // Farthest first, so the nearest neighbour's limit is applied last.
+        self.near.sort_unstable_by(|a, b| b.d.total_cmp(&a.d));
+        self.bound_now.clear();
+        let mut v = v_des;
+        for _ in 0..PASSES {
+            let mut changed = false;
+            for n in &self.near {
+                let Some((excess, n_hat)) = self.excess(n, x_hold, dt, &v) else { continue };
+                // Pass it: on the side chosen when its limit first bound; a new one on the side
+                // the centre asks for when it clearly asks, otherwise to the right (two UAVs
+                // head-on both keep right and pass each other). At least at the closing
+                // speed taken out.
+                let rel = [v[0] - n.vel[0], v[1] - n.vel[1], v[2] - n.vel[2]];
+                let slide = perpendicular(rel, n_hat);
+                let speed = norm(slide);
+                let kept = self.sides.iter().find(|s| s.0 == n.id).map(|s| perpendicular(s.1, n_hat));
+                let t_hat = match kept {
+                    Some(t) if norm(t) > 0.1 => scale(t, 1.0 / norm(t)),
+                    _ if speed > (SLIDE_COMMITTED * excess).max(SLIDE_NOISE_MPS) => scale(slide, 1.0 / speed),
+                    _ => right_of(n_hat),
+                };
+                if !self.bound_now.contains(&n.id) {
+                    self.bound_now.push(n.id);
+                    match self.sides.iter_mut().find(|s| s.0 == n.id) {
+                        Some(s) => s.1 = t_hat,
+                        None => self.sides.push((n.id, t_hat)),
+                    }
+                }
+                // Only when the centre lies beyond the neighbour (nearer than d_min to it, or
+                // past it): short of it, braking alone is enough.
+                let toward_goal = -(goal[0] * n_hat[0] + goal[1] * n_hat[1] + goal[2] * n_hat[2]);
+                let along_side = slide[0] * t_hat[0] + slide[1] * t_hat[1] + slide[2] * t_hat[2];
+                let more = if toward_goal > n.d - self.d_min(n) { (excess - along_side).max(0.0) } else { 0.0 };
+                for k in 0..3 {
+                    v[k] += excess * n_hat[k] + more * t_hat[k];
+                }
+                v = vehicle.clamp_velocity(v);
+                changed = true;
+            }
+            if !changed {
+                break;
+            }
+        }
+        let bound_now = &self.bound_now;
+        self.sides.retain(|s| bound_now.contains(&s.0));
+        for k in 0..3 {
+            o_i[VX + k] = v[k] - x_hold[VX + k];
+            o_i[X + k] = 0.5 * dt * o_i[VX + k];
+        }
+        true
+    }
+
+    /// How close neighbour `n` may come (m).
+    #[inline]
+    fn d_min(&self, n: &Near) -> f64 {
+        n.slot_limit.map_or(self.distance_m, |s| s.min(self.distance_m))
+    }
+
+    /// How much faster than allowed velocity `v` closes on neighbour `n`, and the direction
+    /// from it to the UAV; None when within the limit.
+    #[inline]
+    fn excess(&self, n: &Near, x_hold: &State9, dt: f64, v: &[f64; 3]) -> Option<(f64, [f64; 3])> {
+        let d = n.d;
+        if d < 1e-9 {
+            return None;
+        }
+        let n_hat = [(x_hold[X] - n.pos[0]) / d, (x_hold[X + 1] - n.pos[1]) / d, (x_hold[X + 2] - n.pos[2]) / d];
+        let closing = -((v[0] - n.vel[0]) * n_hat[0] + (v[1] - n.vel[1]) * n_hat[1] + (v[2] - n.vel[2]) * n_hat[2]);
+        let d_min = self.d_min(n);
+        let room = d - d_min - closing.max(0.0) * dt;
+        // Within d_min already: open at (d_min − d) per second.
+        let c_max = if room > 0.0 { (2.0 * self.braking_mps2 * room).sqrt() } else { room };
+        // A small tolerance, so that a limit met to rounding does not count again.
+        (closing > c_max + 1e-9).then_some((closing - c_max, n_hat))
+    }
+}
+
+/// The unit vector to the right of a UAV heading toward `−n_hat` (`n_hat` from the neighbour
+/// to the UAV), horizontal: `(−n̂) × ẑ`; for a neighbour straight above or below, `ŷ`.
+#[inline]
+fn right_of(n_hat: [f64; 3]) -> [f64; 3] {
+    // (−n̂) × ẑ = (−n̂y, n̂x, 0)
+    let (x, y) = (-n_hat[1], n_hat[0]);
+    let h = (x * x + y * y).sqrt();
+    if h < 1e-6 {
+        return [0.0, 1.0, 0.0];
+    }
+    [x / h, y / h, 0.0]
+}
+
+/// `a` without its component along the unit vector `n`.
+#[inline]
+fn perpendicular(a: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+    let along = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+    [a[0] - along * n[0], a[1] - along * n[1], a[2] - along * n[2]]
+}
+
+#[inline]
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+#[inline]
+fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vehicle::KinematicModel;
+
+    fn near(id: u32, pos: [f64; 3], vel: [f64; 3], me: [f64; 3]) -> Near {
+        let p = [me[0] - pos[0], me[1] - pos[1], me[2] - pos[2]];
+        Near { id: UavId(id), pos, vel, slot_limit: None, d: norm(p) }
+    }
+
+    fn own(pos: [f64; 3], vel: [f64; 3]) -> State9 {
+        State9::from_column_slice(&[pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], 0.0, 0.0, 0.0])
+    }
+
+    /// A centre 300 m to the right, straight through a neighbour 80 m away at the same speed.
+    fn blocked() -> (Avoidance, State9, State9) {
+        let mut av = Avoidance::new(62.5, 2.5, 4);
+        let x_hold = own([0.0, 0.0, 0.0], [60.0, 0.0, 0.0]);
+        av.near.push(near(1, [0.0, -80.0, 0.0], [60.0, 0.0, 0.0], [0.0; 3]));
+        let mut o_i = State9::zeros();
+        o_i[X + 1] = -300.0;
+        o_i[VX + 1] = -300.0;
+        (av, x_hold, o_i)
+    }
+
+    #[test]
+    fn closing_is_limited_to_what_braking_stops_and_the_uav_slides_past() {
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let (mut av, x_hold, mut o_i) = blocked();
+        assert!(av.limit(&vehicle, &x_hold, 0.1, &mut o_i));
+        let v = [x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]];
+        // Closing on it (−y) at most √(2·2.5·(80 − 62.5 − c·0.1)) ≈ 9 m/s.
+        assert!(-v[1] <= 9.5 && -v[1] > 5.0, "{v:?}");
+        // Head-on, nothing decides the side: to the right of −y, i.e. back (−x), at least as
+        // fast as the closing speed taken out (the vehicle's 20 m/s of vy less the limit).
+        assert!(v[0] < 60.0 - 5.0, "{v:?}");
+        // The target is now a velocity: its position part is that velocity's own step.
+        assert!((o_i[X + 1] - 0.05 * o_i[VX + 1]).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_side_once_chosen_is_kept_while_the_limit_binds() {
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let (mut av, x_hold, mut o_i) = blocked();
+        av.limit(&vehicle, &x_hold, 0.1, &mut o_i);
+        let first = av.sides[0].1;
+        // Next update the centre asks, slightly, for the other side: the UAV stays with its own.
+        let (_, x_hold, mut o_i) = blocked();
+        o_i[VX] = 3.0;
+        av.near.clear();
+        av.near.push(near(1, [0.0, -80.0, 0.0], [60.0, 0.0, 0.0], [0.0; 3]));
+        av.limit(&vehicle, &x_hold, 0.1, &mut o_i);
+        assert_eq!(av.sides[0].1, first);
+        assert!(o_i[VX] < 0.0, "{:?}", o_i.as_slice());
+    }
+
+    #[test]
+    fn a_neighbour_short_of_the_centre_is_braked_for_not_passed() {
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let (mut av, x_hold, mut o_i) = blocked();
+        // The centre is 10 m toward the neighbour, which stays 70 m away: brake, no slide.
+        o_i[X + 1] = -10.0;
+        o_i[VX + 1] = -18.0;
+        av.near[0].vel[1] = 0.0;
+        assert!(av.limit(&vehicle, &x_hold, 0.1, &mut o_i));
+        assert!(o_i[VX].abs() < 1e-9, "{:?}", o_i.as_slice());
+    }
+
+    #[test]
+    fn nothing_changes_when_no_neighbour_closes_fast() {
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let mut av = Avoidance::new(62.5, 2.5, 4);
+        let x_hold = own([0.0; 3], [60.0, 0.0, 0.0]);
+        av.near.push(near(1, [0.0, -100.0, 0.0], [60.0, 0.5, 0.0], [0.0; 3]));
+        let mut o_i = State9::zeros();
+        o_i[X + 1] = -0.3;
+        o_i[VX + 1] = -0.3;
+        let before = o_i;
+        assert!(!av.limit(&vehicle, &x_hold, 0.1, &mut o_i));
+        assert_eq!(o_i, before);
+    }
+}
