@@ -100,8 +100,13 @@ fn separation_keeping_holds_a_wide_v_apart_where_formation_keeping_alone_does_no
         s.controller.avoid_m = Some(0.0);
     }))
     .expect("valid");
-    // Collision avoidance alone (on by default, 1.25 × 15 m) also keeps them apart.
-    let avoid_only = Scenario::try_from(spec.with(|s| s.controller.separation_m = Some(0.0))).expect("valid");
+    // Collision avoidance alone (off by default for the fixed wing; 1.25 × 15 m) also keeps them
+    // apart.
+    let avoid_only = Scenario::try_from(spec.with(|s| {
+        s.controller.separation_m = Some(0.0);
+        s.controller.avoid_m = Some(18.75);
+    }))
+    .expect("valid");
     let with = run_one(&wide, 1, 135);
     let without = run_one(&off, 1, 135);
     let avoiding = run_one(&avoid_only, 1, 135);

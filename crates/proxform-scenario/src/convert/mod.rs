@@ -170,7 +170,13 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
-        params.avoid_m = Some(params.avoid_m.unwrap_or(defaults::AVOID_PER_SAFETY * safety_distance_m));
+        // Collision avoidance by default for the kinematic vehicle; the fixed wing's braking is a
+        // rough figure (it avoids by turning), so there it is asked for, like the stopping limit.
+        let avoid_default = match vehicle {
+            VehicleModel::Kinematic(_) => defaults::AVOID_PER_SAFETY * safety_distance_m,
+            VehicleModel::FixedWing(_) => 0.0,
+        };
+        params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
         let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
         let mut warnings = world::faults_after(&faults, duration_s);
         if navigator_by_radio {
