@@ -60,8 +60,8 @@ fn the_robust_fusion_alone_keeps_the_others_from_following_a_uav_that_flies_off(
     // The paper's formation; UAV2's own sensor sticks for 5 s at 40 s and nothing checks it:
     // UAV2 believes the reading and flies off by tens of metres. UAV3 weighs it against the
     // navigator, UAVs 5 and 6 against the median of the three UAVs ahead of them. Separation
-    // keeping is off, so that what the test sees is the fusion (with it on, the others also
-    // move aside as UAV2 passes).
+    // keeping and collision avoidance are off, so that what the test sees is the fusion (with
+    // them on, the others also move aside as UAV2 passes).
     let worst_of = |s: &Summary, uavs: &[u32]| {
         uavs.iter()
             .map(|&u| {
@@ -75,6 +75,7 @@ fn the_robust_fusion_alone_keeps_the_others_from_following_a_uav_that_flies_off(
         Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
             s.controller.isolation_gate = Some(gate);
             s.controller.separation_m = Some(0.0);
+            s.controller.avoid_m = Some(0.0);
             s.fault = vec![proxform_scenario::spec::FaultSpec {
                 kind: Some("stuck_sensor".into()),
                 uav: Some(2),

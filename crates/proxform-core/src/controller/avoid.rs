@@ -55,6 +55,28 @@ impl Near {
     }
 }
 
+/// The side on which the UAV passes a neighbour, and for how long its limit has bound.
+#[derive(Debug, Clone, Copy)]
+struct Side {
+    id: UavId,
+    /// Unit vector, perpendicular to the line to the neighbour when chosen.
+    t_hat: [f64; 3],
+    /// Seconds the limit has bound, with breaks shorter than [`SIDE_MEMORY_S`].
+    bound_s: f64,
+    /// Seconds since the limit last bound.
+    idle_s: f64,
+    /// Whether the side is already the right one (after [`LOCK_S`]).
+    right: bool,
+}
+
+/// After this long (s) passing a neighbour on the side its centre asked for, a UAV passes on
+/// the right instead: two UAVs that chose the same side (each asked to go the same way) slide
+/// together and never pass; on their rights they slide apart.
+const LOCK_S: f64 = 10.0;
+
+/// A side is forgotten once its neighbour's limit has not bound for this long (s).
+const SIDE_MEMORY_S: f64 = 2.0;
+
 /// The rule's parameters and its list of neighbours, allocated once.
 #[derive(Debug, Clone)]
 pub(super) struct Avoidance {
@@ -67,7 +89,7 @@ pub(super) struct Avoidance {
     /// The side on which the UAV passes each neighbour whose limit bound in the last update
     /// (a unit vector): kept while the limit binds, so that the UAV does not turn this way and
     /// that as the geometry wavers.
-    sides: Vec<(UavId, [f64; 3])>,
+    sides: Vec<Side>,
     /// The neighbours whose limit bound in this update (working memory).
     bound_now: Vec<UavId>,
 }
@@ -98,7 +120,7 @@ impl Avoidance {
     pub(super) fn heap_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.near.capacity() * std::mem::size_of::<Near>()
-            + self.sides.capacity() * std::mem::size_of::<(UavId, [f64; 3])>()
+            + self.sides.capacity() * std::mem::size_of::<Side>()
             + self.bound_now.capacity() * std::mem::size_of::<UavId>()
     }
 
@@ -131,15 +153,22 @@ impl Avoidance {
     /// Limits the centre `o_i` (as `O_i − X_hold`, X_hold the UAV's state next update if it
     /// keeps its course) so that the UAV closes on no neighbour faster than it can stop.
     /// True when a limit bound.
-    pub(super) fn limit(&mut self, vehicle: &VehicleModel, x_hold: &State9, dt: f64, o_i: &mut State9) -> bool {
+    /// `goal` is where the centre is, from X_hold (m).
+    pub(super) fn limit(
+        &mut self,
+        vehicle: &VehicleModel,
+        x_hold: &State9,
+        dt: f64,
+        o_i: &mut State9,
+        goal: &[f64; 3],
+    ) -> bool {
         // The velocity the centre asks for, as far as the vehicle can fly it: limits on a
         // velocity it cannot reach would bind on nothing.
         let v_des =
             vehicle.clamp_velocity([x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]]);
-        // Where the centre is, from X_hold.
-        let goal = [o_i[X], o_i[X + 1], o_i[X + 2]];
         if self.near.iter().all(|n| self.excess(n, x_hold, dt, &v_des).is_none()) {
-            self.sides.clear();
+            self.bound_now.clear();
+            self.forget(dt);
             return false;
         }
         // Farthest first, so the nearest neighbour's limit is applied last.
@@ -157,41 +186,73 @@ impl Avoidance {
                 let rel = [v[0] - n.vel[0], v[1] - n.vel[1], v[2] - n.vel[2]];
                 let slide = perpendicular(rel, n_hat);
                 let speed = norm(slide);
-                let kept = self.sides.iter().find(|s| s.0 == n.id).map(|s| perpendicular(s.1, n_hat));
-                let t_hat = match kept {
-                    Some(t) if norm(t) > 0.1 => scale(t, 1.0 / norm(t)),
-                    _ if speed > (SLIDE_COMMITTED * excess).max(SLIDE_NOISE_MPS) => scale(slide, 1.0 / speed),
-                    _ => right_of(n_hat),
+                let kept = self.sides.iter().find(|s| s.id == n.id).map(|s| (perpendicular(s.t_hat, n_hat), s));
+                let (mut t_hat, mut right) = match kept {
+                    Some((_, s)) if s.bound_s >= LOCK_S && !s.right => (right_of(n_hat), true),
+                    Some((t, s)) if norm(t) > 0.1 => (scale(t, 1.0 / norm(t)), s.right),
+                    _ if speed > (SLIDE_COMMITTED * excess).max(SLIDE_NOISE_MPS) => (scale(slide, 1.0 / speed), false),
+                    _ => (right_of(n_hat), true),
                 };
-                if !self.bound_now.contains(&n.id) {
-                    self.bound_now.push(n.id);
-                    match self.sides.iter_mut().find(|s| s.0 == n.id) {
-                        Some(s) => s.1 = t_hat,
-                        None => self.sides.push((n.id, t_hat)),
+                // Only when the centre lies beyond the neighbour (nearer than d_min to it, or
+                // past it) does the UAV pass it: short of it, braking alone is enough.
+                let toward_goal = -(goal[0] * n_hat[0] + goal[1] * n_hat[1] + goal[2] * n_hat[2]);
+                let passing = toward_goal > n.d - self.d_min(n);
+                let try_side = |t: [f64; 3]| {
+                    let along_side = slide[0] * t[0] + slide[1] * t[1] + slide[2] * t[2];
+                    let more = if passing { (excess - along_side).max(0.0) } else { 0.0 };
+                    let w = vehicle.clamp_velocity([
+                        v[0] + excess * n_hat[0] + more * t[0],
+                        v[1] + excess * n_hat[1] + more * t[1],
+                        v[2] + excess * n_hat[2] + more * t[2],
+                    ]);
+                    let achieved = (w[0] - n.vel[0]) * t[0] + (w[1] - n.vel[1]) * t[1] + (w[2] - n.vel[2]) * t[2];
+                    (w, achieved)
+                };
+                let (mut w, achieved) = try_side(t_hat);
+                if passing {
+                    // A side the vehicle's limits close (it already flies as fast that way as it
+                    // can) is no way past: the other side, if it gets past faster.
+                    let other = scale(t_hat, -1.0);
+                    let (w_other, achieved_other) = try_side(other);
+                    if achieved_other > achieved + SLIDE_NOISE_MPS {
+                        (w, t_hat, right) = (w_other, other, false);
                     }
                 }
-                // Only when the centre lies beyond the neighbour (nearer than d_min to it, or
-                // past it): short of it, braking alone is enough.
-                let toward_goal = -(goal[0] * n_hat[0] + goal[1] * n_hat[1] + goal[2] * n_hat[2]);
-                let along_side = slide[0] * t_hat[0] + slide[1] * t_hat[1] + slide[2] * t_hat[2];
-                let more = if toward_goal > n.d - self.d_min(n) { (excess - along_side).max(0.0) } else { 0.0 };
-                for k in 0..3 {
-                    v[k] += excess * n_hat[k] + more * t_hat[k];
+                if !self.bound_now.contains(&n.id) {
+                    self.bound_now.push(n.id);
+                    match self.sides.iter_mut().find(|s| s.id == n.id) {
+                        Some(s) => {
+                            s.t_hat = t_hat;
+                            s.right = right;
+                            s.bound_s += dt;
+                            s.idle_s = 0.0;
+                        }
+                        None => self.sides.push(Side { id: n.id, t_hat, bound_s: dt, idle_s: 0.0, right }),
+                    }
                 }
-                v = vehicle.clamp_velocity(v);
+                v = w;
                 changed = true;
             }
             if !changed {
                 break;
             }
         }
-        let bound_now = &self.bound_now;
-        self.sides.retain(|s| bound_now.contains(&s.0));
+        self.forget(dt);
         for k in 0..3 {
             o_i[VX + k] = v[k] - x_hold[VX + k];
             o_i[X + k] = 0.5 * dt * o_i[VX + k];
         }
         true
+    }
+
+    /// Ages the sides of the neighbours whose limit did not bind this update, and forgets
+    /// those idle for longer than [`SIDE_MEMORY_S`].
+    fn forget(&mut self, dt: f64) {
+        let bound_now = &self.bound_now;
+        for s in self.sides.iter_mut().filter(|s| !bound_now.contains(&s.id)) {
+            s.idle_s += dt;
+        }
+        self.sides.retain(|s| s.idle_s <= SIDE_MEMORY_S);
     }
 
     /// How close neighbour `n` may come (m).
@@ -259,15 +320,24 @@ mod tests {
         Near { id: UavId(id), pos, vel, slot_limit: None, d: norm(p) }
     }
 
+    fn goal(o_i: &State9) -> [f64; 3] {
+        [o_i[X], o_i[X + 1], o_i[X + 2]]
+    }
+
     fn own(pos: [f64; 3], vel: [f64; 3]) -> State9 {
         State9::from_column_slice(&[pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], 0.0, 0.0, 0.0])
     }
 
-    /// A centre 300 m to the right, straight through a neighbour 80 m away at the same speed.
+    /// A centre 300 m to the right, straight through a neighbour 80 m away at the same speed
+    /// (80 m/s: as much room to slow down as to speed up, 30 and 20 m/s).
     fn blocked() -> (Avoidance, State9, State9) {
+        blocked_at(80.0)
+    }
+
+    fn blocked_at(vx: f64) -> (Avoidance, State9, State9) {
         let mut av = Avoidance::new(62.5, 2.5, 4);
-        let x_hold = own([0.0, 0.0, 0.0], [60.0, 0.0, 0.0]);
-        av.near.push(near(1, [0.0, -80.0, 0.0], [60.0, 0.0, 0.0], [0.0; 3]));
+        let x_hold = own([0.0, 0.0, 0.0], [vx, 0.0, 0.0]);
+        av.near.push(near(1, [0.0, -80.0, 0.0], [vx, 0.0, 0.0], [0.0; 3]));
         let mut o_i = State9::zeros();
         o_i[X + 1] = -300.0;
         o_i[VX + 1] = -300.0;
@@ -278,13 +348,16 @@ mod tests {
     fn closing_is_limited_to_what_braking_stops_and_the_uav_slides_past() {
         let vehicle = VehicleModel::Kinematic(KinematicModel::default());
         let (mut av, x_hold, mut o_i) = blocked();
-        assert!(av.limit(&vehicle, &x_hold, 0.1, &mut o_i));
+        assert!({
+            let g = goal(&o_i);
+            av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
+        });
         let v = [x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]];
         // Closing on it (−y) at most √(2·2.5·(80 − 62.5 − c·0.1)) ≈ 9 m/s.
         assert!(-v[1] <= 9.5 && -v[1] > 5.0, "{v:?}");
         // Head-on, nothing decides the side: to the right of −y, i.e. back (−x), at least as
         // fast as the closing speed taken out (the vehicle's 20 m/s of vy less the limit).
-        assert!(v[0] < 60.0 - 5.0, "{v:?}");
+        assert!(v[0] < 80.0 - 5.0, "{v:?}");
         // The target is now a velocity: its position part is that velocity's own step.
         assert!((o_i[X + 1] - 0.05 * o_i[VX + 1]).abs() < 1e-12);
     }
@@ -293,16 +366,36 @@ mod tests {
     fn a_side_once_chosen_is_kept_while_the_limit_binds() {
         let vehicle = VehicleModel::Kinematic(KinematicModel::default());
         let (mut av, x_hold, mut o_i) = blocked();
-        av.limit(&vehicle, &x_hold, 0.1, &mut o_i);
-        let first = av.sides[0].1;
+        {
+            let g = goal(&o_i);
+            av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
+        };
+        let first = av.sides[0].t_hat;
         // Next update the centre asks, slightly, for the other side: the UAV stays with its own.
         let (_, x_hold, mut o_i) = blocked();
         o_i[VX] = 3.0;
         av.near.clear();
-        av.near.push(near(1, [0.0, -80.0, 0.0], [60.0, 0.0, 0.0], [0.0; 3]));
-        av.limit(&vehicle, &x_hold, 0.1, &mut o_i);
-        assert_eq!(av.sides[0].1, first);
+        av.near.push(near(1, [0.0, -80.0, 0.0], [80.0, 0.0, 0.0], [0.0; 3]));
+        {
+            let g = goal(&o_i);
+            av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
+        };
+        assert_eq!(av.sides[0].t_hat, first);
         assert!(o_i[VX] < 0.0, "{:?}", o_i.as_slice());
+    }
+
+    #[test]
+    fn a_side_the_vehicle_cannot_fly_gives_way_to_the_other() {
+        // At 52 m/s, 2 m/s above the vehicle's least speed: slowing down (the right) gets it
+        // nowhere, so it passes on the left, speeding up.
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let (mut av, x_hold, mut o_i) = blocked_at(52.0);
+        assert!({
+            let g = goal(&o_i);
+            av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
+        });
+        assert!(o_i[VX] > 5.0, "{:?}", o_i.as_slice());
+        assert!(!av.sides[0].right);
     }
 
     #[test]
@@ -313,7 +406,10 @@ mod tests {
         o_i[X + 1] = -10.0;
         o_i[VX + 1] = -18.0;
         av.near[0].vel[1] = 0.0;
-        assert!(av.limit(&vehicle, &x_hold, 0.1, &mut o_i));
+        assert!({
+            let g = goal(&o_i);
+            av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
+        });
         assert!(o_i[VX].abs() < 1e-9, "{:?}", o_i.as_slice());
     }
 
@@ -327,7 +423,10 @@ mod tests {
         o_i[X + 1] = -0.3;
         o_i[VX + 1] = -0.3;
         let before = o_i;
-        assert!(!av.limit(&vehicle, &x_hold, 0.1, &mut o_i));
+        assert!(!{
+            let g = goal(&o_i);
+            av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
+        });
         assert_eq!(o_i, before);
     }
 }

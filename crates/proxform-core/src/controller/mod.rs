@@ -251,11 +251,11 @@ impl ProximityController {
             return Decision::alone();
         }
         // Step 4: the envelope centre O_i (as O_i − X_hold).
-        let mut o_i = envelope_centre(params, &est, setup.stopping_mps2);
+        let (mut o_i, goal) = envelope_centre(params, &est, setup.stopping_mps2);
         // Collision avoidance (beyond the paper): no closing faster than braking can stop.
         if let Some(av) = &mut self.avoidance {
             av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);
-            av.limit(vehicle, &x_hold, params.dt_s, &mut o_i);
+            av.limit(vehicle, &x_hold, params.dt_s, &mut o_i, &goal);
         }
         // Steps 5-6: keep the course while X_hold lies inside the envelope around O_i.
         let x_hold_minus_o = -o_i;
@@ -434,8 +434,9 @@ impl ProximityController {
 /// too close (separation keeping, beyond the paper), and with the velocity part of W closing
 /// the remaining position gap over τ (paper §2.3), never faster than braking at `stopping`
 /// (m/s²) can stop within the gap: `min(|e|/τ, √(2·a·|e|))` per axis (beyond the paper; it
-/// binds only on gaps wider than 2·a·τ², metres, never in formation).
-fn envelope_centre(params: &ControllerParams, est: &Estimates, stopping: Option<f64>) -> State9 {
+/// binds only on gaps wider than 2·a·τ², metres, never in formation). Also returns where the
+/// centre's position is, from X_hold.
+fn envelope_centre(params: &ControllerParams, est: &Estimates, stopping: Option<f64>) -> (State9, [f64; 3]) {
     let lambda = params.lambda;
     let x_bar = if est.n_bar > 0 { est.sum_bar / est.w_bar } else { est.sum_dep / est.c_sum };
     let mut o_i = if est.main_refs > 0 {
@@ -447,16 +448,24 @@ fn envelope_centre(params: &ControllerParams, est: &Estimates, stopping: Option<
     for k in X..VX {
         o_i[k] += est.push[k];
     }
+    // Where the centre is (its position part may below become a velocity's step).
+    let goal = [o_i[X], o_i[X + 1], o_i[X + 2]];
     if let Some(tau) = params.closing_time_s {
         for k in X..VX {
             let e = o_i[k];
-            o_i[k + 3] += match stopping {
-                Some(a) if e.abs() > 2.0 * a * tau * tau => e.signum() * (2.0 * a * e.abs()).sqrt(),
-                _ => e / tau,
-            };
+            match stopping {
+                Some(a) if e.abs() > 2.0 * a * tau * tau => {
+                    // Far from the slot: fly the velocity that arrives without overshooting
+                    // (the position part becomes that velocity's own step, so that the input
+                    // follows the velocity, not a gap it cannot close in one update).
+                    o_i[k + 3] += e.signum() * (2.0 * a * e.abs()).sqrt();
+                    o_i[k] = 0.5 * params.dt_s * o_i[k + 3];
+                }
+                _ => o_i[k + 3] += e / tau,
+            }
         }
     }
-    o_i
+    (o_i, goal)
 }
 
 /// `X̂_ij − X_hold` for neighbour `id` predicted at `f_x_j` (eq. 10, attitudes wrapped); None
