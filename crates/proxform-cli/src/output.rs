@@ -45,11 +45,15 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     let faults = runs.first().is_some_and(|r| r.sensor_faults.is_some());
     let isolation = runs.first().is_some_and(|r| r.isolation.is_some());
     let forming = runs.first().is_some_and(|r| r.forming.is_some());
+    let transitions = runs.first().is_some_and(|r| r.transitions.is_some());
     if faults {
         header.extend(["healthy_pass", "rejoin_s"].map(String::from));
     }
     if forming {
         header.extend(["time_to_form_s", "transient_error_ratio", "path_length_m_per_uav"].map(String::from));
+    }
+    if transitions {
+        header.extend(["transition_s", "transition_error_ratio"].map(String::from));
     }
     if isolation {
         header.extend(
@@ -87,6 +91,9 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
                 format!("{:.4}", f.transient_error_ratio),
                 format!("{:.1}", f.path_length_m_per_uav),
             ]);
+        }
+        if let (true, Some(c)) = (transitions, r.transitions) {
+            rec.extend([format!("{:.3}", c.transition_s), format!("{:.4}", c.transient_error_ratio)]);
         }
         if let (true, Some(i)) = (isolation, r.isolation) {
             rec.extend([

@@ -127,6 +127,17 @@ pub fn print(
             number(f.path_length_m_per_uav)
         )?;
     }
+    if let Some(c) = &s.transitions {
+        writeln!(
+            out,
+            "formation changes        completed (every follower within the allowable errors of the new formation until the next change) in {} of runs; slowest change per run {} s (median), {} s (p99), {} s (max); largest error during the changes {}× the allowable",
+            fraction(c.completed_fraction),
+            number(c.transition_s_median),
+            number(c.transition_s_p99),
+            number(c.transition_s_max),
+            number(c.transient_error_ratio_max)
+        )?;
+    }
     if let Some(i) = &s.isolation {
         writeln!(
             out,

@@ -14,6 +14,7 @@ use crate::error::ConfigError;
 use crate::formation::Formation;
 use crate::method::{FormationController, Method};
 use crate::observation::{Observation, UavId};
+use crate::schedule::FormationSchedule;
 use crate::state::{self, State9};
 use crate::vehicle::VehicleModel;
 
@@ -26,6 +27,8 @@ pub struct AgentSetup {
     controller: Arc<ControllerSetup>,
     formation: Arc<Formation>,
     dependencies: Vec<DependencySet>,
+    /// Changes of formation in flight (none by default).
+    schedule: Arc<FormationSchedule>,
 }
 
 impl AgentSetup {
@@ -49,7 +52,25 @@ impl AgentSetup {
             });
         }
         method.validate()?;
-        Ok(Self { method, navigator, controller, formation, dependencies })
+        Ok(Self { method, navigator, controller, formation, dependencies, schedule: Arc::default() })
+    }
+
+    /// The same agents, changing formation in flight as `schedule` says (checked against the
+    /// first formation's size).
+    pub fn with_schedule(mut self, schedule: FormationSchedule) -> Result<Self, ConfigError> {
+        let schedule = FormationSchedule::new(schedule.stages().to_vec(), self.formation.len())?;
+        for stage in schedule.stages() {
+            if stage.formation.slot(self.navigator).is_none() {
+                return Err(ConfigError::UnknownUav { id: self.navigator, size: stage.formation.len() });
+            }
+        }
+        self.schedule = Arc::new(schedule);
+        Ok(self)
+    }
+
+    /// The changes of formation in flight.
+    pub fn schedule(&self) -> &FormationSchedule {
+        &self.schedule
     }
 
     /// The followers' method.
@@ -82,10 +103,25 @@ impl AgentSetup {
 #[derive(Debug, Clone)]
 pub struct Agent {
     controller: FormationController,
+    /// The changes of formation still to come, with what the controller is rebuilt from
+    /// (None when the formation never changes: agents of a swarm stay small).
+    changes: Option<Box<Changes>>,
     /// The own state this UAV expects at the next step: the model applied to its estimate and
     /// the input it chose (None before the first step, and when neither the own-state filter
     /// nor the own-sensor check is on; boxed so that agents without them stay small).
     own_prediction: Option<Box<OwnPrediction>>,
+}
+
+/// What an agent needs to switch formation: the schedule, the next stage, and what its
+/// controller is built from.
+#[derive(Debug, Clone)]
+struct Changes {
+    schedule: Arc<FormationSchedule>,
+    next: usize,
+    id: UavId,
+    method: Method,
+    navigator: UavId,
+    setup: Arc<ControllerSetup>,
 }
 
 /// What the UAV expects of its own state, and for how long it has flown on that alone.
@@ -109,7 +145,38 @@ impl Agent {
             setup.formation.clone(),
             deps,
         )?;
-        Ok(Self { controller, own_prediction: None })
+        let changes = (!setup.schedule.is_empty()).then(|| {
+            Box::new(Changes {
+                schedule: setup.schedule.clone(),
+                next: 0,
+                id,
+                method: setup.method,
+                navigator: setup.navigator,
+                setup: setup.controller.clone(),
+            })
+        });
+        Ok(Self { controller, changes, own_prediction: None })
+    }
+
+    /// Switches to the formation in force at `now_s`: the controller is set up afresh for its
+    /// slots and tables (its neighbour tracks restart from the next observations).
+    fn follow_schedule(&mut self, now_s: f64) {
+        let Some(ch) = self.changes.as_deref_mut() else { return };
+        let stages = ch.schedule.stages();
+        let mut switched = None;
+        while ch.next < stages.len() && now_s >= stages[ch.next].at_s - 1e-9 {
+            switched = Some(ch.next);
+            ch.next += 1;
+        }
+        let Some(k) = switched else { return };
+        let stage = &stages[k];
+        let deps = stage.dependencies.get(ch.id.index()).cloned().unwrap_or_default();
+        let setup = ch.setup.clone();
+        // The stage was checked with the first formation's setup: the same UAVs, the same
+        // navigator, tables of slots of its own formation.
+        self.controller =
+            FormationController::new(&ch.method, ch.id, ch.navigator, setup, stage.formation.clone(), deps)
+                .expect("a checked schedule's stages are valid for every UAV");
     }
 
     /// One update period at `now_s`: `own_measured` is the UAV's measurement of its own state,
@@ -118,6 +185,7 @@ impl Agent {
     /// flies on the prediction instead; the own-state filter (gain < 1) blends an accepted
     /// measurement with the prediction; then the controller decides.
     pub fn step(&mut self, now_s: f64, own_measured: &State9, heard: &[Observation]) -> Decision {
+        self.follow_schedule(now_s);
         let setup = self.controller.setup();
         let params = setup.params();
         let (gain, gate, dt) = (params.own_filter_gain, params.own_gate_m, params.dt_s);
@@ -186,7 +254,9 @@ impl Agent {
 
     /// Bytes held on the heap (shared setup and formation excluded).
     pub fn heap_bytes(&self) -> usize {
-        self.controller.heap_bytes() + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<OwnPrediction>())
+        self.controller.heap_bytes()
+            + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<OwnPrediction>())
+            + self.changes.as_ref().map_or(0, |_| std::mem::size_of::<Changes>())
     }
 }
 

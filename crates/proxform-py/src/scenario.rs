@@ -173,7 +173,8 @@ impl PyScenario {
             .map(|i| match i == nav {
                 true => vec![0.0; 6],
                 false => {
-                    proxform_sim::measure::observer::formation_error_to(&self.inner, &states, &states[nav], i).to_vec()
+                    proxform_sim::measure::observer::formation_error_to(&self.inner, 0.0, &states, &states[nav], i)
+                        .to_vec()
                 }
             })
             .collect();

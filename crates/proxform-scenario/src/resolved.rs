@@ -57,10 +57,34 @@ pub fn to_toml(sc: &Scenario) -> Result<String, toml::ser::Error> {
 
 fn formation(sc: &Scenario) -> FormationSpec {
     let f = sc.formation();
-    let slot = f
-        .slots
+    let frame = match f.frame {
+        FormationFrame::World => "world",
+        FormationFrame::Course => "course",
+    };
+    let change = sc
+        .schedule()
+        .stages()
         .iter()
-        .zip(sc.dependencies())
+        .map(|s| crate::spec::FormationChangeSpec {
+            at_s: Some(s.at_s),
+            slot: slot_specs(sc, &s.formation, &s.dependencies),
+            shape: None,
+            dependencies: None,
+        })
+        .collect();
+    FormationSpec {
+        frame: Some(frame.into()),
+        slot: slot_specs(sc, f, sc.dependencies()),
+        shape: None,
+        dependencies: None,
+        change,
+    }
+}
+
+fn slot_specs(sc: &Scenario, f: &proxform_core::Formation, deps: &[proxform_core::DependencySet]) -> Vec<SlotSpec> {
+    f.slots
+        .iter()
+        .zip(deps)
         .enumerate()
         .map(|(i, (s, d))| SlotSpec {
             id: Some(i as u32 + 1),
@@ -69,12 +93,7 @@ fn formation(sc: &Scenario) -> FormationSpec {
             depends_on: (i != sc.navigator().index())
                 .then(|| d.refs().iter().map(|(j, c)| ((j.0 + 1).to_string(), *c)).collect::<BTreeMap<_, _>>()),
         })
-        .collect();
-    let frame = match f.frame {
-        FormationFrame::World => "world",
-        FormationFrame::Course => "course",
-    };
-    FormationSpec { frame: Some(frame.into()), slot, shape: None, dependencies: None }
+        .collect()
 }
 
 fn path(p: &NavigatorPath) -> PathSpec {

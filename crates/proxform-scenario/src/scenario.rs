@@ -160,6 +160,16 @@ impl Scenario {
         self.agents.formation()
     }
 
+    /// The formation in force at `t_s` (the first one, or a `[[formation.change]]`'s).
+    pub fn formation_at(&self, t_s: f64) -> &Arc<Formation> {
+        self.agents.schedule().at(t_s).map_or(self.agents.formation(), |s| &s.formation)
+    }
+
+    /// The changes of formation in flight.
+    pub fn schedule(&self) -> &proxform_core::FormationSchedule {
+        self.agents.schedule()
+    }
+
     /// The navigator, which flies [`Self::path`] and runs no controller.
     pub fn navigator(&self) -> UavId {
         self.agents.navigator()

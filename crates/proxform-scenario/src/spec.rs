@@ -80,6 +80,25 @@ pub struct FormationSpec {
     pub shape: Option<ShapeSpec>,
     /// How dependency tables are derived for slots without `depends_on`.
     pub dependencies: Option<AutoDepsSpec>,
+    /// Changes of formation in flight (`[[formation.change]]`), in time order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub change: Vec<FormationChangeSpec>,
+}
+
+/// One `[[formation.change]]`: from `at_s` on, other slots (explicit or a shape), with their
+/// own dependency tables; the frame stays the formation's.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationChangeSpec {
+    /// When the new formation takes over (s, > 0, before the end) (required).
+    pub at_s: Option<f64>,
+    /// Explicit slots, as many as the formation's, or …
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slot: Vec<SlotSpec>,
+    /// … a generated shape.
+    pub shape: Option<ShapeSpec>,
+    /// How dependency tables are derived for slots without `depends_on`.
+    pub dependencies: Option<AutoDepsSpec>,
 }
 
 /// One explicit slot.

@@ -20,9 +20,11 @@ pub mod world;
 pub use batch::compare;
 pub use batch::runs::{
     run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FormingSummary,
-    IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics,
+    IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
 };
-pub use measure::metrics::{FormingMetrics, IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics};
+pub use measure::metrics::{
+    FormingMetrics, IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics, TransitionMetrics,
+};
 pub use measure::observer::{Observer, StepFrame};
 pub use measure::trajectory::{Trajectory, TrajectoryRow};
 pub use world::engine::Simulation;

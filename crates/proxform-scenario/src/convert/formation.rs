@@ -1,12 +1,17 @@
 //! `[formation]`: slots (explicit or a generated shape), the frame, and dependency tables.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use nalgebra::Vector3;
 use proxform_core::angle::deg;
-use proxform_core::{DependencySet, FormationFrame, FormationSlot, UavId};
+use proxform_core::{
+    DependencySet, Formation, FormationFrame, FormationSchedule, FormationSlot, FormationStage, UavId,
+};
 
-use super::values::{distance, err, finite, positive, probability, required, uav, vec3, SpecError, MAX_DISTANCE_M};
+use super::values::{
+    distance, err, finite, positive, probability, required, show, uav, vec3, SpecError, MAX_DISTANCE_M,
+};
 use super::MAX_UAVS;
 use crate::defaults;
 use crate::formation::lattice::default_levels;
@@ -327,6 +332,64 @@ pub fn drifting_groups(deps: &[DependencySet], navigator: UavId, f: &FormationSp
             navigator.0 + 1
         ),
     )]
+}
+
+/// `[[formation.change]]`: each change's slots (explicit or a shape, in the formation's frame,
+/// as many as the formation's, the safety distance apart) and dependency tables, checked like
+/// the formation's; times strictly increasing within the flight.
+pub fn schedule(
+    f: &FormationSpec,
+    first: &Formation,
+    navigator: UavId,
+    safety_distance_m: f64,
+    duration_s: f64,
+    sensing_range_m: f64,
+) -> Result<FormationSchedule, SpecError> {
+    let mut stages = Vec::with_capacity(f.change.len());
+    let mut last = 0.0;
+    for (k, c) in f.change.iter().enumerate() {
+        let key = format!("formation.change[{}]", k + 1);
+        let at_s = positive(&format!("{key}.at_s"), required(&format!("{key}.at_s"), c.at_s)?)?;
+        if at_s <= last || at_s >= duration_s {
+            return Err(err(
+                format!("{key}.at_s"),
+                format!(
+                    "{} s must come after the start and the change before ({} s) and before the end ({} s)",
+                    show(at_s),
+                    show(last),
+                    show(duration_s)
+                ),
+            ));
+        }
+        last = at_s;
+        let spec = FormationSpec {
+            frame: f.frame.clone(),
+            slot: c.slot.clone(),
+            shape: c.shape.clone(),
+            dependencies: c.dependencies.clone(),
+            change: Vec::new(),
+        };
+        // Errors name the change's own keys.
+        let within = |e: SpecError| SpecError {
+            key: e.key.strip_prefix("formation").map_or(e.key.clone(), |rest| format!("{key}{rest}")),
+            message: e.message,
+        };
+        let Slots { slots, explicit, .. } = slots(&spec).map_err(within)?;
+        if slots.len() != first.len() {
+            return Err(err(
+                key,
+                format!("has {} slots; the formation has {} UAVs, and keeps them", slots.len(), first.len()),
+            ));
+        }
+        super::feasibility::separated(&slots, safety_distance_m).map_err(within)?;
+        let dependencies = dependencies(&spec, &slots, &explicit, navigator, sensing_range_m).map_err(within)?;
+        stages.push(FormationStage {
+            at_s,
+            formation: Arc::new(Formation { slots, frame: first.frame }),
+            dependencies,
+        });
+    }
+    FormationSchedule::new(stages, first.len()).map_err(|e| err("formation.change", e.to_string()))
 }
 
 #[cfg(test)]

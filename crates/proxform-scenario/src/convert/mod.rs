@@ -98,6 +98,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let dependencies =
             formation::dependencies(&spec.formation, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
         let formation = Arc::new(Formation { slots, frame });
+        let schedule = formation::schedule(
+            &spec.formation,
+            &formation,
+            navigator,
+            safety_distance_m,
+            duration_s,
+            params.areas.sensing_range_m,
+        )?;
 
         let path = path::path(&spec.path)?;
         let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
@@ -190,7 +198,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &spec.formation));
         let agents = AgentSetup::new(method, navigator, setup, formation, dependencies)
-            .map_err(|e| err("controller.method", e.to_string()))?;
+            .map_err(|e| err("controller.method", e.to_string()))?
+            .with_schedule(schedule)
+            .map_err(|e| err("formation.change", e.to_string()))?;
         Ok(Scenario {
             spec,
             name,

@@ -107,6 +107,26 @@ pub struct Summary {
     /// How the formations formed, when they did not start in their slots.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub forming: Option<FormingSummary>,
+    /// How the changes of formation went, when the scenario has any (left out of the JSON
+    /// otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transitions: Option<TransitionSummary>,
+}
+
+/// How the changes of formation of a batch went.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TransitionSummary {
+    /// Fraction of runs in which every change was completed before the next (or the end).
+    pub completed_fraction: f64,
+    /// Each run's slowest change (s): median over runs (∞ counts for a run with one not
+    /// completed).
+    pub transition_s_median: f64,
+    /// The same, 99th percentile (nearest rank).
+    pub transition_s_p99: f64,
+    /// The same, largest.
+    pub transition_s_max: f64,
+    /// Largest error over its allowable error during the changes, over all runs.
+    pub transient_error_ratio_max: f64,
 }
 
 /// How the formations of a batch formed (scattered starts, UAVs joining).
@@ -444,6 +464,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         per_uav_adjustments: per_uav_adj,
         sensor_faults: sensor_fault_summary(runs),
         forming: forming_summary(runs),
+        transitions: transition_summary(runs),
         isolation: isolation_summary(runs),
     }
 }
@@ -461,6 +482,23 @@ fn isolation_summary(runs: &[RunSummary]) -> Option<IsolationSummary> {
         isolated_per_uav_s: mean(|m| m.isolated_per_uav_s),
         own_suspect_s_per_uav: mean(|m| m.own_suspect_s_per_uav),
         own_suspect_episodes: m.iter().map(|m| m.own_suspect_episodes).sum(),
+    })
+}
+
+/// The transition part of a batch's summary (None when the formation never changes).
+fn transition_summary(runs: &[RunSummary]) -> Option<TransitionSummary> {
+    let c: Vec<_> = runs.iter().filter_map(|r| r.transitions).collect();
+    if c.is_empty() {
+        return None;
+    }
+    let mut t: Vec<f64> = c.iter().map(|m| m.transition_s).collect();
+    let p99 = quantile_of(&mut t, 0.99);
+    Some(TransitionSummary {
+        completed_fraction: c.iter().filter(|m| m.transition_s.is_finite()).count() as f64 / c.len() as f64,
+        transition_s_median: crate::measure::stats::quantile(&t, 0.5),
+        transition_s_p99: p99,
+        transition_s_max: t.last().copied().unwrap_or(0.0),
+        transient_error_ratio_max: c.iter().map(|m| m.transient_error_ratio).fold(0.0, f64::max),
     })
 }
 
@@ -538,6 +576,7 @@ mod tests {
             sensor_faults: None,
             isolation: None,
             forming: None,
+            transitions: None,
         }
     }
 

@@ -88,6 +88,31 @@ pub struct RunSummary {
     /// How the formation formed, when it did not start in its slots (scattered starts, UAVs
     /// joining).
     pub forming: Option<FormingMetrics>,
+    /// How the formation changed in flight, when it has `[[formation.change]]`s.
+    pub transitions: Option<TransitionMetrics>,
+}
+
+/// How the changes of formation of a run went.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TransitionMetrics {
+    /// The slowest change: from its start, how long until every follower was within its
+    /// allowable errors of the new formation and stayed there until the next change or the
+    /// end (s; ∞ when some follower was still outside them then).
+    pub transition_s: f64,
+    /// Largest error over its allowable error during the changes (any axis, any follower).
+    pub transient_error_ratio: f64,
+    /// Largest error over its allowable error before the first change.
+    pub before_error_ratio: f64,
+}
+
+/// One change of formation, as measured: its window (until the next change or the end) and
+/// the last time in it that a follower was outside its allowable errors.
+#[derive(Debug, Clone, Copy)]
+struct Transition {
+    at_s: f64,
+    until_s: f64,
+    last_out: f64,
+    ratio: f64,
 }
 
 /// How a formation that did not start in its slots came together.
@@ -190,6 +215,9 @@ pub struct RunMetrics {
     forming: bool,
     /// Scattered starts: a run passes when it formed by this time (s).
     form_within_s: Option<f64>,
+    /// Changes of formation in flight, and the largest error ratio before the first.
+    transitions: Vec<Transition>,
+    before_ratio: f64,
     last_out_any: f64,
     ratio_so_far: f64,
     ratio_before_formed: f64,
@@ -244,6 +272,18 @@ impl RunMetrics {
             forming: !scenario.placement().in_slots()
                 || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. })),
             form_within_s: scenario.form_within_s(),
+            transitions: {
+                let stages = scenario.schedule().stages();
+                (0..stages.len())
+                    .map(|k| Transition {
+                        at_s: stages[k].at_s,
+                        until_s: stages.get(k + 1).map_or(f64::INFINITY, |s| s.at_s),
+                        last_out: f64::NEG_INFINITY,
+                        ratio: 0.0,
+                    })
+                    .collect()
+            },
+            before_ratio: 0.0,
             last_out_any: f64::NEG_INFINITY,
             ratio_so_far: 0.0,
             ratio_before_formed: 0.0,
@@ -303,10 +343,30 @@ impl RunMetrics {
         };
         // A run in which no follower flew has nothing to judge: it does not pass. A formation
         // that did not start in its slots passes when it formed in time and stayed formed.
+        let transitions = (!self.transitions.is_empty()).then(|| TransitionMetrics {
+            transition_s: self
+                .transitions
+                .iter()
+                .map(|c| {
+                    // The window's last frame: the one before the next change, or the flight's.
+                    let last = if c.until_s.is_finite() { (c.until_s - self.dt).min(self.t_last) } else { self.t_last };
+                    if c.last_out >= last - 1e-9 {
+                        f64::INFINITY
+                    } else {
+                        (c.last_out + self.dt - c.at_s).max(0.0)
+                    }
+                })
+                .fold(0.0, f64::max),
+            transient_error_ratio: self.transitions.iter().map(|c| c.ratio).fold(0.0, f64::max),
+            before_error_ratio: self.before_ratio,
+        });
         let pass = self.total.follower_steps > 0
-            && match self.form_within_s {
-                Some(limit) => time_to_form_s <= limit + 1e-9,
-                None => self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a),
+            && match (self.form_within_s, &transitions) {
+                (Some(limit), _) => time_to_form_s <= limit + 1e-9,
+                // A formation that changes passes when it kept its errors before the first
+                // change and completed every change before the next.
+                (None, Some(t)) => t.before_error_ratio <= 1.0 && t.transition_s.is_finite(),
+                (None, None) => self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a),
             };
         let uav_s = self.uav_steps.max(1) as f64 * self.dt;
         let mn = self.model_n.max(1) as f64;
@@ -348,6 +408,7 @@ impl RunMetrics {
                 transient_error_ratio: self.ratio_before_formed,
                 path_length_m_per_uav: self.path_m / self.followers.max(1) as f64,
             }),
+            transitions,
             isolation: self.isolating.then(|| {
                 let per = self.dt / self.followers.max(1) as f64;
                 IsolationMetrics {
@@ -479,7 +540,7 @@ fn partial(
         if i == nav {
             continue;
         }
-        let e = formation_error_to(scenario, frame.states, reference, i);
+        let e = formation_error_to(scenario, frame.t, frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
         p.speed_sum += speed;
         p.max_ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(p.max_ratio, f64::max);
@@ -514,7 +575,7 @@ impl Observer for RunMetrics {
         self.samples += 1;
         let n = frame.states.len();
         let nav = self.nav;
-        let reference = navigator_reference(scenario, frame.states, frame.active);
+        let reference = navigator_reference(scenario, frame.t, frame.states, frame.active);
         self.separation.observe(frame.states, frame.active);
         self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
@@ -563,6 +624,17 @@ impl Observer for RunMetrics {
                 self.ratio_before_formed = self.ratio_so_far;
             }
         }
+        for c in self.transitions.iter_mut() {
+            if frame.t >= c.at_s - 1e-9 && frame.t < c.until_s - 1e-9 {
+                c.ratio = c.ratio.max(step_ratio);
+                if step_ratio > 1.0 {
+                    c.last_out = frame.t;
+                }
+            }
+        }
+        if self.transitions.first().is_some_and(|c| frame.t < c.at_s - 1e-9) {
+            self.before_ratio = self.before_ratio.max(step_ratio);
+        }
         let order = (heading[0].powi(2) + heading[1].powi(2) + heading[2].powi(2)).sqrt() / (active.max(1) as f64);
         self.order_sum += order;
         self.order_min = self.order_min.min(order);
@@ -576,7 +648,7 @@ impl Observer for RunMetrics {
             if !frame.active[a.uav] || t < a.end_s - 1e-9 || t >= a.until_s - 1e-9 {
                 continue;
             }
-            let e = formation_error_to(scenario, frame.states, &reference, a.uav);
+            let e = formation_error_to(scenario, frame.t, frame.states, &reference, a.uav);
             if !e.iter().zip(&self.allowable).all(|(e, al)| e.abs() <= *al) {
                 a.last_out = t;
             }
@@ -592,7 +664,7 @@ impl Observer for RunMetrics {
             if !frame.active[*i] {
                 continue;
             }
-            let e = formation_error_to(scenario, frame.states, &reference, *i);
+            let e = formation_error_to(scenario, frame.t, frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
         }
     }

@@ -82,16 +82,17 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     }
 }
 
-/// Formation errors of UAV `i` relative to the reference `nav_state` (METHOD §7):
+/// Formation errors of UAV `i` at `t_s` (in the formation then in force) relative to the
+/// reference `nav_state` (METHOD §7):
 /// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped). W is the one
 /// the controllers use: for a formation that turns by banking (the controller's
 /// `bank_turn_feedforward`, the fixed wing) the slot's heading and bank in the turn are part of
 /// it, so a wing UAV flying along its own velocity in a coordinated turn is not counted as a
 /// yaw error.
 #[inline]
-pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &State9, i: usize) -> [f64; 6] {
+pub fn formation_error_to(scenario: &Scenario, t_s: f64, states: &[State9], nav_state: &State9, i: usize) -> [f64; 6] {
     let nav = scenario.navigator().index();
-    let f = &scenario.formation();
+    let f = scenario.formation_at(t_s);
     let mut slot = *nav_state;
     f.add_w_with(scenario.controller().bank_turn_feedforward, &f.slots[i], &f.slots[nav], nav_state, &mut slot);
     let e = proxform_core::state::difference(&states[i], &slot);
@@ -101,12 +102,12 @@ pub fn formation_error_to(scenario: &Scenario, states: &[State9], nav_state: &St
 /// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
 /// over flying followers of `X_i − W_i,nav` (attitudes averaged as small differences from the
 /// first follower's).
-pub fn navigator_reference(scenario: &Scenario, states: &[State9], active: &[bool]) -> State9 {
+pub fn navigator_reference(scenario: &Scenario, t_s: f64, states: &[State9], active: &[bool]) -> State9 {
     let nav = scenario.navigator().index();
     if active[nav] {
         return states[nav];
     }
-    let f = &scenario.formation();
+    let f = scenario.formation_at(t_s);
     let mut sum = State9::zeros();
     let mut base: Option<State9> = None;
     let mut n = 0.0;
@@ -142,17 +143,17 @@ mod tests {
         states[4][X] += 1.0;
         states[4][Y] -= 2.0;
         states[4][BETA] += 0.01;
-        let e = formation_error_to(&sc, &states, &nav, 4);
+        let e = formation_error_to(&sc, 0.0, &states, &nav, 4);
         for (k, want) in [1.0, -2.0, 0.0, 0.0, 0.01, 0.0].into_iter().enumerate() {
             assert!((e[k] - want).abs() < 1e-9, "component {k}: {} vs {want}", e[k]);
         }
-        assert_eq!(formation_error_to(&sc, &states, &nav, 2), [0.0; 6]);
+        assert_eq!(formation_error_to(&sc, 0.0, &states, &nav, 2), [0.0; 6]);
         // Without the navigator, the reference is the mean of the followers' implied
         // navigator states: UAV5's offset moves it by a fifth.
         let mut active = [true; 6];
-        assert_eq!(navigator_reference(&sc, &states, &active), nav);
+        assert_eq!(navigator_reference(&sc, 0.0, &states, &active), nav);
         active[0] = false;
-        let r = navigator_reference(&sc, &states, &active);
+        let r = navigator_reference(&sc, 0.0, &states, &active);
         assert!((r[X] - 0.2).abs() < 1e-9 && (r[Y] + 0.4).abs() < 1e-9 && (r[Z] - 300.0).abs() < 1e-9, "{r:?}");
     }
 }

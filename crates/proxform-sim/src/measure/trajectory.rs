@@ -104,12 +104,13 @@ impl Observer for Trajectory {
         }
         let nav = scenario.navigator().index();
         let allowable = scenario.allowable().as_array();
-        let reference = navigator_reference(scenario, frame.states, frame.active);
+        let reference = navigator_reference(scenario, frame.t, frame.states, frame.active);
         for (i, s) in frame.states.iter().enumerate().take(self.sample) {
             if !frame.active[i] {
                 continue;
             }
-            let error = if i == nav { [0.0; 6] } else { formation_error_to(scenario, frame.states, &reference, i) };
+            let error =
+                if i == nav { [0.0; 6] } else { formation_error_to(scenario, frame.t, frame.states, &reference, i) };
             let (outcome, in_envelope) = match frame.uavs[i].outcome {
                 Some(o) => (o.label(), o == proxform_core::Outcome::Held),
                 None if i == nav => ("navigator", false),

@@ -342,7 +342,8 @@ impl Outside<'_> {
             if !here && w.active[i] {
                 (w.active[i], self.absent[i]) = (false, true);
             } else if here && self.absent[i] {
-                let reference = crate::measure::observer::navigator_reference(sc, &w.current, &w.active);
+                let reference =
+                    crate::measure::observer::navigator_reference(sc, w.k as f64 * sc.dt_s(), &w.current, &w.active);
                 w.current[i] = sc.slot_state(i, &reference);
                 (w.active[i], self.absent[i]) = (true, false);
             }
@@ -397,7 +398,8 @@ impl<'s> World<'s> {
                     if now && !self.active[i] {
                         // Appears in its slot relative to the navigator (or to the formation's
                         // estimate of it), shifted by the offset.
-                        let reference = crate::measure::observer::navigator_reference(sc, &self.current, &self.active);
+                        let reference =
+                            crate::measure::observer::navigator_reference(sc, t, &self.current, &self.active);
                         let mut s = sc.slot_state(i, &reference);
                         s[state::X] += offset_m.x;
                         s[state::Y] += offset_m.y;
