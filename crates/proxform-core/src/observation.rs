@@ -31,6 +31,10 @@ pub enum ObservationSource {
     Onboard,
     /// A message heard over the radio: not limited by the sensing range.
     Radio,
+    /// A close-range detection by the observer's own sensors (every UAV within the collision
+    /// avoidance's watch radius, beyond the nearest of each azimuth area): for collision
+    /// avoidance only; the formation controller neither sorts it into areas nor tracks it.
+    Close,
 }
 
 /// One observed state of a neighbour.

@@ -30,6 +30,16 @@ pub enum Placement {
         /// Slots assigned to the drawn starts to minimise the total distance to them.
         assign: bool,
     },
+    /// On the ground in a row across the initial course (along the world y axis), centred
+    /// under the centre of the followers' slots, standing still and level: a take-off.
+    Row {
+        /// Distance between neighbours in the row (m).
+        spacing_m: f64,
+        /// Height of the ground below the navigator's start (m).
+        below_m: f64,
+        /// Slots assigned to the starts to minimise the total distance to them.
+        assign: bool,
+    },
     /// The listed followers at their positions (m, relative to the navigator's start, world
     /// axes); the others in their slots.
     Explicit(Vec<(UavId, [f64; 3])>),
@@ -44,5 +54,10 @@ impl Placement {
     /// True when the simulator draws the starts at random.
     pub fn is_random(&self) -> bool {
         matches!(self, Placement::Box { .. } | Placement::Disc { .. })
+    }
+
+    /// True when the followers start at rest on the ground.
+    pub fn is_take_off(&self) -> bool {
+        matches!(self, Placement::Row { .. })
     }
 }

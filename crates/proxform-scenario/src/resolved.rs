@@ -246,6 +246,13 @@ fn initial(sc: &Scenario) -> InitialSpec {
             assign_slots: Some(*assign),
             ..base
         },
+        Placement::Row { spacing_m, below_m, assign } => InitialSpec {
+            placement: Some("row".into()),
+            row_spacing_m: Some(*spacing_m),
+            ground_below_m: Some(*below_m),
+            assign_slots: Some(*assign),
+            ..base
+        },
         Placement::Explicit(list) => InitialSpec {
             placement: Some("explicit".into()),
             uavs: list

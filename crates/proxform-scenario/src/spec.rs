@@ -213,6 +213,10 @@ pub struct InitialSpec {
     /// "box", "disc": assign the drawn starts to the slots so that the total distance from
     /// start to slot is least (else in draw order). Default false.
     pub assign_slots: Option<bool>,
+    /// "row": distance between neighbours in the take-off row (m).
+    pub row_spacing_m: Option<f64>,
+    /// "row": height of the ground below the navigator's start (m).
+    pub ground_below_m: Option<f64>,
     /// Not in the slots: a run passes when its formation has formed (every follower within its
     /// allowable errors from then to the end) by this time (s). Default 120.
     pub form_within_s: Option<f64>,

@@ -55,3 +55,23 @@ fn a_run_that_forms_too_late_fails() {
     assert_eq!(s.pass_fraction, 0.0);
     assert_eq!(s.forming.expect("forming").formed_fraction, 1.0);
 }
+
+fn takeoff(edit: impl FnOnce(&mut ScenarioSpec)) -> Scenario {
+    let path = format!("{}/../../scenarios/takeoff-lattice100.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).expect("shipped scenario");
+    let spec = parse_spec(&text, "takeoff-lattice100.toml").expect("valid");
+    check(spec.with(edit), &text, "takeoff-lattice100.toml").expect("valid")
+}
+
+#[test]
+fn a_hundred_uavs_take_off_from_a_row_into_a_lattice_apart() {
+    let sc = takeoff(|_| {});
+    let s = batch(&sc, 2);
+    let f = s.forming.as_ref().expect("a take-off is measured");
+    assert_eq!(f.formed_fraction, 1.0, "{f:?}");
+    assert!(f.time_to_form_s_max <= 60.0, "{f:?}");
+    assert!(s.min_separation_m >= sc.safety_distance_m(), "{}", s.min_separation_m);
+    // Without collision avoidance the climbing UAVs pass each other far too close.
+    let without = batch(&takeoff(|s| s.controller.avoid_m = Some(0.0)), 2);
+    assert!(without.min_separation_m < 0.5 * sc.safety_distance_m(), "{}", without.min_separation_m);
+}

@@ -24,7 +24,7 @@ mod setup;
 use std::sync::Arc;
 
 pub use decision::{Decision, Outcome};
-pub use params::{ControllerParams, AVOID_BRAKING_SHARE, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
+pub use params::{ControllerParams, AVOID_BRAKING_SHARE, AVOID_WATCH, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
 pub use setup::ControllerSetup;
 
 use avoid::Avoidance;
@@ -287,7 +287,10 @@ impl ProximityController {
         nearest.iter_mut().for_each(|a| a.0 = EMPTY);
         let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
-            if observations[..k].iter().any(|p| p.id == o.id) {
+            if o.source == ObservationSource::Close {
+                continue; // collision avoidance's alone
+            }
+            if observations[..k].iter().any(|p| p.id == o.id && p.source != ObservationSource::Close) {
                 tracks.predict(o, now_s, params.dt_s);
                 continue;
             }
@@ -308,7 +311,7 @@ impl ProximityController {
         }
         for s in 0..tracks.slots() {
             let Some(id) = tracks.coasting(s, now_s, params.coast_s) else { continue };
-            if id == me || observations.iter().any(|o| o.id == id) {
+            if id == me || observations.iter().any(|o| o.id == id && o.source != ObservationSource::Close) {
                 continue;
             }
             let x = tracks.state_at(s, now_s);
@@ -389,7 +392,8 @@ impl ProximityController {
         // Step 3: main references perceived but not the nearest in their area.
         for r in 0..dependency.refs().len() {
             let (id, c) = dependency.refs()[r];
-            let (f_x_j, f) = match observations.iter().position(|o| o.id == id) {
+            let (f_x_j, f) = match observations.iter().position(|o| o.id == id && o.source != ObservationSource::Close)
+            {
                 Some(k) => {
                     if nearest.iter().any(|a| a.0 == k as u32) {
                         continue; // already counted with its area

@@ -204,6 +204,11 @@ pub const SEPARATION_SLOT_FRACTION: f64 = 0.8;
 /// does not give way (the navigator).
 pub const AVOID_BRAKING_SHARE: f64 = 0.5;
 
+/// A sensor serving the collision avoidance reports every UAV within this many avoidance
+/// distances (`avoid_m`), not only the nearest of each azimuth area: one hidden behind another
+/// may be the one closing fastest.
+pub const AVOID_WATCH: f64 = 2.0;
+
 /// Longest horizon accepted (updates).
 pub const MAX_HORIZON: u32 = 50;
 

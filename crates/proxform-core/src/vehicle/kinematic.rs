@@ -17,7 +17,7 @@ use crate::state::{Input, State9, ALPHA, VX, X};
 /// Limits of the kinematic vehicle. Defaults are the paper's §4 values (METHOD §9).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct KinematicLimits {
-    /// Minimum forward speed vx (m/s). Default 180 km/h.
+    /// Minimum forward speed vx (m/s, ≥ 0; 0 for a vehicle that can hover). Default 180 km/h.
     pub vx_min_mps: f64,
     /// Maximum forward speed vx (m/s). Default 360 km/h.
     pub vx_max_mps: f64,
@@ -49,9 +49,16 @@ impl Default for KinematicLimits {
 }
 
 impl KinematicLimits {
-    /// Checks every limit is finite and positive and vx_min < vx_max.
+    /// Checks every limit is finite and positive (vx_min may be 0: a vehicle that hovers) and
+    /// vx_min < vx_max.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        positive("vx_min", self.vx_min_mps)?;
+        if !(self.vx_min_mps.is_finite() && self.vx_min_mps >= 0.0) {
+            return Err(ConfigError::OutOfRange {
+                field: "vx_min",
+                value: self.vx_min_mps,
+                expected: "a finite speed ≥ 0 m/s",
+            });
+        }
         positive("vx_max", self.vx_max_mps)?;
         if self.vx_min_mps >= self.vx_max_mps {
             return Err(ConfigError::OutOfRange {

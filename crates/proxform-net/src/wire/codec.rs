@@ -193,6 +193,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
                 w.u8(match o.source {
                     ObservationSource::Onboard => 0,
                     ObservationSource::Radio => 1,
+                    ObservationSource::Close => 2,
                 });
                 w.pad(3);
                 w.f64(o.age_s);
@@ -288,6 +289,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
                 let source = match r.u8()? {
                     0 => ObservationSource::Onboard,
                     1 => ObservationSource::Radio,
+                    2 => ObservationSource::Close,
                     v => return Err(DecodeError::Field { field: "observation source", value: v.into() }),
                 };
                 r.skip(3)?;
@@ -379,6 +381,15 @@ mod tests {
                 heard: vec![obs(0, ObservationSource::Onboard), obs(5, ObservationSource::Radio)],
             }),
             Message::Sense(SenseMsg {
+                uav: 1,
+                run: 4,
+                phase: Phase::Fly,
+                k: 9,
+                t_s: 0.9,
+                own: state(3.0),
+                heard: vec![obs(4, ObservationSource::Close)],
+            }),
+            Message::Sense(SenseMsg {
                 uav: 7,
                 run: 0,
                 phase: Phase::Warm,
@@ -425,7 +436,7 @@ mod tests {
         }
         // Layouts as docs/wire.md gives them.
         let lens: Vec<usize> = samples().iter().map(|m| encode(m).len()).collect();
-        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112, 104, 104, 48, 20]);
+        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + OBSERVATION_BYTES, 112, 104, 104, 48, 20]);
         // NaN payloads and signed zeros survive (bits, not values).
         let odd = Message::State(StateMsg {
             uav: 1,

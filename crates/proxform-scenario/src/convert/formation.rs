@@ -336,7 +336,8 @@ pub fn drifting_groups(deps: &[DependencySet], navigator: UavId, f: &FormationSp
 
 /// `[[formation.change]]`: each change's slots (explicit or a shape, in the formation's frame,
 /// as many as the formation's, the safety distance apart) and dependency tables, checked like
-/// the formation's; times strictly increasing within the flight.
+/// the formation's; times strictly increasing (a change after the end of the flight is kept,
+/// with a warning: a shortened flight stays valid).
 pub fn schedule(
     f: &FormationSpec,
     first: &Formation,
@@ -344,21 +345,23 @@ pub fn schedule(
     safety_distance_m: f64,
     duration_s: f64,
     sensing_range_m: f64,
+    warnings: &mut Vec<SpecError>,
 ) -> Result<FormationSchedule, SpecError> {
     let mut stages = Vec::with_capacity(f.change.len());
     let mut last = 0.0;
     for (k, c) in f.change.iter().enumerate() {
         let key = format!("formation.change[{}]", k + 1);
         let at_s = positive(&format!("{key}.at_s"), required(&format!("{key}.at_s"), c.at_s)?)?;
-        if at_s <= last || at_s >= duration_s {
+        if at_s <= last {
             return Err(err(
                 format!("{key}.at_s"),
-                format!(
-                    "{} s must come after the start and the change before ({} s) and before the end ({} s)",
-                    show(at_s),
-                    show(last),
-                    show(duration_s)
-                ),
+                format!("{} s must come after the start and the change before ({} s)", show(at_s), show(last)),
+            ));
+        }
+        if at_s >= duration_s {
+            warnings.push(err(
+                format!("{key}.at_s"),
+                format!("comes at {} s, after the end of the flight ({} s): never flown", show(at_s), show(duration_s)),
             ));
         }
         last = at_s;

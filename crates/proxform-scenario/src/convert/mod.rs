@@ -98,6 +98,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let dependencies =
             formation::dependencies(&spec.formation, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
         let formation = Arc::new(Formation { slots, frame });
+        let mut schedule_warnings = Vec::new();
         let schedule = formation::schedule(
             &spec.formation,
             &formation,
@@ -105,11 +106,13 @@ impl TryFrom<ScenarioSpec> for Scenario {
             safety_distance_m,
             duration_s,
             params.areas.sensing_range_m,
+            &mut schedule_warnings,
         )?;
 
         let path = path::path(&spec.path)?;
         let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
-        let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m)?;
+        let can_hover = matches!(vehicle, VehicleModel::Kinematic(k) if k.limits.vx_min_mps == 0.0);
+        let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m, can_hover)?;
         let form_within_s = placement::form_within(&spec.initial, &placement, duration_s)?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
 
@@ -187,6 +190,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
         let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
         let mut warnings = world::faults_after(&faults, duration_s);
+        warnings.append(&mut schedule_warnings);
         if navigator_by_radio {
             warnings.extend(formation::beyond_the_navigators_radio(
                 &formation.slots,

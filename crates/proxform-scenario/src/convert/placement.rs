@@ -38,6 +38,7 @@ pub fn placement(
     initial: &[State9],
     navigator: UavId,
     safety_distance_m: f64,
+    can_hover: bool,
 ) -> Result<Placement, SpecError> {
     let kind = spec.placement.as_deref().unwrap_or("slots");
     let only = |key: &str, given: bool, for_kind: &str| -> Result<(), SpecError> {
@@ -50,9 +51,11 @@ pub fn placement(
     only("radius_m", spec.radius_m.is_some(), "disc")?;
     only("height_m", spec.height_m.is_some(), "disc")?;
     only("uav", !spec.uavs.is_empty(), "explicit")?;
+    only("row_spacing_m", spec.row_spacing_m.is_some(), "row")?;
+    only("ground_below_m", spec.ground_below_m.is_some(), "row")?;
     let assign = spec.assign_slots.unwrap_or(false);
-    if spec.assign_slots.is_some() && !matches!(kind, "box" | "disc") {
-        return Err(err("initial.assign_slots", "applies to placement = \"box\" or \"disc\" only"));
+    if spec.assign_slots.is_some() && !matches!(kind, "box" | "disc" | "row") {
+        return Err(err("initial.assign_slots", "applies to placement = \"box\", \"disc\" or \"row\" only"));
     }
     let n = initial.len() as f64;
     let cell = 2.0 * safety_distance_m;
@@ -105,6 +108,40 @@ pub fn placement(
             }
             Ok(Placement::Disc { radius_m, height_m, assign })
         }
+        "row" => {
+            if !can_hover {
+                return Err(err(
+                    "initial.placement",
+                    "a take-off row starts the UAVs at rest: it needs a vehicle that can hover \
+                     (model = \"kinematic\" with vehicle.vx_min_kmh = 0)",
+                ));
+            }
+            let Some(spacing) = spec.row_spacing_m else {
+                return Err(err("initial.row_spacing_m", "is required with placement = \"row\""));
+            };
+            let spacing_m = distance("initial.row_spacing_m", positive("initial.row_spacing_m", spacing)?)?;
+            if spacing_m < safety_distance_m {
+                return Err(err(
+                    "initial.row_spacing_m",
+                    format!("{} m is closer than the safety distance ({} m)", show(spacing_m), show(safety_distance_m)),
+                ));
+            }
+            let Some(below) = spec.ground_below_m else {
+                return Err(err("initial.ground_below_m", "is required with placement = \"row\""));
+            };
+            let below_m = distance("initial.ground_below_m", non_negative("initial.ground_below_m", below)?)?;
+            if below_m < safety_distance_m {
+                return Err(err(
+                    "initial.ground_below_m",
+                    format!(
+                        "{} m: the navigator would start within the safety distance ({} m) of the row",
+                        show(below_m),
+                        show(safety_distance_m)
+                    ),
+                ));
+            }
+            Ok(Placement::Row { spacing_m, below_m, assign })
+        }
         "explicit" => {
             if spec.uavs.is_empty() {
                 return Err(err("initial.uav", "give at least one [[initial.uav]] with placement = \"explicit\""));
@@ -155,7 +192,7 @@ pub fn placement(
         }
         other => Err(err(
             "initial.placement",
-            format!("unknown placement \"{other}\" (expected \"slots\", \"box\", \"disc\" or \"explicit\")"),
+            format!("unknown placement \"{other}\" (expected \"slots\", \"box\", \"disc\", \"row\" or \"explicit\")"),
         )),
     }
 }

@@ -72,7 +72,8 @@ pub fn vehicle(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
     }
     let mut l = KinematicLimits::default();
     if let Some(x) = v.vx_min_kmh {
-        l.vx_min_mps = kmh(positive("vehicle.vx_min_kmh", x)?);
+        // 0: a vehicle that can hover (a multirotor), which a take-off row needs.
+        l.vx_min_mps = kmh(super::values::non_negative("vehicle.vx_min_kmh", x)?);
     }
     if let Some(x) = v.vx_max_kmh {
         l.vx_max_mps = kmh(speed_kmh("vehicle.vx_max_kmh", positive("vehicle.vx_max_kmh", x)?)?);

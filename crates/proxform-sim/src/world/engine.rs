@@ -161,7 +161,12 @@ impl<'s> Simulation<'s> {
             sent_now: 0,
             active: initially_flying(scenario),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
-            sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma()),
+            sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma()).with_watch(
+                match (scenario.method(), scenario.controller().avoid_m) {
+                    (proxform_core::Method::Proximity, Some(d)) => proxform_core::controller::AVOID_WATCH * d,
+                    _ => 0.0,
+                },
+            ),
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
         };

@@ -1,8 +1,8 @@
 //! The starting states of one run: every UAV in its slot, or the followers scattered at random
 //! in the scenario's box or disc (each start drawn from the UAV's own placement stream, again
 //! until it is the safety distance from every UAV already placed, the navigator first), or at
-//! the scenario's explicit positions. Velocities and attitudes are the in-slot ones: the
-//! navigator's. With `assign_slots` the drawn starts go to the followers whose slots make the
+//! the scenario's explicit positions, or on the ground in a take-off row at rest. Velocities
+//! and attitudes are otherwise the in-slot ones: the navigator's. With `assign_slots` the drawn starts go to the followers whose slots make the
 //! total distance from start to slot least (Kuhn-Munkres, from the `pathfinding` crate, on
 //! distances in millimetres).
 
@@ -26,6 +26,23 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
     let nav_at = at(&states[nav]);
     match sc.placement() {
         Placement::Slots => {}
+        Placement::Row { spacing_m, below_m, assign } => {
+            // A row along y under the centre of the followers' slots, on the ground, at rest.
+            let followers: Vec<usize> = (0..n).filter(|&i| i != nav).collect();
+            let centre = slots_centre(&states, &followers);
+            let m = followers.len();
+            let starts: Vec<[f64; 3]> = (0..m)
+                .map(|k| [centre[0], centre[1] + (k as f64 - (m as f64 - 1.0) / 2.0) * spacing_m, nav_at[2] - below_m])
+                .collect();
+            let order = if *assign { assigned(&starts, &followers, &states) } else { (0..m).collect() };
+            for (f, &i) in followers.iter().enumerate() {
+                let s = &mut states[i];
+                *s = State9::zeros();
+                for k in 0..3 {
+                    s[X + k] = starts[order[f]][k];
+                }
+            }
+        }
         Placement::Explicit(list) => {
             for (id, p) in list {
                 let s = &mut states[id.index()];
@@ -35,15 +52,8 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
             }
         }
         region => {
-            // The centre of the followers' slots.
             let followers = (0..n).filter(|&i| i != nav);
-            let m = (n - 1).max(1) as f64;
-            let mut centre = [0.0; 3];
-            for i in followers.clone() {
-                for k in 0..3 {
-                    centre[k] += states[i][X + k] / m;
-                }
-            }
+            let centre = slots_centre(&states, &followers.clone().collect::<Vec<_>>());
             let d2 = sc.safety_distance_m().powi(2);
             let key = run.at(0);
             let mut placed: Vec<[f64; 3]> = vec![nav_at];
@@ -86,6 +96,18 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
     states
 }
 
+/// The centre of the followers' slots (their in-slot positions in `slots`).
+fn slots_centre(slots: &[State9], followers: &[usize]) -> [f64; 3] {
+    let m = followers.len().max(1) as f64;
+    let mut centre = [0.0; 3];
+    for &i in followers {
+        for k in 0..3 {
+            centre[k] += slots[i][X + k] / m;
+        }
+    }
+    centre
+}
+
 /// For each follower (in `followers` order), the index of the start it takes: the assignment of
 /// starts to the followers' slots (their positions in `slots`) with the least total distance.
 fn assigned(starts: &[[f64; 3]], followers: &[usize], slots: &[State9]) -> Vec<usize> {
@@ -105,6 +127,27 @@ mod tests {
 
     fn scattered(edit: impl FnOnce(&mut proxform_scenario::ScenarioSpec)) -> Scenario {
         Scenario::try_from(paper_spec().with(edit)).expect("valid")
+    }
+
+    #[test]
+    fn a_take_off_row_stands_still_on_the_ground_under_the_slots() {
+        let sc = scattered(|s| {
+            s.vehicle.vx_min_kmh = Some(0.0);
+            s.initial.placement = Some("row".into());
+            s.initial.row_spacing_m = Some(60.0);
+            s.initial.ground_below_m = Some(80.0);
+        });
+        let a = initial_states(&sc, RunKey::new(1, 0));
+        assert_eq!(a, initial_states(&sc, RunKey::new(1, 7)), "a row is the same in every run");
+        let nav = sc.navigator().index();
+        let mut ys: Vec<f64> = Vec::new();
+        for (i, s) in a.iter().enumerate().filter(|(i, _)| *i != nav) {
+            assert!((s[Z] - (a[nav][Z] - 80.0)).abs() < 1e-9, "UAV{} not on the ground", i + 1);
+            assert!((3..9).all(|k| s[k] == 0.0), "UAV{} not at rest and level", i + 1);
+            ys.push(s[Y]);
+        }
+        ys.sort_by(f64::total_cmp);
+        assert!(ys.windows(2).all(|w| (w[1] - w[0] - 60.0).abs() < 1e-9), "{ys:?}");
     }
 
     #[test]

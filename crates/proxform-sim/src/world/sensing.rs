@@ -47,12 +47,19 @@ pub struct SensorScratch {
     best_id: Vec<u32>,
     /// Main references found in range.
     refs: Vec<u32>,
+    /// UAVs within the watch radius (collision avoidance's close-range detections).
+    close: Vec<u32>,
 }
 
 impl SensorScratch {
     /// Scratch for `m` areas.
     pub fn new(m: usize) -> Self {
-        Self { best_d2: vec![f64::INFINITY; m], best_id: vec![0; m], refs: Vec::with_capacity(8) }
+        Self {
+            best_d2: vec![f64::INFINITY; m],
+            best_id: vec![0; m],
+            refs: Vec::with_capacity(8),
+            close: Vec::with_capacity(8),
+        }
     }
 }
 
@@ -62,12 +69,23 @@ pub struct ProximitySensor {
     classifier: AreaClassifier,
     range_m: f64,
     sigma: State9,
+    /// Every UAV closer than this (m) is also reported, as a close-range detection for
+    /// collision avoidance (0: none).
+    watch_m: f64,
 }
 
 impl ProximitySensor {
     /// A sensor with `m` areas, range `range_m` and noise σ per parameter.
     pub fn new(m: usize, range_m: f64, sigma: State9) -> Self {
-        Self { classifier: AreaClassifier::new(m), range_m, sigma }
+        Self { classifier: AreaClassifier::new(m), range_m, sigma, watch_m: 0.0 }
+    }
+
+    /// The same sensor also reporting every UAV closer than `watch_m` (at most the range) as a
+    /// close-range detection ([`ObservationSource::Close`]): collision avoidance must see a
+    /// UAV hidden behind another in its azimuth area.
+    pub fn with_watch(mut self, watch_m: f64) -> Self {
+        self.watch_m = watch_m.min(self.range_m);
+        self
     }
 
     /// Appends to `out` what UAV `i` perceives of `scene` through `link`.
@@ -88,9 +106,14 @@ impl ProximitySensor {
         let (sin_yaw, cos_yaw) = me[state::BETA].sin_cos();
         scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
         scratch.refs.clear();
+        scratch.close.clear();
+        let watch2 = self.watch_m * self.watch_m;
         let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
             if j as usize == i {
                 return;
+            }
+            if d2 < watch2 {
+                scratch.close.push(j);
             }
             let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
             // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
@@ -199,6 +222,21 @@ impl ProximitySensor {
                 }
             }
         }
+        // Close-range detections for collision avoidance, after everything else (so that the
+        // draws above are those of a sensor without them): every UAV within the watch radius
+        // not already reported onboard, each with its own dropout and noise.
+        if !scratch.close.is_empty() {
+            scratch.close.sort_unstable();
+            for k in 0..scratch.close.len() {
+                let j = scratch.close[k];
+                let reported = out[start..].iter().any(|o| o.id.0 == j && o.source == ObservationSource::Onboard);
+                if !reported && kept(link.dropout, rng) {
+                    let mut o = self.observe(j, states, rng);
+                    o.source = ObservationSource::Close;
+                    out.push(o);
+                }
+            }
+        }
     }
 
     #[inline]
@@ -296,7 +334,18 @@ mod tests {
         messages: &[Message],
         fuse: bool,
     ) -> Vec<Observation> {
-        let sensor = ProximitySensor::new(8, 250.0, State9::zeros());
+        perceive_watching(states, deps, dropout, messages, fuse, 0.0)
+    }
+
+    fn perceive_watching(
+        states: &[State9],
+        deps: &[DependencySet],
+        dropout: f64,
+        messages: &[Message],
+        fuse: bool,
+        watch_m: f64,
+    ) -> Vec<Observation> {
+        let sensor = ProximitySensor::new(8, 250.0, State9::zeros()).with_watch(watch_m);
         let mut grid = NeighbourGrid::new();
         grid.rebuild(states.iter().map(|s| [s[0], s[1], s[2]]), 250.0);
         let scene = Scene { states, grid: &grid, search: NeighbourSearch::Grid, dependencies: deps };
@@ -324,6 +373,29 @@ mod tests {
         sensor.perceive(0, &scene, &link, &mut draws, &mut SensorScratch::new(8), &mut out);
         assert_eq!(out[0].id, UavId(99), "perception appends");
         out.split_off(1)
+    }
+
+    #[test]
+    fn a_watching_sensor_also_reports_a_close_uav_hidden_in_an_area_after_the_others() {
+        // UAV 5 sits 30 m ahead, just behind UAV 1's line of sight: UAV 1 (100 m) is no longer
+        // the nearest of that area, so put UAV 5 in UAV 1's area but farther than a new UAV 6.
+        let (mut states, deps) = setup();
+        let mut close = states[1];
+        close[0] = 30.0;
+        close[1] = 0.5;
+        let mut nearer = states[1];
+        nearer[0] = 20.0;
+        nearer[1] = 0.2;
+        states.push(close);
+        states.push(nearer);
+        let deps = [deps, vec![DependencySet::default(); 2]].concat();
+        let plain = perceive_watching(&states, &deps, 0.0, &[], false, 0.0);
+        assert!(!plain.iter().any(|o| o.id.0 == 5), "hidden behind UAV 6 in its area");
+        let watching = perceive_watching(&states, &deps, 0.0, &[], false, 50.0);
+        // The same reports first (the same draws), then the close one.
+        assert_eq!(&watching[..plain.len()], &plain[..]);
+        let extra: Vec<_> = watching[plain.len()..].iter().map(|o| (o.id.0, o.source)).collect();
+        assert_eq!(extra, vec![(5, ObservationSource::Close)]);
     }
 
     #[test]
