@@ -126,7 +126,7 @@ impl Avoidance {
 
     /// Takes this update's neighbours: every UAV perceived, not only the nearest of each
     /// azimuth area (one hidden behind another in its area may be the one closing fastest),
-    /// each once (its first report), extrapolated to the next update at its velocity.
+    /// extrapolated to the next update at its velocity.
     pub(super) fn perceive(
         &mut self,
         formation: &Formation,
@@ -138,8 +138,10 @@ impl Avoidance {
     ) {
         self.near.clear();
         let r2 = params.areas.sensing_range_m.powi(2);
-        for (k, o) in observations.iter().enumerate() {
-            if o.id == me || observations[..k].iter().any(|p| p.id == o.id) {
+        // A UAV reported twice (onboard and by radio) stands twice: the same limit, met by the
+        // same velocity, costs less than looking for it.
+        for o in observations {
+            if o.id == me {
                 continue;
             }
             let n = Near::new(formation, o.id, &o.state, params.dt_s, slot_i, x_hold);

@@ -155,10 +155,7 @@ impl ProximityController {
         let fusion = p
             .isolation_gate
             .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
-        let avoidance = p
-            .avoid_m
-            .filter(|&d| d > 0.0)
-            .map(|d| Box::new(Avoidance::new(d, 0.5 * setup.vehicle.braking_mps2(), slots)));
+        let avoidance = p.avoid_m.filter(|&d| d > 0.0).map(|d| Box::new(Avoidance::new(d, setup.braking_mps2, slots)));
         Ok(Self {
             id,
             setup,
@@ -251,7 +248,7 @@ impl ProximityController {
             return Decision::alone();
         }
         // Step 4: the envelope centre O_i (as O_i − X_hold).
-        let (mut o_i, goal) = envelope_centre(params, &est, setup.stopping_mps2);
+        let (mut o_i, goal) = envelope_centre(params, &est, params.stop_closing.then_some(setup.braking_mps2));
         // Collision avoidance (beyond the paper): no closing faster than braking can stop.
         if let Some(av) = &mut self.avoidance {
             av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);

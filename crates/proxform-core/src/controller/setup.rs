@@ -21,8 +21,9 @@ pub struct ControllerSetup {
     input_weights: Input,
     pub(super) classifier: AreaClassifier,
     hessian: Option<Hessian>,
-    /// The deceleration the closing velocity is limited by (m/s²), with `stop_closing`.
-    pub(super) stopping_mps2: Option<f64>,
+    /// The deceleration the stopping limit and collision avoidance count on (m/s²): their
+    /// share ([`super::AVOID_BRAKING_SHARE`]) of the vehicle's braking.
+    pub(super) braking_mps2: f64,
 }
 
 impl ControllerSetup {
@@ -41,8 +42,8 @@ impl ControllerSetup {
             .control_matrix_is_constant()
             .then(|| Hessian::new(&vehicle.control_matrix(&State9::zeros(), params.dt_s), n, &q, &input_weights));
         let classifier = AreaClassifier::new(params.areas.areas);
-        let stopping_mps2 = params.stop_closing.then(|| super::AVOID_BRAKING_SHARE * vehicle.braking_mps2());
-        Ok(Arc::new(Self { params, vehicle, q, input_weights, classifier, hessian, stopping_mps2 }))
+        let braking_mps2 = super::AVOID_BRAKING_SHARE * vehicle.braking_mps2();
+        Ok(Arc::new(Self { params, vehicle, q, input_weights, classifier, hessian, braking_mps2 }))
     }
 
     /// The parameters.
