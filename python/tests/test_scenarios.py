@@ -65,6 +65,8 @@ def test_with_values_changes_a_value_and_checks_it():
         ({"fault": [{"kind": "remove", "uav": 2, "at_s": 10}, {"kind": "remove", "uav": 99, "at_s": 5}]}, "fault[2]", ""),
         ({"formation": {1: 2}}, "formation", ""),
         ({"controller": {"lambda": object()}}, "controller.lambda", "not object"),
+        ({"engine": "warp"}, "engine", "unknown engine"),
+        ({"engine": "fast", "wind": {"steady_kmh": [20.0, 0.0, 0.0]}}, "engine", "does not run wind"),
     ],
 )
 def test_a_bad_dict_names_its_key(changes, key, words):

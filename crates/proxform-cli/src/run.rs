@@ -226,6 +226,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         },
     };
     crate::scenarios::warn(&scenario, &source);
+    let engine = crate::scenarios::engine(&scenario, &source)?;
     if args.print_scenario {
         print!("{}", proxform_scenario::resolved::to_toml(&scenario).context("cannot write the scenario as TOML")?);
         return Ok(ExitCode::SUCCESS);
@@ -281,6 +282,8 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     let mut stdout = std::io::stdout().lock();
     report::print(&mut stdout, &scenario, &result, elapsed, pool.current_num_threads())?;
     writeln!(stdout, "peak memory              {}", crate::memory::mib(crate::memory::peak_rss_bytes()))?;
+    let engine = if args.net.distributed { "reference (agents in their own processes)" } else { engine.name() };
+    writeln!(stdout, "engine                   {engine}")?;
     writeln!(stdout, "\nwrote {} files to {}", written.len(), out.display())?;
     Ok(if result.summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

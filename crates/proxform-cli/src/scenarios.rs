@@ -62,6 +62,18 @@ pub fn check(spec: ScenarioSpec, source: &Source) -> Result<Scenario> {
     }
 }
 
+/// The engine the scenario runs on; `engine = "fast"` on a scenario the fast engine does not
+/// run is an error naming the file, line and key.
+pub fn engine(scenario: &Scenario, source: &Source) -> Result<proxform_sim::EngineKind> {
+    proxform_sim::engine_for(scenario).map_err(|e| match source {
+        Source::File { name, text } => match load::locate(text, "engine") {
+            Some(line) => anyhow::anyhow!("{name}:{line}: engine: {e}"),
+            None => anyhow::anyhow!("{name}: engine: {e}"),
+        },
+        Source::BuiltIn => anyhow::anyhow!("engine: {e}"),
+    })
+}
+
 /// What a TOML file of proxform describes, judged by its tables and top-level keys.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FileKind {

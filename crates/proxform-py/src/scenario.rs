@@ -27,7 +27,17 @@ impl PyScenario {
 
 /// Parses and checks TOML text; errors name `source`, the key and the line.
 fn from_text(py: Python<'_>, text: &str, source: &str, with_line: bool) -> PyResult<Scenario> {
-    load::parse(text, source).map_err(|e| errors::from_load(py, &e, with_line))
+    let sc = load::parse(text, source).map_err(|e| errors::from_load(py, &e, with_line))?;
+    // `engine = "fast"` on a scenario the fast engine does not run.
+    if let Err(e) = proxform_sim::engine_for(&sc) {
+        let line = load::locate(text, "engine").filter(|_| with_line);
+        let message = match line {
+            Some(l) => format!("{source}:{l}: engine: {e}"),
+            None => format!("{source}: engine: {e}"),
+        };
+        return Err(errors::scenario_error(py, &message, Some("engine"), line, source));
+    }
+    Ok(sc)
 }
 
 /// A Python dict as TOML text, or the key that has no TOML form.

@@ -26,5 +26,7 @@ pub mod wind;
 pub use convert::SpecError;
 pub use load::LoadError;
 pub use path::NavigatorPath;
-pub use scenario::{in_slots, AllowableErrors, CorrelatedNoise, MeasurementNoise, NetworkFaults, Scenario};
+pub use scenario::{
+    in_slots, AllowableErrors, CorrelatedNoise, EngineChoice, MeasurementNoise, NetworkFaults, Scenario,
+};
 pub use spec::ScenarioSpec;

@@ -35,6 +35,7 @@ pub fn resolved(sc: &Scenario) -> ScenarioSpec {
         navigator: Some(sc.navigator().0 + 1),
         safety_distance_m: Some(sc.safety_distance_m()),
         warmup_s: Some(sc.warmup_s()),
+        engine: Some(sc.engine().name().into()),
         formation: formation(sc),
         path: path(sc.path()),
         initial: initial(sc),

@@ -72,6 +72,34 @@ impl AllowableErrors {
     }
 }
 
+/// Which engine steps a flight (the scenario's `engine` key).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EngineChoice {
+    /// The fast engine from [`EngineChoice::AUTO_FAST_FROM`] UAVs when it runs the scenario,
+    /// else the reference.
+    #[default]
+    Auto,
+    /// The reference engine: one agent object per UAV.
+    Reference,
+    /// The fast engine: every phase over arrays (an error if it does not run the scenario).
+    Fast,
+}
+
+impl EngineChoice {
+    /// Swarms at least this large run on the fast engine under `engine = "auto"`.
+    pub const AUTO_FAST_FROM: usize = 10_000;
+
+    /// The key's value as written in a scenario file.
+    pub fn name(self) -> &'static str {
+        match self {
+            EngineChoice::Auto => "auto",
+            EngineChoice::Reference => "reference",
+            EngineChoice::Fast => "fast",
+        }
+    }
+}
+
 /// A checked scenario. Built by [`Scenario::try_from`] a [`ScenarioSpec`].
 #[derive(Debug, Clone)]
 pub struct Scenario {
@@ -90,6 +118,7 @@ pub struct Scenario {
     pub(crate) allowable: AllowableErrors,
     pub(crate) safety_distance_m: f64,
     pub(crate) warmup_s: f64,
+    pub(crate) engine: EngineChoice,
     pub(crate) dropout: f64,
     pub(crate) reference_dropout: Option<f64>,
     pub(crate) faults: Vec<Fault>,
@@ -237,6 +266,11 @@ impl Scenario {
     /// Pairs closer than this are reported as unsafe (m).
     pub fn safety_distance_m(&self) -> f64 {
         self.safety_distance_m
+    }
+
+    /// Which engine the scenario asks for.
+    pub fn engine(&self) -> EngineChoice {
+        self.engine
     }
 
     /// How long the formation has been flying before t = 0 (s): the controllers watch that

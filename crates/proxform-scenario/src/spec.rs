@@ -29,6 +29,10 @@ pub struct ScenarioSpec {
     pub safety_distance_m: Option<f64>,
     /// How long the formation has flown before t = 0 (s, ≥ 0). Default 1.
     pub warmup_s: Option<f64>,
+    /// Which engine steps the flight: "reference" (one agent object per UAV, bit-identical
+    /// across versions), "fast" (every phase over arrays, for large swarms) or "auto" (the fast
+    /// one from 10 000 UAVs when it runs the scenario). Default "auto".
+    pub engine: Option<String>,
     /// The formation (required: slots or a shape).
     #[serde(default)]
     pub formation: FormationSpec,

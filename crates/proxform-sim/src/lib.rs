@@ -3,6 +3,8 @@
 //! - [`world`]: the engine that steps every UAV in named phases (perceive, estimate, decide,
 //!   actuate, propagate) from a shared snapshot, the onboard sensor, the radio, wind and
 //!   faults. Each UAV's decision is its [`proxform_core::Agent`]'s step.
+//! - [`fast`]: the structure-of-arrays engine for large swarms (the same method over arrays);
+//!   [`flight`] runs a flight on whichever engine the scenario chooses.
 //! - [`random`]: the seeded random streams every draw comes from.
 //! - [`measure`]: observers that watch a run (metrics, trajectories).
 //! - [`batch`]: seeded runs in parallel, comparisons of methods, throughput.
@@ -12,6 +14,8 @@
 //! caller.
 
 pub mod batch;
+pub mod fast;
+pub mod flight;
 pub mod measure;
 pub mod parallel;
 pub mod random;
@@ -22,6 +26,7 @@ pub use batch::runs::{
     run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FormingSummary,
     IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
 };
+pub use flight::{engine_for, EngineKind, Flight};
 pub use measure::metrics::{
     FormingMetrics, IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics, TransitionMetrics,
 };

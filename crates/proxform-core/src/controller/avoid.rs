@@ -77,9 +77,11 @@ const LOCK_S: f64 = 10.0;
 /// A side is forgotten once its neighbour's limit has not bound for this long (s).
 const SIDE_MEMORY_S: f64 = 2.0;
 
-/// The rule's parameters and its list of neighbours, allocated once.
+/// The rule's parameters and its list of neighbours, allocated once. Public so that an engine
+/// that steps many UAVs as arrays can run the same rule for the few UAVs it binds on (see
+/// [`Avoidance::remembers`]).
 #[derive(Debug, Clone)]
-pub(super) struct Avoidance {
+pub struct Avoidance {
     /// `avoid_m`: no neighbour closer (m).
     distance_m: f64,
     /// `a`: the deceleration counted on (m/s²).
@@ -107,17 +109,20 @@ const SLIDE_NOISE_MPS: f64 = 1.0;
 const PASSES: usize = 8;
 
 impl Avoidance {
-    pub(super) fn new(distance_m: f64, braking_mps2: f64, capacity: usize) -> Self {
+    /// The rule for avoidance distance `distance_m` (m) and deceleration `braking_mps2` (m/s²).
+    pub fn new(distance_m: f64, braking_mps2: f64) -> Self {
         Self {
             distance_m,
             braking_mps2,
-            near: Vec::with_capacity(capacity),
-            sides: Vec::with_capacity(capacity),
-            bound_now: Vec::with_capacity(capacity),
+            // Grown when first needed: most UAVs of a large swarm never come close enough.
+            near: Vec::new(),
+            sides: Vec::new(),
+            bound_now: Vec::new(),
         }
     }
 
-    pub(super) fn heap_bytes(&self) -> usize {
+    /// Bytes held (the struct and its lists).
+    pub fn heap_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.near.capacity() * std::mem::size_of::<Near>()
             + self.sides.capacity() * std::mem::size_of::<Side>()
@@ -127,7 +132,7 @@ impl Avoidance {
     /// Takes this update's neighbours: every UAV perceived, not only the nearest of each
     /// azimuth area (one hidden behind another in its area may be the one closing fastest),
     /// extrapolated to the next update at its velocity.
-    pub(super) fn perceive(
+    pub fn perceive(
         &mut self,
         formation: &Formation,
         me: UavId,
@@ -156,7 +161,7 @@ impl Avoidance {
     /// keeps its course) so that the UAV closes on no neighbour faster than it can stop.
     /// True when a limit bound.
     /// `goal` is where the centre is, from X_hold (m).
-    pub(super) fn limit(
+    pub fn limit(
         &mut self,
         vehicle: &VehicleModel,
         x_hold: &State9,
@@ -245,6 +250,38 @@ impl Avoidance {
             o_i[X + k] = 0.5 * dt * o_i[VX + k];
         }
         true
+    }
+
+    /// Whether [`Self::limit`] could bind on any of `observations` for the centre `o_i` (as
+    /// `O_i − X_hold`): false only when, for every one, even closing at the full relative
+    /// speed `w` leaves room to stop, `d − d_avoid − w·Δt ≥ w²/(2a)` (the limit with `d_min` at
+    /// its largest). A rule that remembers no side and could bind on nothing leaves the centre
+    /// and itself as they are, so the caller may skip it (and the list it would fill).
+    pub fn may_bind(
+        &self,
+        vehicle: &VehicleModel,
+        x_hold: &State9,
+        dt: f64,
+        o_i: &State9,
+        observations: &[Observation],
+    ) -> bool {
+        let v =
+            vehicle.clamp_velocity([x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]]);
+        observations.iter().any(|o| {
+            let x = &o.state;
+            let p = [0, 1, 2].map(|a| x_hold[X + a] - (x[X + a] + dt * x[VX + a]));
+            let d = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            let w2 = (0..3).map(|a| (v[a] - x[VX + a]).powi(2)).sum::<f64>();
+            d - self.distance_m - w2.sqrt() * dt < w2 / (2.0 * self.braking_mps2)
+        })
+    }
+
+    /// Whether the rule remembers a side for some neighbour: while it does, its next
+    /// [`Self::limit`] depends on this one's. A rule that remembers nothing and binds on no
+    /// neighbour leaves the centre as it is and stays as it was, so an engine may run a fresh
+    /// one in its place.
+    pub fn remembers(&self) -> bool {
+        !self.sides.is_empty()
     }
 
     /// Ages the sides of the neighbours whose limit did not bind this update, and forgets
@@ -337,13 +374,60 @@ mod tests {
     }
 
     fn blocked_at(vx: f64) -> (Avoidance, State9, State9) {
-        let mut av = Avoidance::new(62.5, 2.5, 4);
+        let mut av = Avoidance::new(62.5, 2.5);
         let x_hold = own([0.0, 0.0, 0.0], [vx, 0.0, 0.0]);
         av.near.push(near(1, [0.0, -80.0, 0.0], [vx, 0.0, 0.0], [0.0; 3]));
         let mut o_i = State9::zeros();
         o_i[X + 1] = -300.0;
         o_i[VX + 1] = -300.0;
         (av, x_hold, o_i)
+    }
+
+    #[test]
+    fn a_rule_that_may_not_bind_leaves_the_centre_as_it_is() {
+        // Random neighbours around a UAV with random centres: whenever `may_bind` says no, the
+        // rule run in full changes nothing (so skipping it is exact); and it says yes for a
+        // neighbour closing fast.
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let params = ControllerParams::default();
+        let slots: Vec<FormationSlot> = (0..4).map(|k| FormationSlot::at(-40.0 * k as f64, 0.0, 0.0)).collect();
+        let formation = Formation::new(slots, crate::formation::FormationFrame::World).expect("finite");
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (mut skipped, mut bound) = (0, 0);
+        for _ in 0..4000 {
+            let x_hold = own([0.0, 0.0, 0.0], [60.0 + 10.0 * next(), 4.0 * next(), 2.0 * next()]);
+            let obs: Vec<Observation> = (1..4)
+                .map(|j| {
+                    let mut st = State9::zeros();
+                    for a in 0..3 {
+                        st[X + a] = 240.0 * next();
+                        st[VX + a] = x_hold[VX + a] + 30.0 * next();
+                    }
+                    Observation { id: UavId(j), state: st, age_s: 0.0, source: ObservationSource::Onboard }
+                })
+                .collect();
+            let mut o_i = State9::zeros();
+            for a in 0..3 {
+                o_i[X + a] = 400.0 * next();
+                o_i[VX + a] = 20.0 * next();
+            }
+            let mut av = Avoidance::new(30.0, 2.5);
+            let may = av.may_bind(&vehicle, &x_hold, 0.1, &o_i, &obs);
+            let before = o_i;
+            let g = goal(&o_i);
+            av.perceive(&formation, UavId(0), &formation.slots[0], &x_hold, &params, &obs);
+            let limited = av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g);
+            if !may {
+                skipped += 1;
+                assert!(!limited && o_i == before && !av.remembers(), "{obs:?} {before:?}");
+            }
+            bound += usize::from(limited);
+        }
+        assert!(skipped > 500 && bound > 100, "skipped {skipped}, bound {bound}");
     }
 
     #[test]
@@ -418,7 +502,7 @@ mod tests {
     #[test]
     fn nothing_changes_when_no_neighbour_closes_fast() {
         let vehicle = VehicleModel::Kinematic(KinematicModel::default());
-        let mut av = Avoidance::new(62.5, 2.5, 4);
+        let mut av = Avoidance::new(62.5, 2.5);
         let x_hold = own([0.0; 3], [60.0, 0.0, 0.0]);
         av.near.push(near(1, [0.0, -100.0, 0.0], [60.0, 0.5, 0.0], [0.0; 3]));
         let mut o_i = State9::zeros();

@@ -23,11 +23,11 @@ mod setup;
 
 use std::sync::Arc;
 
+pub use avoid::Avoidance;
 pub use decision::{Decision, Outcome};
 pub use params::{ControllerParams, AVOID_BRAKING_SHARE, AVOID_WATCH, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
 pub use setup::ControllerSetup;
 
-use avoid::Avoidance;
 use fusion::{Fusion, Implied};
 
 use crate::error::ConfigError;
@@ -155,7 +155,7 @@ impl ProximityController {
         let fusion = p
             .isolation_gate
             .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
-        let avoidance = p.avoid_m.filter(|&d| d > 0.0).map(|d| Box::new(Avoidance::new(d, setup.braking_mps2, slots)));
+        let avoidance = p.avoid_m.filter(|&d| d > 0.0).map(|d| Box::new(Avoidance::new(d, setup.braking_mps2)));
         Ok(Self {
             id,
             setup,
@@ -251,8 +251,11 @@ impl ProximityController {
         let (mut o_i, goal) = envelope_centre(params, &est, params.stop_closing.then_some(setup.braking_mps2));
         // Collision avoidance (beyond the paper): no closing faster than braking can stop.
         if let Some(av) = &mut self.avoidance {
-            av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);
-            av.limit(vehicle, &x_hold, params.dt_s, &mut o_i, &goal);
+            // Skipped (with the same result) when it remembers nothing and cannot bind.
+            if av.remembers() || av.may_bind(vehicle, &x_hold, params.dt_s, &o_i, observations) {
+                av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);
+                av.limit(vehicle, &x_hold, params.dt_s, &mut o_i, &goal);
+            }
         }
         // Steps 5-6: keep the course while X_hold lies inside the envelope around O_i.
         let x_hold_minus_o = -o_i;

@@ -56,6 +56,26 @@ impl ControllerSetup {
         &self.vehicle
     }
 
+    /// The azimuth areas' classifier.
+    pub fn classifier(&self) -> &AreaClassifier {
+        &self.classifier
+    }
+
+    /// The deceleration the stopping limit and collision avoidance count on (m/s²).
+    pub fn braking_mps2(&self) -> f64 {
+        self.braking_mps2
+    }
+
+    /// The envelope's weights `1/Δ²` per parameter.
+    pub fn q(&self) -> &State9 {
+        &self.q
+    }
+
+    /// The input weights (per input, over its per-step limit squared).
+    pub fn input_weights(&self) -> &Input {
+        &self.input_weights
+    }
+
     /// METHOD §6 step 7: the input that brings the UAV at `own` toward the target whose
     /// course-keeping deviation is `r = F·X − target`, within the vehicle's limits: the
     /// closed-form step for H = 1, the horizon QP for H > 1 (falling back to the one-step

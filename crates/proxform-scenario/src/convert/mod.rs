@@ -87,6 +87,17 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ),
             ));
         }
+        let engine = match spec.engine.as_deref() {
+            None | Some("auto") => crate::scenario::EngineChoice::Auto,
+            Some("reference") => crate::scenario::EngineChoice::Reference,
+            Some("fast") => crate::scenario::EngineChoice::Fast,
+            Some(other) => {
+                return Err(err(
+                    "engine",
+                    format!("unknown engine \"{other}\" (expected \"auto\", \"reference\" or \"fast\")"),
+                ))
+            }
+        };
         let vehicle = vehicle::vehicle(&spec.vehicle)?;
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
         let mut params = controller::params(&spec.controller, dt_s, fixed_wing)?;
@@ -221,6 +232,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             allowable,
             safety_distance_m,
             warmup_s,
+            engine,
             dropout,
             reference_dropout,
             faults,

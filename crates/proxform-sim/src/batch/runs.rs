@@ -273,7 +273,8 @@ fn run_one_stoppable(
     tick: &(dyn Fn() + Sync),
     stop: &AtomicBool,
 ) -> (RunSummary, Option<Trajectory>) {
-    let sim = Simulation::new(scenario, options, seed, run);
+    let engine = crate::flight::engine_for(scenario).unwrap_or(crate::flight::EngineKind::Reference);
+    let sim = crate::flight::Flight::new(scenario, engine, options, seed, run);
     observe(scenario, sim, run, record, (Ticker { tick, stop }, &mut ()))
 }
 
@@ -281,7 +282,7 @@ fn run_one_stoppable(
 /// whatever else the caller watches with.
 fn observe(
     scenario: &Scenario,
-    sim: Simulation<'_>,
+    sim: crate::flight::Flight<'_>,
     run: u64,
     record: Option<Trajectory>,
     ticker: (Ticker<'_>, &mut dyn Observer),
@@ -376,8 +377,13 @@ pub fn run_batch_with_agents(
         }
         let sim = Simulation::with_agents(scenario, options, (seed, r), Box::new(&mut *agents));
         let tick: &(dyn Fn() + Sync) = if runs == 1 { progress } else { &|| {} };
-        let (summary, trajectory) =
-            observe(scenario, sim, r, record_first.take(), (Ticker { tick, stop }, &mut *watch));
+        let (summary, trajectory) = observe(
+            scenario,
+            crate::flight::Flight::Reference(Box::new(sim)),
+            r,
+            record_first.take(),
+            (Ticker { tick, stop }, &mut *watch),
+        );
         if trajectory.is_some() {
             first_trajectory = trajectory;
         }

@@ -8,9 +8,9 @@ use std::time::Instant;
 
 use proxform_scenario::Scenario;
 
+use crate::flight::{EngineKind, Flight};
 use crate::measure::metrics::RunMetrics;
 use crate::measure::observer::{Observer, StepFrame};
-use crate::world::engine::Simulation;
 use crate::world::options::{NeighbourSearch, RunOptions};
 
 /// One throughput measurement.
@@ -20,6 +20,8 @@ pub struct Throughput {
     pub uavs: u64,
     /// Steps timed.
     pub steps: u64,
+    /// Engine that stepped the flight.
+    pub engine: EngineKind,
     /// Neighbour search used.
     pub search: NeighbourSearch,
     /// Worker threads of the pool the steps ran on.
@@ -44,23 +46,29 @@ impl Observer for Metrics<'_> {
     }
 }
 
-/// Runs `steps` steps of `sc` (seed 1, run 0; at most the flight's steps) with `search`, in
-/// parallel within the run when `parallel`, on the current rayon pool.
-pub fn measure(sc: &Scenario, steps: u64, search: NeighbourSearch, parallel: bool) -> Throughput {
+/// Runs `steps` steps of `sc` (seed 1, run 0; at most the flight's steps) on `engine` with
+/// `search` (the fast engine always searches its grid), in parallel within the run when
+/// `parallel`, on the current rayon pool.
+pub fn measure(sc: &Scenario, engine: EngineKind, steps: u64, search: NeighbourSearch, parallel: bool) -> Throughput {
     let options = RunOptions { neighbour_search: search, ..RunOptions::default() };
     let t0 = Instant::now();
-    let sim = Simulation::new(sc, options, 1, 0).with_parallel(parallel);
+    let sim = Flight::new(sc, engine, options, 1, 0).with_parallel(parallel);
+    let engine = match sim {
+        Flight::Reference(_) => EngineKind::Reference,
+        Flight::Fast(_) => EngineKind::Fast,
+    };
     let heap_bytes = sim.heap_bytes() as u64;
     let mut metrics = RunMetrics::new(sc);
     let setup_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    sim.run_steps(steps, &mut Metrics(&mut metrics));
+    timed_steps(sim, steps, &mut metrics);
     let step_s = t1.elapsed().as_secs_f64();
     let steps = steps.min(sc.steps());
     let updates = (sc.len() as u64 - 1) * steps;
     Throughput {
         uavs: sc.len() as u64,
         steps,
+        engine,
         search,
         threads: rayon::current_num_threads(),
         setup_s,
@@ -69,4 +77,11 @@ pub fn measure(sc: &Scenario, steps: u64, search: NeighbourSearch, parallel: boo
         ns_per_update: step_s * 1e9 / updates.max(1) as f64,
         heap_bytes,
     }
+}
+
+/// The steps measured (a function of its own, so that an instruction counter can count them
+/// alone: `valgrind --tool=callgrind --toggle-collect='*timed_steps*'`).
+#[inline(never)]
+pub fn timed_steps(sim: Flight<'_>, steps: u64, metrics: &mut RunMetrics) {
+    sim.run_steps(steps, &mut Metrics(metrics));
 }

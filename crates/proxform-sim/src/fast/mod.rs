@@ -1,0 +1,314 @@
+//! The fast engine: every phase of a step run over all UAVs as arrays, for large swarms.
+//!
+//! The reference engine ([`crate::world`]) steps one [`proxform_core::Agent`] object per UAV,
+//! each with its own tracks and controller, through every phase. This engine runs the same
+//! method ([`update`]: the reference controller's steps, its α-β tracks, its collision
+//! avoidance) over flat arrays: the true states, one array of every UAV's tracks in f32
+//! ([`tracks`]), the inputs and the per-UAV records, with per-thread scratch allocated once.
+//! A step is:
+//! 1. **index**: the neighbour grid over the positions;
+//! 2. **radio**: the broadcasters' messages (their own measurements), composed once;
+//! 3. per block of [`BLOCK`] UAVs, in parallel: **perceive** (areas, references, radio,
+//!    close-range detections from the true geometry), **measure** (noise drawn in bulk, only
+//!    for what was observed), **decide** (the controller on the tracks), **actuate** (the
+//!    actuation error);
+//! 4. **propagate**: every UAV through the kinematic vehicle, in place;
+//! 5. **measure**: the observers see the new states.
+//!
+//! Positions inside the controller are relative to each UAV's reference point, which moves
+//! with the navigator's path ([`update::View::shift`]), so f32 tracks keep their resolution
+//! however far the swarm flies; the true states stay in f64.
+//!
+//! Random numbers come from the counter-based streams of [`crate::random::bulk`], keyed by
+//! (seed, run, UAV, source, step): results do not depend on the thread count. They are other
+//! numbers than the reference engine's, so the two engines agree in distribution, not bit for
+//! bit (`tests/fast_engine.rs` checks the distributions). [`setup::supports`] says which
+//! scenarios it runs; the rest run on the reference engine.
+
+mod setup;
+mod tracks;
+mod update;
+
+use proxform_core::controller::Avoidance;
+use proxform_core::grid::NeighbourGrid;
+use proxform_core::state::{ALPHA, VX, X};
+use proxform_core::State9;
+use proxform_scenario::Scenario;
+use rayon::prelude::*;
+
+use crate::measure::observer::{Observer, StepFrame, UavStep};
+use crate::random::RunKey;
+use crate::world::options::RunOptions;
+use setup::Consts;
+pub use setup::{supports, Unsupported};
+use tracks::{Owner, Track};
+use update::{Message, Scratch, View};
+
+/// UAVs per block of the per-UAV phases.
+pub const BLOCK: usize = 256;
+
+/// Step numbers of the warm-up's draws, far from the flight's.
+const WARMUP_DRAW_BASE: u64 = 1 << 62;
+
+/// One block's slices of the per-UAV arrays, with its index: records, inputs, tracks and their
+/// counts, avoidance memory.
+type BlockSlices<'b> = (
+    usize,
+    (((&'b mut [UavStep], &'b mut [[f32; 6]]), (&'b mut [Track], &'b mut [u8])), &'b mut [Option<Box<Avoidance>>]),
+);
+
+/// One flight on the fast engine.
+pub struct FastSimulation<'s> {
+    sc: &'s Scenario,
+    c: Consts,
+    options: RunOptions,
+    run: RunKey,
+    k: u64,
+    /// True states (f64), indexed by UAV.
+    states: Vec<State9>,
+    /// What each UAV's last update produced.
+    uavs: Vec<UavStep>,
+    /// Each UAV's input as applied this step.
+    applied: Vec<[f32; 6]>,
+    active: Vec<bool>,
+    /// `capacity` tracks per UAV, then how many each uses.
+    tracks: Vec<Track>,
+    used: Vec<u8>,
+    /// Collision avoidance's memory, for the UAVs whose rule remembers a side.
+    avoid: Vec<Option<Box<Avoidance>>>,
+    grid: NeighbourGrid,
+    messages: Vec<Message>,
+    /// Origins of the reference points of the last steps.
+    ring: Vec<[f64; 3]>,
+    start: [f64; 3],
+    origin0: [f64; 3],
+    parallel: bool,
+}
+
+impl std::fmt::Debug for FastSimulation<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FastSimulation").field("uavs", &self.states.len()).field("k", &self.k).finish()
+    }
+}
+
+impl<'s> FastSimulation<'s> {
+    /// A flight of `sc` for run `run` of seed `seed`, warmed up as the reference engine's.
+    pub fn new(sc: &'s Scenario, options: RunOptions, seed: u64, run: u64) -> Result<Self, Unsupported> {
+        supports(sc)?;
+        let c = Consts::new(sc);
+        let n = sc.len();
+        let nav = sc.navigator().index();
+        let s0 = sc.initial()[nav];
+        let start = [s0[X], s0[X + 1], s0[X + 2]];
+        let p0 = sc.path().state_at(0.0, start);
+        let ring_len = ((c.filter.timeout_steps.max(c.coast_steps) + 3) as usize).next_power_of_two();
+        let run = RunKey::new(seed, run);
+        let mut sim = Self {
+            sc,
+            options,
+            run,
+            k: 0,
+            states: sc.initial().to_vec(),
+            uavs: vec![UavStep::default(); n],
+            applied: vec![[0.0; 6]; n],
+            active: vec![true; n],
+            tracks: vec![Track::default(); n * c.capacity],
+            used: vec![0; n],
+            avoid: (0..n).map(|_| None).collect(),
+            grid: NeighbourGrid::new(),
+            messages: Vec::with_capacity(c.broadcasters.len()),
+            ring: vec![[p0[X], p0[X + 1], p0[X + 2]]; ring_len],
+            start,
+            origin0: [p0[X], p0[X + 1], p0[X + 2]],
+            parallel: n >= crate::world::engine::PARALLEL_MIN_UAVS,
+            c,
+        };
+        sim.warm_up();
+        Ok(sim)
+    }
+
+    /// Forces serial or parallel stepping (results are identical).
+    pub fn with_parallel(mut self, parallel: bool) -> Self {
+        self.parallel = parallel;
+        self
+    }
+
+    /// Current true states.
+    pub fn states(&self) -> &[State9] {
+        &self.states
+    }
+
+    /// Bytes held by the engine's arrays (the scenario excluded).
+    pub fn heap_bytes(&self) -> usize {
+        let n = self.states.len();
+        n * (std::mem::size_of::<State9>()
+            + std::mem::size_of::<UavStep>()
+            + std::mem::size_of::<[f32; 6]>()
+            + 2
+            + std::mem::size_of::<Option<Box<Avoidance>>>())
+            + self.tracks.len() * std::mem::size_of::<Track>()
+            + self.avoid.iter().flatten().map(|a| a.heap_bytes()).sum::<usize>()
+            + self.grid.heap_bytes()
+    }
+
+    /// The origin of the reference points at step `k` (the navigator's path position).
+    fn origin_at(&self, k: i64) -> [f64; 3] {
+        let s = self.sc.path().state_at(k as f64 * self.c.dt, self.start);
+        [s[X], s[X + 1], s[X + 2]]
+    }
+
+    /// The warm-up (as the reference engine's): the followers watch the ideal formation fly
+    /// its path for `warmup_s` before t = 0, so that their tracks know the rates; nothing is
+    /// applied.
+    fn warm_up(&mut self) {
+        let sc = self.sc;
+        let steps = if sc.placement().in_slots() { (sc.warmup_s() / sc.dt_s()).round() as i64 } else { 0 };
+        if steps == 0 {
+            return;
+        }
+        let nav = self.c.nav;
+        for w in 0..steps {
+            let k = -(steps - w);
+            let nav_state = sc.path().state_at(k as f64 * self.c.dt, self.start);
+            for (i, s) in self.states.iter_mut().enumerate() {
+                *s = if i == nav { nav_state } else { sc.slot_state(i, &nav_state) };
+            }
+            self.decide_all(k, WARMUP_DRAW_BASE + w as u64, true);
+        }
+        // Back to the start: every UAV in its slot (the only placement this engine runs).
+        self.states.copy_from_slice(sc.initial());
+        self.uavs.iter_mut().for_each(|u| *u = UavStep::default());
+    }
+
+    /// Index, radio and the per-UAV phases up to the applied inputs, for step `k`.
+    fn decide_all(&mut self, k: i64, draw_step: u64, warm: bool) {
+        let origin = self.origin_at(k);
+        let len = self.ring.len();
+        self.ring[update::ring_index(k as i32, len)] = origin;
+        self.grid.rebuild_ids(
+            self.states.iter().enumerate().map(|(i, s)| (i as u32, [s[X], s[X + 1], s[X + 2]])),
+            self.c.range,
+        );
+        let Self { sc, c, run, states, uavs, applied, tracks, used, avoid, grid, messages, ring, origin0, .. } = self;
+        let view = View {
+            c,
+            sc,
+            states,
+            grid,
+            run: *run,
+            draw_step,
+            k: k as i32,
+            origin,
+            origin0: *origin0,
+            ring,
+            messages: &[],
+            warm,
+        };
+        // Radio: the broadcasters' own measurements.
+        messages.clear();
+        for &j in &c.broadcasters {
+            let s = &states[j];
+            messages.push(Message {
+                sender: j as u32,
+                state: update::own_measurement(&view, j),
+                at: [s[X], s[X + 1], s[X + 2]],
+            });
+        }
+        let view = View { messages, ..view };
+        let cap = c.capacity;
+        let nav = c.nav;
+        let adjust = self.options.adjustment_enabled;
+        let block = |scratch: &mut Scratch, (b, (((uavs, applied), (tracks, used)), avoid)): BlockSlices<'_>| {
+            for o in 0..uavs.len() {
+                let i = b * BLOCK + o;
+                if i == nav {
+                    uavs[o] = UavStep::default();
+                    applied[o] = [0.0; 6];
+                    continue;
+                }
+                let mut owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
+                let u = update::update(&view, i, scratch, &mut owner, &mut avoid[o]);
+                uavs[o] = u.step;
+                applied[o] = if adjust { u.applied } else { [0.0; 6] };
+                if !adjust {
+                    uavs[o].model_error = [0.0; 9];
+                }
+            }
+        };
+        if self.parallel {
+            uavs.par_chunks_mut(BLOCK)
+                .zip(applied.par_chunks_mut(BLOCK))
+                .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)))
+                .zip(avoid.par_chunks_mut(BLOCK))
+                .enumerate()
+                .for_each_init(|| Scratch::new(c), block);
+        } else {
+            let mut scratch = Scratch::new(c);
+            uavs.chunks_mut(BLOCK)
+                .zip(applied.chunks_mut(BLOCK))
+                .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)))
+                .zip(avoid.chunks_mut(BLOCK))
+                .enumerate()
+                .for_each(|x| block(&mut scratch, x));
+        }
+    }
+
+    /// Advances one update period.
+    pub fn step(&mut self) {
+        let k = self.k;
+        self.decide_all(k as i64, k, false);
+        // Propagate: the navigator along its path, the followers through the kinematic vehicle.
+        let dt = self.c.dt;
+        let nav = self.c.nav;
+        let nav_next = self.sc.path().state_at((k + 1) as f64 * dt, self.start);
+        let propagate = |(i, (s, u)): (usize, (&mut State9, &[f32; 6]))| {
+            if i == nav {
+                *s = nav_next;
+                return;
+            }
+            for a in 0..3 {
+                let (ua, ur) = (f64::from(u[a]), f64::from(u[3 + a]));
+                s[X + a] += dt * (s[VX + a] + 0.5 * ua);
+                s[VX + a] += ua;
+                s[ALPHA + a] += ur;
+            }
+        };
+        if self.parallel {
+            self.states.par_iter_mut().zip(self.applied.par_iter()).enumerate().for_each(propagate);
+        } else {
+            self.states.iter_mut().zip(self.applied.iter()).enumerate().for_each(propagate);
+        }
+        self.k += 1;
+    }
+
+    fn frame(&self) -> StepFrame<'_> {
+        StepFrame {
+            k: self.k,
+            t: self.k as f64 * self.c.dt,
+            states: &self.states,
+            uavs: &self.uavs,
+            active: &self.active,
+            radio_sent: self.messages.len(),
+        }
+    }
+
+    /// Runs the whole flight, showing every step (and the initial state) to `observer`.
+    pub fn run(self, observer: &mut impl Observer) {
+        let steps = self.sc.steps();
+        self.run_steps(steps, observer);
+    }
+
+    /// Runs `steps` update periods (or fewer if the flight ends first), showing each to
+    /// `observer`.
+    pub fn run_steps(mut self, steps: u64, observer: &mut impl Observer) {
+        let sc = self.sc;
+        if self.k == 0 {
+            observer.on_step(sc, &self.frame());
+        }
+        let end = (self.k + steps).min(sc.steps());
+        while self.k < end && observer.keep_going() {
+            self.step();
+            observer.on_step(sc, &self.frame());
+        }
+    }
+}

@@ -1,0 +1,183 @@
+//! What the fast engine derives once from a scenario: which scenarios it runs (the rest stay
+//! with the reference engine) and the constants every UAV's update reads.
+
+use proxform_core::azimuth::AreaClassifier;
+use proxform_core::state::{ALPHA, VX};
+use proxform_core::{Method, PredictorKind, VehicleModel};
+use proxform_scenario::Scenario;
+
+use super::tracks::{Filter, MAX_ID};
+
+/// Why the fast engine does not run a scenario (it then runs on the reference engine).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("the fast engine does not run {0} (use the reference engine)")]
+pub struct Unsupported(pub &'static str);
+
+/// Checks that the fast engine runs every feature `sc` uses: the proximity method on the
+/// kinematic vehicle with α-β tracks and the one-step input; measurement noise, actuation
+/// error, onboard dropout, beacons and i.i.d. radio loss, separation keeping, the stopping
+/// limit and collision avoidance. Wind, position-fix bias, faults, formation changes, scattered
+/// starts, radio delay, bursts and relays, the robust fusion, the own-state filter and check,
+/// the horizon and the fixed wing stay with the reference engine.
+pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
+    let p = sc.controller();
+    let radio = sc.radio();
+    let checks: [(bool, &'static str); 18] = [
+        (matches!(sc.method(), Method::Proximity), "a baseline method"),
+        (matches!(sc.vehicle(), VehicleModel::Kinematic(_)), "the fixed-wing vehicle"),
+        (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
+        (p.horizon <= 1, "a prediction horizon"),
+        (p.isolation_gate.is_none(), "the robust fusion"),
+        (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
+        (!p.bank_turn_feedforward, "the bank-turn feed-forward"),
+        (sc.wind().is_calm(), "wind"),
+        (sc.gnss_bias().is_none(), "a position-fix bias"),
+        (sc.faults().is_empty(), "faults"),
+        (sc.schedule().is_empty(), "formation changes"),
+        (sc.placement().in_slots(), "scattered starts"),
+        (radio.delay_steps == 0, "radio delay"),
+        (radio.burst.is_none(), "bursty radio loss"),
+        (!radio.relay_navigator, "relays of the navigator"),
+        (sc.len() <= MAX_ID as usize, "more than 2^30 UAVs"),
+        (p.areas.areas + max_refs(sc) <= MAX_TRACKS, "more than 16 areas and references"),
+        (p.track_timeout_s.max(p.coast_s) / p.dt_s <= MAX_TRACK_STEPS, "a track timeout over 4096 update periods"),
+    ];
+    match checks.iter().find(|c| !c.0) {
+        Some(&(_, what)) => Err(Unsupported(what)),
+        None => Ok(()),
+    }
+}
+
+/// Most tracks a UAV keeps in the fast engine (its areas and its main references).
+pub const MAX_TRACKS: usize = 16;
+
+/// Longest track timeout or coasting time the fast engine runs, in update periods (it keeps
+/// the reference points of that many past steps).
+pub const MAX_TRACK_STEPS: f64 = 4096.0;
+
+/// The most main references any UAV has.
+fn max_refs(sc: &Scenario) -> usize {
+    sc.dependencies().iter().map(|d| d.refs().len()).max().unwrap_or(0)
+}
+
+/// The constants of every UAV's update.
+#[derive(Debug, Clone)]
+pub struct Consts {
+    pub nav: usize,
+    pub dt: f64,
+    pub areas: usize,
+    pub classifier: AreaClassifier,
+    /// Sensing range (m) and its square.
+    pub range: f64,
+    pub r2: f64,
+    /// Close-range detections within this distance squared (0: none).
+    pub watch2: f64,
+    /// Track records per UAV.
+    pub capacity: usize,
+    pub filter: Filter,
+    /// A track coasts for at most this many steps.
+    pub coast_steps: i64,
+    pub coast_decay_s: f64,
+    /// Measurement noise σ per parameter.
+    pub sigma: [f32; 9],
+    pub lambda: f64,
+    /// The formation turns with the course (W's offset rotated by the neighbour's course).
+    pub course_frame: bool,
+    /// Envelope: Δ per parameter and ρ².
+    pub inv_threshold: [f64; 9],
+    pub rho2: f64,
+    pub closing_time_s: Option<f64>,
+    /// The stopping limit's deceleration (m/s²), when on.
+    pub stopping: Option<f64>,
+    pub separation: f64,
+    /// Collision avoidance: distance (m) and deceleration (m/s²).
+    pub avoid: Option<(f64, f64)>,
+    /// The one-step input's diagonal: `g_a = Σ_k B_ka·q_k·r_k`, `u_a = −g_a/h_a`.
+    pub q: [f64; 9],
+    pub h: [f64; 6],
+    /// Per-step input limits (rate·Δt) and the state box of velocity and attitude.
+    pub scale: [f64; 6],
+    pub state_min: [f64; 6],
+    pub state_max: [f64; 6],
+    pub dropout: f64,
+    pub reference_dropout: f64,
+    pub actuation_error: f64,
+    pub radio_loss: f64,
+    pub radio_range2: f64,
+    /// The UAVs that broadcast, in the order their messages are heard.
+    pub broadcasters: Vec<usize>,
+}
+
+impl Consts {
+    /// The constants of `sc` (which [`supports`] accepts).
+    pub fn new(sc: &Scenario) -> Self {
+        let p = sc.controller();
+        let setup = sc.agents().controller().clone();
+        let VehicleModel::Kinematic(kin) = sc.vehicle() else { unreachable!("checked by supports") };
+        let PredictorKind::AlphaBeta { alpha, beta } = p.predictor else { unreachable!("checked by supports") };
+        let dt = p.dt_s;
+        let n = sc.len();
+        let nav = sc.navigator().index();
+        let range = p.areas.sensing_range_m;
+        let watch = match p.avoid_m {
+            Some(d) if d > 0.0 => (proxform_core::controller::AVOID_WATCH * d).min(range),
+            _ => 0.0,
+        };
+        let steps = |s: f64| (s / dt + 1e-6).floor() as i64;
+        let timeout_steps = steps(p.track_timeout_s);
+        let q: [f64; 9] = std::array::from_fn(|k| setup.q()[k]);
+        let w = setup.input_weights();
+        let half = 0.5 * dt;
+        let h: [f64; 6] =
+            std::array::from_fn(
+                |a| {
+                    if a < 3 {
+                        half * half * q[a] + q[VX + a] + w[a]
+                    } else {
+                        q[ALPHA + a - 3] + w[a]
+                    }
+                },
+            );
+        let scale_v = kin.input_scale(dt);
+        let l = &kin.limits;
+        let am = l.attitude_max_rad;
+        let sigma = sc.noise().sigma();
+        let radio = sc.radio();
+        let beacons: Vec<usize> = sc.beacons().iter().map(|b| b.index()).filter(|&j| j < n).collect();
+        let all = if radio.broadcast_all { n } else { 0 };
+        let broadcasters = beacons.iter().copied().chain((0..all).filter(|j| !beacons.contains(j))).collect();
+        Self {
+            nav,
+            dt,
+            areas: p.areas.areas,
+            classifier: AreaClassifier::new(p.areas.areas),
+            range,
+            r2: range * range,
+            watch2: watch * watch,
+            capacity: (p.areas.areas + max_refs(sc)).max(1),
+            filter: Filter { alpha, beta, dt, timeout_steps, coast_accel_s: p.coast_accel_s },
+            coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
+            coast_decay_s: p.coast_decay_s,
+            sigma: std::array::from_fn(|k| sigma[k] as f32),
+            lambda: p.lambda,
+            course_frame: sc.formation().frame == proxform_core::FormationFrame::Course,
+            inv_threshold: std::array::from_fn(|k| 1.0 / p.envelope.thresholds[k]),
+            rho2: p.envelope.rho * p.envelope.rho,
+            closing_time_s: p.closing_time_s,
+            stopping: p.stop_closing.then_some(setup.braking_mps2()),
+            separation: p.separation_m.unwrap_or(0.0),
+            avoid: p.avoid_m.filter(|&d| d > 0.0).map(|d| (d, setup.braking_mps2())),
+            q,
+            h,
+            scale: std::array::from_fn(|a| scale_v[a]),
+            state_min: [l.vx_min_mps, -l.vy_max_mps, -l.vz_max_mps, -am.x, -am.y, -am.z],
+            state_max: [l.vx_max_mps, l.vy_max_mps, l.vz_max_mps, am.x, am.y, am.z],
+            dropout: sc.dropout(),
+            reference_dropout: sc.reference_dropout(),
+            actuation_error: sc.actuation_error(),
+            radio_loss: radio.loss,
+            radio_range2: radio.range_m * radio.range_m,
+            broadcasters,
+        }
+    }
+}
