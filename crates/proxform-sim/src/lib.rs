@@ -30,7 +30,7 @@ pub use flight::{engine_for, EngineKind, Flight};
 pub use measure::metrics::{
     FormingMetrics, IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics, TransitionMetrics,
 };
-pub use measure::observer::{Observer, StepFrame};
+pub use measure::observer::{Observer, StepFrame, StepOutcome, UavStep};
 pub use measure::trajectory::{Trajectory, TrajectoryRow};
 pub use world::engine::Simulation;
 pub use world::options::RunOptions;

@@ -105,6 +105,33 @@ fn the_engines_agree_on_a_lossy_single_level_lattice() {
 }
 
 #[test]
+fn the_engines_agree_where_collision_avoidance_binds() {
+    // A tight lattice (16 m), a slow vehicle (9 km/h/s) and large actuation errors: the
+    // avoidance rule binds (it keeps pairs from 10.8 m to 12.8 m and costs metres of x error),
+    // so the fast engine's per-UAV memory of the rule is exercised.
+    let text = |avoid: f64, engine: &str| {
+        format!(
+            "name = \"tight\"\nsafety_distance_m = 10\nduration_s = 30\nengine = \"{engine}\"\n\
+             [formation.shape]\nkind = \"lattice\"\nuavs = 200\nspacing_m = 16\nlevels = 1\n\
+             [formation.dependencies]\nk = 3\nmax_distance_m = 40\nnavigator_degree = 0.3\n\
+             [controller]\nsensing_range_m = 40\navoid_m = {avoid}\n\
+             [vehicle]\naccel_kmh_s = [9, 9, 9]\n[radio]\nbeacons = [1]\n[noise]\nactuation_error = 0.8\n"
+        )
+    };
+    let load = |avoid, engine| proxform_scenario::load::parse(&text(avoid, engine), "tight.toml").expect("valid");
+    let (with, without) = (load(40.0, "fast"), load(0.0, "fast"));
+    let runs = 2;
+    let r: Vec<_> = (0..runs).map(|k| reference(&with, RunOptions::default(), k)).collect();
+    let f: Vec<_> = (0..runs).map(|k| fast(&with, RunOptions::default(), k)).collect();
+    let free: Vec<_> = (0..runs).map(|k| fast(&without, RunOptions::default(), k)).collect();
+    let (a, b, c) = (figures(&r), figures(&f), figures(&free));
+    assert!(b.min_separation > c.min_separation + 1.0, "the rule binds: {b:?} vs {c:?}");
+    assert!((a.min_separation - b.min_separation).abs() < 0.5, "{a:?} vs {b:?}");
+    assert!((a.max[0] - b.max[0]).abs() < 0.3 * a.max[0], "{a:?} vs {b:?}");
+    assert!(a.max[0] > 5.0 * c.max[0], "{a:?} vs {c:?}");
+}
+
+#[test]
 fn the_fast_engine_is_deterministic_whatever_the_threads() {
     let sc = swarm(3000, |s| s.duration_s = Some(2.0));
     let run = |threads: usize, parallel: bool| {

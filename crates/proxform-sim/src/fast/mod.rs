@@ -54,7 +54,7 @@ const WARMUP_DRAW_BASE: u64 = 1 << 62;
 /// counts, avoidance memory.
 type BlockSlices<'b> = (
     usize,
-    (((&'b mut [UavStep], &'b mut [[f32; 6]]), (&'b mut [Track], &'b mut [u8])), &'b mut [Option<Box<Avoidance>>]),
+    (((&'b mut [UavStep], &'b mut [[f32; 6]]), (&'b mut [Track], &'b mut [u8])), &'b mut Vec<(u32, Box<Avoidance>)>),
 );
 
 /// One flight on the fast engine.
@@ -74,8 +74,9 @@ pub struct FastSimulation<'s> {
     /// `capacity` tracks per UAV, then how many each uses.
     tracks: Vec<Track>,
     used: Vec<u8>,
-    /// Collision avoidance's memory, for the UAVs whose rule remembers a side.
-    avoid: Vec<Option<Box<Avoidance>>>,
+    /// Collision avoidance's memory of the UAVs whose rule remembers a side, per block (few
+    /// UAVs of a large swarm ever have one).
+    avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
     grid: NeighbourGrid,
     messages: Vec<Message>,
     /// Origins of the reference points of the last steps.
@@ -114,7 +115,7 @@ impl<'s> FastSimulation<'s> {
             active: vec![true; n],
             tracks: vec![Track::default(); n * c.capacity],
             used: vec![0; n],
-            avoid: (0..n).map(|_| None).collect(),
+            avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
             messages: Vec::with_capacity(c.broadcasters.len()),
             ring: vec![[p0[X], p0[X + 1], p0[X + 2]]; ring_len],
@@ -141,13 +142,10 @@ impl<'s> FastSimulation<'s> {
     /// Bytes held by the engine's arrays (the scenario excluded).
     pub fn heap_bytes(&self) -> usize {
         let n = self.states.len();
-        n * (std::mem::size_of::<State9>()
-            + std::mem::size_of::<UavStep>()
-            + std::mem::size_of::<[f32; 6]>()
-            + 2
-            + std::mem::size_of::<Option<Box<Avoidance>>>())
+        n * (std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>() + std::mem::size_of::<[f32; 6]>() + 2)
             + self.tracks.len() * std::mem::size_of::<Track>()
-            + self.avoid.iter().flatten().map(|a| a.heap_bytes()).sum::<usize>()
+            + self.avoid.iter().flatten().map(|a| a.1.heap_bytes()).sum::<usize>()
+            + self.avoid.len() * std::mem::size_of::<Vec<(u32, Box<Avoidance>)>>()
             + self.grid.heap_bytes()
     }
 
@@ -227,7 +225,12 @@ impl<'s> FastSimulation<'s> {
                     continue;
                 }
                 let mut owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
-                let u = update::update(&view, i, scratch, &mut owner, &mut avoid[o]);
+                let at = avoid.iter().position(|a| a.0 as usize == i);
+                let mut kept = at.map(|p| avoid.swap_remove(p).1);
+                let u = update::update(&view, i, scratch, &mut owner, &mut kept);
+                if let Some(k) = kept {
+                    avoid.push((i as u32, k));
+                }
                 uavs[o] = u.step;
                 applied[o] = if adjust { u.applied } else { [0.0; 6] };
                 if !adjust {
@@ -239,7 +242,7 @@ impl<'s> FastSimulation<'s> {
             uavs.par_chunks_mut(BLOCK)
                 .zip(applied.par_chunks_mut(BLOCK))
                 .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)))
-                .zip(avoid.par_chunks_mut(BLOCK))
+                .zip(avoid.par_iter_mut())
                 .enumerate()
                 .for_each_init(|| Scratch::new(c), block);
         } else {
@@ -247,7 +250,7 @@ impl<'s> FastSimulation<'s> {
             uavs.chunks_mut(BLOCK)
                 .zip(applied.chunks_mut(BLOCK))
                 .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)))
-                .zip(avoid.chunks_mut(BLOCK))
+                .zip(avoid.iter_mut())
                 .enumerate()
                 .for_each(|x| block(&mut scratch, x));
         }

@@ -6,7 +6,7 @@ use proxform_core::state::{ALPHA, VX};
 use proxform_core::{Method, PredictorKind, VehicleModel};
 use proxform_scenario::Scenario;
 
-use super::tracks::{Filter, MAX_ID};
+use super::tracks::{Filter, MAX_AGE_STEPS, MAX_ID};
 
 /// Why the fast engine does not run a scenario (it then runs on the reference engine).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -38,9 +38,9 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (radio.delay_steps == 0, "radio delay"),
         (radio.burst.is_none(), "bursty radio loss"),
         (!radio.relay_navigator, "relays of the navigator"),
-        (sc.len() <= MAX_ID as usize, "more than 2^30 UAVs"),
+        (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (p.areas.areas + max_refs(sc) <= MAX_TRACKS, "more than 16 areas and references"),
-        (p.track_timeout_s.max(p.coast_s) / p.dt_s <= MAX_TRACK_STEPS, "a track timeout over 4096 update periods"),
+        (p.track_timeout_s / p.dt_s <= MAX_AGE_STEPS as f64, "a track timeout over 120 update periods"),
     ];
     match checks.iter().find(|c| !c.0) {
         Some(&(_, what)) => Err(Unsupported(what)),
@@ -50,10 +50,6 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
 
 /// Most tracks a UAV keeps in the fast engine (its areas and its main references).
 pub const MAX_TRACKS: usize = 16;
-
-/// Longest track timeout or coasting time the fast engine runs, in update periods (it keeps
-/// the reference points of that many past steps).
-pub const MAX_TRACK_STEPS: f64 = 4096.0;
 
 /// The most main references any UAV has.
 fn max_refs(sc: &Scenario) -> usize {
@@ -77,6 +73,8 @@ pub struct Consts {
     pub filter: Filter,
     /// A track coasts for at most this many steps.
     pub coast_steps: i64,
+    /// Tracks older than this (steps) are freed: the longer of the timeout and the coasting.
+    pub track_limit: i64,
     pub coast_decay_s: f64,
     /// Measurement noise σ per parameter.
     pub sigma: [f32; 9],
@@ -157,6 +155,7 @@ impl Consts {
             capacity: (p.areas.areas + max_refs(sc)).max(1),
             filter: Filter { alpha, beta, dt, timeout_steps, coast_accel_s: p.coast_accel_s },
             coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
+            track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
             coast_decay_s: p.coast_decay_s,
             sigma: std::array::from_fn(|k| sigma[k] as f32),
             lambda: p.lambda,

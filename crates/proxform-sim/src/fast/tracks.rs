@@ -1,10 +1,11 @@
 //! The neighbour tracks of every UAV in one array: `capacity` records per UAV, contiguous, each
-//! a neighbour's filtered state in f32 (68 bytes), with the reference's α-β filter (METHOD §3,
+//! a neighbour's filtered state in f32 (64 bytes), with the reference's α-β filter (METHOD §3,
 //! `proxform_core::predictor`) run on them in f32.
 //!
 //! Positions are kept relative to the owner's reference point at the track's time, `R_i(k) =
 //! O(k) + A_i` ([`super::update::View::shift`]): tens of metres, so f32 resolves them to
-//! micrometres however far the swarm flies. Times are step numbers (`t = k·Δt`).
+//! micrometres however far the swarm flies. Times are step numbers (`t = k·Δt`), kept modulo
+//! 128 beside the id.
 //!
 //! (Measured: a record per track and a scalar update cost fewer instructions than the same
 //! filter over lanes of all of a UAV's tracks, whose fixed width and copies outweigh the
@@ -14,26 +15,31 @@ use proxform_core::state::{State9, VX};
 
 /// Marks a free track.
 pub const FREE: u32 = u32::MAX;
-/// The id bits of `id_seen` (the top two bits count the measurements absorbed, up to 2).
-const ID_BITS: u32 = (1 << 30) - 1;
+/// A track's word: the neighbour's id in the low 24 bits, the step of its last measurement
+/// modulo 128 in the next 7, and whether it has absorbed a second measurement in the top bit.
+const ID_MASK: u32 = (1 << 24) - 1;
+const K_SHIFT: u32 = 24;
+const K_MASK: u32 = 0x7f;
+const SEEN_TWICE: u32 = 1 << 31;
 /// Largest UAV id a track can hold.
-pub const MAX_ID: u32 = ID_BITS - 1;
+pub const MAX_ID: u32 = ID_MASK - 1;
+/// Longest a track may go unmeasured and still be used (steps): ages are kept modulo 128, and
+/// every UAV frees its tracks older than its limit each step ([`Owner::sweep`]).
+pub const MAX_AGE_STEPS: i64 = 120;
 
-/// One neighbour's filtered state.
+/// One neighbour's filtered state: 64 bytes.
 #[derive(Debug, Clone, Copy)]
 pub struct Track {
-    /// Neighbour id | measurements absorbed (0-2) << 30; [`FREE`] when unused.
-    id_seen: u32,
-    /// Step of the measurement behind the estimate.
-    pub k: i32,
-    /// Position relative to the owner's reference point at step `k` (m; 0-2), velocity and
-    /// attitude (3-8), their rates (9-14).
+    /// Id, step modulo 128 and second-measurement flag; [`FREE`] when unused.
+    word: u32,
+    /// Position relative to the owner's reference point at the track's step (m; 0-2),
+    /// velocity and attitude (3-8), their rates (9-14).
     pub v: [f32; 15],
 }
 
 impl Default for Track {
     fn default() -> Self {
-        Self { id_seen: FREE, k: 0, v: [0.0; 15] }
+        Self { word: FREE, v: [0.0; 15] }
     }
 }
 
@@ -41,13 +47,28 @@ impl Track {
     /// The neighbour, None when free.
     #[inline]
     pub fn id(&self) -> Option<u32> {
-        (self.id_seen != FREE).then_some(self.id_seen & ID_BITS)
+        (self.word != FREE).then_some(self.word & ID_MASK)
     }
 
     /// Whether the track is `id`'s.
     #[inline]
     fn is(&self, id: u32) -> bool {
-        self.id_seen != FREE && self.id_seen & ID_BITS == id
+        self.word != FREE && self.word & ID_MASK == id
+    }
+
+    /// Steps since its last measurement at step `k` (a free track: older than any).
+    #[inline]
+    fn age(&self, k: i32) -> i64 {
+        if self.word == FREE {
+            return i64::MAX;
+        }
+        i64::from((k as u32).wrapping_sub(self.word >> K_SHIFT) & K_MASK)
+    }
+
+    /// The word of neighbour `id` measured at step `k`.
+    #[inline]
+    fn word(id: u32, k: i32, twice: bool) -> u32 {
+        id | ((k as u32 & K_MASK) << K_SHIFT) | if twice { SEEN_TWICE } else { 0 }
     }
 }
 
@@ -71,6 +92,18 @@ pub struct Owner<'a> {
 }
 
 impl Owner<'_> {
+    /// Frees the tracks not measured for more than `limit` steps (the longer of the timeout and
+    /// the coasting time, at most [`MAX_AGE_STEPS`]): none of them would be used again, and
+    /// ages modulo 128 stay exact.
+    #[inline]
+    pub fn sweep(&mut self, k: i32, limit: i64) {
+        for t in self.tracks[..usize::from(*self.used)].iter_mut() {
+            if t.word != FREE && t.age(k) > limit {
+                t.word = FREE;
+            }
+        }
+    }
+
     /// The slot of `id`, or the one to (re)use for it: a new one while there is room, else the
     /// one measured longest ago (freed). `hint` is where to look first (neighbours are fed in
     /// the same order step after step, so the n-th fed is usually in slot n).
@@ -83,24 +116,24 @@ impl Owner<'_> {
             return s;
         }
         if n < self.tracks.len() {
-            self.tracks[n] = Track { k, ..Track::default() };
+            self.tracks[n] = Track::default();
             *self.used += 1;
             return n;
         }
         let mut oldest = 0;
         for s in 1..n {
-            if self.tracks[s].k < self.tracks[oldest].k {
+            if self.tracks[s].age(k) > self.tracks[oldest].age(k) {
                 oldest = s;
             }
         }
-        self.tracks[oldest].id_seen = FREE;
+        self.tracks[oldest].word = FREE;
         oldest
     }
 
-    /// Feeds neighbour `id`'s observation `z` (looked for first in slot `hint`; relative to the owner's reference point at step
-    /// `k`) and returns its slot and its predicted state Δt after `k` (position, velocity,
-    /// attitude). `shift(k0)` is how far the reference point of step `k0` lies from that of
-    /// step `k` (m).
+    /// Feeds neighbour `id`'s observation `z` (looked for first in slot `hint`; relative to the
+    /// owner's reference point at step `k`) and returns its slot and its predicted state Δt
+    /// after `k` (position, velocity, attitude). `shift(k0)` is how far the reference point of
+    /// step `k0` lies from that of step `k` (m).
     pub fn predict(
         &mut self,
         f: &Filter,
@@ -111,27 +144,25 @@ impl Owner<'_> {
     ) -> (usize, [f32; 9]) {
         let s = self.slot_for(id, k, hint);
         let tr = &mut self.tracks[s];
-        let steps = i64::from(k) - i64::from(tr.k);
+        let steps = tr.age(k);
         let zf: [f32; 9] = std::array::from_fn(|c| z[c] as f32);
         if !tr.is(id) || steps > f.timeout_steps {
             // Start: the measurement, no rates.
-            tr.id_seen = id | (1 << 30);
-            tr.k = k;
+            tr.word = Track::word(id, k, false);
             tr.v[..9].copy_from_slice(&zf);
             tr.v[9..].fill(0.0);
         } else if steps > 0 {
             let dt = (steps as f64 * f.dt) as f32;
-            if tr.id_seen >> 30 < 2 {
+            if tr.word & SEEN_TWICE == 0 {
                 // Two-point start: value from the measurement, rate from the difference.
                 for c in 0..6 {
                     let diff = proxform_core::state::difference_component(VX + c, z[VX + c], f64::from(tr.v[3 + c]));
                     tr.v[9 + c] = (diff / f64::from(dt)) as f32;
                 }
                 tr.v[..9].copy_from_slice(&zf);
-                tr.id_seen = id | (2 << 30);
             } else {
                 // The α-β update.
-                let d = shift(tr.k);
+                let d = shift(k - steps as i32);
                 let (alpha, beta_dt) = (f.alpha as f32, (f.beta / f64::from(dt)) as f32);
                 for c in 0..3 {
                     let pred = tr.v[c] + d[c] as f32 + dt * (tr.v[3 + c] + 0.5 * dt * tr.v[9 + c]);
@@ -145,7 +176,7 @@ impl Owner<'_> {
                     tr.v[9 + c] += beta_dt * res;
                 }
             }
-            tr.k = k;
+            tr.word = Track::word(id, k, true);
         }
         (s, extrapolate(tr, f.dt as f32, [0.0; 3], f32::INFINITY))
     }
@@ -155,14 +186,20 @@ impl Owner<'_> {
     #[inline]
     pub fn coasting(&self, s: usize, k: i32, max_steps: i64) -> Option<u32> {
         let tr = &self.tracks[s];
-        let age = i64::from(k) - i64::from(tr.k);
+        let age = tr.age(k);
         tr.id().filter(|_| age >= 1 && age <= max_steps)
     }
 
     /// Steps since slot `s` was measured, at step `k`.
     #[inline]
     pub fn age_steps(&self, s: usize, k: i32) -> i64 {
-        i64::from(k) - i64::from(self.tracks[s].k)
+        self.tracks[s].age(k)
+    }
+
+    /// The step slot `s` was last measured, seen from step `k`.
+    #[inline]
+    pub fn measured_at(&self, s: usize, k: i32) -> i32 {
+        k - self.tracks[s].age(k) as i32
     }
 
     /// Slots in use.
@@ -273,7 +310,7 @@ mod tests {
         let (_, age) = reference.report(UavId(7), 20.0).expect("tracked");
         assert!(age < 0.2);
         let want = reference.state_at(0, 19.9 + 0.5);
-        let got = owner.state_at(&f, 0, 0.5 + (19.9 - 0.1 * f64::from(owner.tracks[0].k)), [0.0; 3]);
+        let got = owner.state_at(&f, 0, 0.5 + (19.9 - 0.1 * f64::from(owner.measured_at(0, 199))), [0.0; 3]);
         for c in 0..3 {
             assert!((f64::from(got[c]) - want[c]).abs() < 2e-3, "{got:?} vs {want:?}");
         }

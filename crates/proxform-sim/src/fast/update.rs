@@ -17,7 +17,7 @@ use proxform_scenario::Scenario;
 
 use super::setup::Consts;
 use super::tracks::Owner;
-use crate::measure::observer::UavStep;
+use crate::measure::observer::{StepOutcome, UavStep};
 use crate::random::bulk;
 use crate::random::{RunKey, Source};
 
@@ -147,10 +147,10 @@ pub fn update(
     let d = decide(v, i, &own, s, tracks, kept);
     let mut step = UavStep { radio_used, ..UavStep::default() };
     let Some((outcome, input)) = d else {
-        step.outcome = Some(Outcome::Alone);
+        step.outcome = Some(StepOutcome::Alone);
         return Update { applied: [0.0; 6], step };
     };
-    step.outcome = Some(outcome);
+    step.outcome = Some(outcome.into());
     step.effort = (0..6).map(|a| (input[a] / c.scale[a]).powi(2)).sum::<f64>().sqrt() as f32;
     let adjusted = matches!(outcome, Outcome::Adjusted { .. });
     let mut applied = input;
@@ -387,6 +387,7 @@ fn decide(
     let dt = c.dt;
     let k = v.k;
     let f = &c.filter;
+    tracks.sweep(k, c.track_limit);
     let mut x_hold = *own;
     for a in 0..3 {
         x_hold[X + a] += dt * own[VX + a];
@@ -419,7 +420,7 @@ fn decide(
             continue;
         }
         let h = tracks.age_steps(t, k) as f64 * dt;
-        let x = tracks.state_at(f, t, h, v.shift(tracks.tracks[t].k));
+        let x = tracks.state_at(f, t, h, v.shift(tracks.measured_at(t, k)));
         let (dx, dy, dz) = (f64::from(x[0]) - own[X], f64::from(x[1]) - own[X + 1], f64::from(x[2]) - own[X + 2]);
         let d2 = dx * dx + dy * dy + dz * dz;
         if d2 > c.r2 {
@@ -440,7 +441,7 @@ fn decide(
     let mut fed = 0;
     let coast = |tracks: &Owner<'_>, t: usize| {
         let age = tracks.age_steps(t, k) as f64 * dt;
-        let x = tracks.state_at(f, t, age + dt, shifts(tracks.tracks[t].k));
+        let x = tracks.state_at(f, t, age + dt, shifts(tracks.measured_at(t, k)));
         (x, (-age / c.coast_decay_s).exp() as f32)
     };
     for a in 0..c.areas {

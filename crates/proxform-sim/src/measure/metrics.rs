@@ -4,11 +4,10 @@
 //! first [`PER_UAV_SAMPLE`] followers only, so a run of a million UAVs stays small.
 
 use proxform_core::state::{State9, P};
-use proxform_core::Outcome;
 
 use proxform_scenario::Scenario;
 
-use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame};
+use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame, StepOutcome};
 
 /// Followers with per-UAV detail in summaries and tables.
 pub const PER_UAV_SAMPLE: usize = 32;
@@ -476,7 +475,7 @@ fn aftermaths(scenario: &Scenario) -> Vec<Aftermath> {
 }
 
 #[inline]
-fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<Outcome>) {
+fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<StepOutcome>) {
     acc.follower_steps += 1;
     for k in 0..6 {
         let a = e[k].abs();
@@ -486,9 +485,9 @@ fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<Outcome>) {
         acc.sum_sq[k] += e[k] * e[k];
     }
     match outcome {
-        Some(Outcome::Adjusted { .. }) => acc.adjustments += 1,
-        Some(Outcome::Alone) => acc.alone += 1,
-        Some(Outcome::Held) => acc.held += 1,
+        Some(StepOutcome::Adjusted) => acc.adjustments += 1,
+        Some(StepOutcome::Alone) => acc.alone += 1,
+        Some(StepOutcome::Held) => acc.held += 1,
         None => {}
     }
 }
@@ -557,13 +556,13 @@ fn partial(
         }
         p.acc.effort += f64::from(u.effort);
         match u.outcome {
-            Some(Outcome::Adjusted { .. }) => {
+            Some(StepOutcome::Adjusted) => {
                 for k in 0..P {
                     p.model_sq[k] += f64::from(u.model_error[k]).powi(2);
                 }
                 p.model_n += 1;
             }
-            Some(Outcome::Held) => p.model_n += 1,
+            Some(StepOutcome::Held) => p.model_n += 1,
             _ => {}
         }
     }
@@ -688,8 +687,8 @@ mod tests {
         StepFrame { k, t: k as f64 * 0.1, states, uavs, active, radio_sent: 2 }
     }
 
-    fn step(outcome: Outcome, effort: f32) -> UavStep {
-        UavStep { outcome: Some(outcome), effort, radio_used: 1, ..UavStep::default() }
+    fn step(outcome: proxform_core::Outcome, effort: f32) -> UavStep {
+        UavStep { outcome: Some(outcome.into()), effort, radio_used: 1, ..UavStep::default() }
     }
 
     #[test]
@@ -816,9 +815,10 @@ mod tests {
         let active = [true; 6];
         // Step 1: all held, no effort. Step 2: UAVs 2-6 adjusted with effort 0.5, UAV3 off,
         // and UAV4 within 30 m of UAV5 (closer than the 50 m safety distance).
-        let mut held: Vec<UavStep> = (0..6).map(|_| step(Outcome::Held, 0.0)).collect();
+        let mut held: Vec<UavStep> = (0..6).map(|_| step(proxform_core::Outcome::Held, 0.0)).collect();
         held[0].outcome = None;
-        let mut adjusted: Vec<UavStep> = (0..6).map(|_| step(Outcome::Adjusted { normalised_sq: 1.0 }, 0.5)).collect();
+        let mut adjusted: Vec<UavStep> =
+            (0..6).map(|_| step(proxform_core::Outcome::Adjusted { normalised_sq: 1.0 }, 0.5)).collect();
         adjusted[0].outcome = None;
         for u in &mut adjusted[1..] {
             u.model_error = [0.03; 9];

@@ -29,7 +29,7 @@ pub struct StepFrame<'a> {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct UavStep {
     /// The controller's outcome at t_{k−1} (None for the navigator and at k = 0).
-    pub outcome: Option<Outcome>,
+    pub outcome: Option<StepOutcome>,
     /// Effect on the state of the actuation error of the last step (true minus commanded):
     /// the model error σm of eq. 17. Kept in f32: it only feeds an RMS statistic.
     pub model_error: [f32; 9],
@@ -42,6 +42,39 @@ pub struct UavStep {
     pub isolated: u16,
     /// It flew on its own prediction, its own measurement failing the own-sensor check.
     pub own_suspect: bool,
+}
+
+/// What a UAV's controller did in a step: its [`Outcome`] without the envelope distance (one
+/// byte, so that a step's records of a large swarm stay small).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepOutcome {
+    /// Kept its course inside the envelope.
+    Held,
+    /// Left the envelope and adjusted.
+    Adjusted,
+    /// Perceived nothing.
+    Alone,
+}
+
+impl From<Outcome> for StepOutcome {
+    fn from(o: Outcome) -> Self {
+        match o {
+            Outcome::Held => StepOutcome::Held,
+            Outcome::Adjusted { .. } => StepOutcome::Adjusted,
+            Outcome::Alone => StepOutcome::Alone,
+        }
+    }
+}
+
+impl StepOutcome {
+    /// Its name in trajectories ("held", "adjusted", "alone"), as [`Outcome::label`].
+    pub fn label(self) -> &'static str {
+        match self {
+            StepOutcome::Held => "held",
+            StepOutcome::Adjusted => "adjusted",
+            StepOutcome::Alone => "alone",
+        }
+    }
 }
 
 /// Something that watches a run.

@@ -112,7 +112,7 @@ impl Observer for Trajectory {
             let error =
                 if i == nav { [0.0; 6] } else { formation_error_to(scenario, frame.t, frame.states, &reference, i) };
             let (outcome, in_envelope) = match frame.uavs[i].outcome {
-                Some(o) => (o.label(), o == proxform_core::Outcome::Held),
+                Some(o) => (o.label(), o == crate::measure::observer::StepOutcome::Held),
                 None if i == nav => ("navigator", false),
                 None => ("initial", false),
             };

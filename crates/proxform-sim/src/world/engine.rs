@@ -506,7 +506,7 @@ impl<'s> World<'s> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use proxform_core::Outcome;
+    use crate::measure::observer::StepOutcome;
     use proxform_scenario::builtin::paper_spec;
     use proxform_scenario::spec::{FaultSpec, SegmentSpec};
 
@@ -538,7 +538,7 @@ mod tests {
             let nav = sc.path().state_at(t, [0.0; 3]);
             assert_eq!(sim.states()[0], nav, "the navigator flies its path exactly");
             for i in 1..6 {
-                assert_eq!(sim.uavs[i].outcome, Some(Outcome::Held), "UAV {} at step {k}", i + 1);
+                assert_eq!(sim.uavs[i].outcome, Some(StepOutcome::Held), "UAV {} at step {k}", i + 1);
                 let e = sc.slot_state(i, &nav) - sim.states()[i];
                 assert!(e.iter().all(|v| v.abs() < 1e-6), "UAV {} drifts: {e:?}", i + 1);
             }
@@ -578,7 +578,7 @@ mod tests {
         sim.world.current[2][1] += 3.0; // UAV3 3 m left of its slot
         let gone = sim.states()[5];
         sim.step();
-        assert!(matches!(sim.uavs[2].outcome, Some(Outcome::Adjusted { .. })), "{:?}", sim.uavs[2].outcome);
+        assert_eq!(sim.uavs[2].outcome, Some(StepOutcome::Adjusted));
         assert_eq!(sim.uavs[0].outcome, None, "the navigator runs no controller");
         assert_eq!((sim.states()[5], sim.uavs[5].outcome), (gone, None));
         // With the adjustment switched off, the same UAV decides but does not move toward it.

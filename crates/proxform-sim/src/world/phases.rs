@@ -303,7 +303,7 @@ impl StepContext<'_> {
                 }
             };
             aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
-            aux.outcome = Some(decision.outcome);
+            aux.outcome = Some(decision.outcome.into());
             aux.isolated = decision.isolated;
             aux.own_suspect = decision.own_suspect;
             let scale = vehicle.input_scale(dt);
