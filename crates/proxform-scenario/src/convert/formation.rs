@@ -161,7 +161,19 @@ fn shape_of(s: &ShapeSpec) -> Result<Shape, SpecError> {
                 Some(l) => l as usize,
                 None => default_levels(n),
             };
-            Shape::Lattice { uavs: n, spacing: spacing()?, levels, level_step: level()? }
+            // Levels on top of each other need a step between them: the built-in swarm's by
+            // default (a lattice of one level has none).
+            let level_step = match s.level_step_m {
+                None if levels > 1 => -crate::formation::lattice::LEVEL_M,
+                _ => level()?,
+            };
+            if levels > 1 && level_step == 0.0 {
+                return Err(err(
+                    "formation.shape.level_step_m",
+                    format!("{levels} levels need a height step between them (found 0 m)"),
+                ));
+            }
+            Shape::Lattice { uavs: n, spacing: spacing()?, levels, level_step }
         }
         other => {
             return Err(err(
@@ -398,6 +410,35 @@ pub fn schedule(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_lattice_of_several_levels_steps_down_by_default() {
+        let shape = |levels: Option<u32>, step: Option<f64>| {
+            shape_of(&ShapeSpec {
+                kind: Some("lattice".into()),
+                uavs: Some(100),
+                spacing_m: Some(50.0),
+                levels,
+                level_step_m: step,
+                ..ShapeSpec::default()
+            })
+        };
+        // Two levels by size: 20 m apart unless the file says otherwise.
+        match shape(None, None).expect("valid") {
+            Shape::Lattice { levels, level_step, .. } => assert_eq!((levels, level_step), (2, -20.0)),
+            other => panic!("{other:?}"),
+        }
+        match shape(Some(3), Some(15.0)).expect("valid") {
+            Shape::Lattice { levels, level_step, .. } => assert_eq!((levels, level_step), (3, 15.0)),
+            other => panic!("{other:?}"),
+        }
+        match shape(Some(1), None).expect("valid") {
+            Shape::Lattice { level_step, .. } => assert_eq!(level_step, 0.0),
+            other => panic!("{other:?}"),
+        }
+        let e = shape(Some(2), Some(0.0)).expect_err("levels on top of each other");
+        assert_eq!(e.key, "formation.shape.level_step_m");
+    }
 
     #[test]
     fn uavs_that_never_lead_to_the_navigator_are_named() {
