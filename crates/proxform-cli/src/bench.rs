@@ -13,7 +13,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use proxform_scenario::{builtin, Scenario};
-use proxform_sim::batch::throughput::{measure, Throughput};
+use proxform_sim::batch::throughput::{measure, measure_minimal, Throughput};
 use proxform_sim::world::options::NeighbourSearch;
 use proxform_sim::EngineKind;
 
@@ -34,7 +34,7 @@ pub struct BenchArgs {
     /// Steps per measurement [default: about three million updates, 5 to 200 steps].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100_000))]
     steps: Option<u64>,
-    /// Swarm size of the instruction counts (callgrind; 0: none).
+    /// Swarm size of the instruction counts (callgrind; 0: none; at most --max-uavs).
     #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
     instructions_uavs: u64,
     /// Output directory [default: out/bench].
@@ -83,22 +83,24 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         sizes.push(n);
         n *= 10;
     }
-    let mut plan: Vec<(u64, usize, NeighbourSearch, EngineKind)> = Vec::new();
+    let mut plan: Vec<(u64, usize, NeighbourSearch, &str)> = Vec::new();
     for &n in &sizes {
         for threads in [1, cores] {
-            plan.push((n, threads, NeighbourSearch::Grid, EngineKind::Fast));
+            plan.push((n, threads, NeighbourSearch::Grid, "fast"));
             if n <= args.reference_max_uavs {
-                plan.push((n, threads, NeighbourSearch::Grid, EngineKind::Reference));
+                plan.push((n, threads, NeighbourSearch::Grid, "reference"));
             }
         }
         if n <= args.naive_max_uavs {
-            plan.push((n, cores, NeighbourSearch::AllPairs, EngineKind::Reference));
+            plan.push((n, cores, NeighbourSearch::AllPairs, "reference"));
         }
+        // The floor: the minimal law over the same slots (not the method).
+        plan.push((n, cores, NeighbourSearch::Grid, "minimal-law"));
     }
     plan.dedup();
     println!("proxform bench: swarm scenario, {} core(s); each line is one child process\n", cores);
     println!(
-        "{:>9} {:>10} {:>10} {:>8} {:>6} {:>16} {:>12} {:>10}",
+        "{:>9} {:>11} {:>10} {:>8} {:>6} {:>16} {:>12} {:>10}",
         "UAVs", "engine", "search", "threads", "steps", "updates/s", "ns/update", "peak mem"
     );
     let exe = std::env::current_exe().context("cannot find the proxform executable")?;
@@ -116,11 +118,10 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         let steps = args.steps.unwrap_or((3_000_000 / work).clamp(5, 200));
         spinner.set_message(format!(
             "measuring {n} UAVs, {}, {}, {threads} thread(s), {steps} steps",
-            engine.name(),
+            engine,
             search_name(search)
         ));
-        let one =
-            [n.to_string(), steps.to_string(), threads.to_string(), search_name(search).into(), engine.name().into()];
+        let one = [n.to_string(), steps.to_string(), threads.to_string(), search_name(search).into(), engine.into()];
         let output = Command::new(&exe)
             .arg("bench")
             .arg("--one")
@@ -134,7 +135,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         let row: Row = serde_json::from_slice(&output.stdout).context("unreadable measurement")?;
         spinner.suspend(|| {
             println!(
-                "{:>9} {:>10} {:>10} {:>8} {:>6} {:>16.3e} {:>12.0} {:>10}",
+                "{:>9} {:>11} {:>10} {:>8} {:>6} {:>16.3e} {:>12.0} {:>10}",
                 row.uavs,
                 row.engine,
                 row.search,
@@ -149,15 +150,15 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     }
     // Instructions per update, counted by callgrind where it is installed.
     if args.instructions_uavs > 0 {
-        let n = args.instructions_uavs;
-        for engine in [EngineKind::Fast, EngineKind::Reference] {
-            spinner.set_message(format!("counting instructions: {n} UAVs, {} (callgrind)", engine.name()));
+        let n = args.instructions_uavs.min(args.max_uavs);
+        for engine in ["fast", "reference", "minimal-law"] {
+            spinner.set_message(format!("counting instructions: {n} UAVs, {engine} (callgrind)"));
             match count_instructions(&exe, n, engine) {
                 Ok(Some(row)) => {
                     let per = row.instructions_per_update.unwrap_or(f64::NAN);
                     spinner.suspend(|| {
                         println!(
-                            "{:>9} {:>10} {:>10} {:>8} {:>6} {:>16.0} instructions/update (callgrind)",
+                            "{:>9} {:>11} {:>10} {:>8} {:>6} {:>16.0} instructions/update (callgrind)",
                             row.uavs, row.engine, row.search, row.threads, row.steps, per
                         )
                     });
@@ -199,8 +200,9 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
         other => bail!("unknown search '{other}'"),
     };
     let engine = match one[4].as_str() {
-        "fast" => EngineKind::Fast,
-        "reference" => EngineKind::Reference,
+        "fast" => Some(EngineKind::Fast),
+        "reference" => Some(EngineKind::Reference),
+        "minimal-law" => None,
         other => bail!("unknown engine '{other}'"),
     };
     // A flight long enough for the steps measured.
@@ -209,10 +211,13 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
     spec.duration_s = Some(proxform_scenario::defaults::DURATION_S.max((steps as f64 + 1.0) * dt));
     let scenario = Scenario::try_from(spec)?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let t: Throughput = pool.install(|| measure(&scenario, engine, steps, search, threads > 1));
+    let t: Throughput = pool.install(|| match engine {
+        Some(engine) => measure(&scenario, engine, steps, search, threads > 1),
+        None => measure_minimal(&scenario, steps, threads > 1),
+    });
     let row = Row {
         uavs: t.uavs,
-        engine: t.engine.name().into(),
+        engine: t.engine.into(),
         search: search_name(search).into(),
         threads: t.threads,
         steps: t.steps,
@@ -229,9 +234,9 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
 /// Instructions per agent-update of `engine` at `n` UAVs (grid search, one thread), counted by
 /// callgrind over the timed steps only (`proxform_sim::batch::throughput::timed_steps`); None
 /// when valgrind is not installed.
-fn count_instructions(exe: &std::path::Path, n: u64, engine: EngineKind) -> Result<Option<Row>> {
+fn count_instructions(exe: &std::path::Path, n: u64, engine: &str) -> Result<Option<Row>> {
     let steps = 5u64;
-    let one = [n.to_string(), steps.to_string(), "1".into(), "grid".into(), engine.name().into()];
+    let one = [n.to_string(), steps.to_string(), "1".into(), "grid".into(), engine.into()];
     let output = match Command::new("valgrind")
         .args([
             "--tool=callgrind",

@@ -195,6 +195,9 @@ fn bench_measures_in_child_processes() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("all-pairs") && stdout.contains("MiB"), "{stdout}");
+    for engine in ["fast", "reference", "minimal-law"] {
+        assert!(stdout.contains(engine), "{engine}: {stdout}");
+    }
     let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
     assert!(csv.lines().count() >= 3, "{csv}");
     assert!(out.join("cost_per_update.png").exists());
