@@ -441,16 +441,29 @@ impl ProximityController {
 /// binds only on gaps wider than 2·a·τ², metres, never in formation). Also returns where the
 /// centre's position is, from X_hold.
 fn envelope_centre(params: &ControllerParams, est: &Estimates, stopping: Option<f64>) -> (State9, [f64; 3]) {
-    let lambda = params.lambda;
     let x_bar = if est.n_bar > 0 { est.sum_bar / est.w_bar } else { est.sum_dep / est.c_sum };
-    let mut o_i = if est.main_refs > 0 {
-        let x_hat_d = est.sum_dep / est.c_sum;
-        (1.0 - lambda) * x_bar + lambda * x_hat_d
-    } else {
-        x_bar
+    let x_hat_d = (est.main_refs > 0).then(|| est.sum_dep / est.c_sum);
+    centre_from(params, &x_bar, x_hat_d.as_ref(), &est.push, stopping)
+}
+
+/// Step 4 from the averages: `O_i − X_hold` from `X̄_i − X_hold` and, when main references are
+/// perceived, `X̂ᴰ_i − X_hold`, with the separation push and the closing velocity as
+/// [`envelope_centre`] says; and where the centre's position is. Shared with engines that keep
+/// their sums in their own form.
+pub fn centre_from(
+    params: &ControllerParams,
+    x_bar: &State9,
+    x_hat_d: Option<&State9>,
+    push: &[f64; 3],
+    stopping: Option<f64>,
+) -> (State9, [f64; 3]) {
+    let lambda = params.lambda;
+    let mut o_i = match x_hat_d {
+        Some(x_hat_d) => (1.0 - lambda) * x_bar + lambda * x_hat_d,
+        None => *x_bar,
     };
     for k in X..VX {
-        o_i[k] += est.push[k];
+        o_i[k] += push[k];
     }
     // Where the centre is (its position part may below become a velocity's step).
     let goal = [o_i[X], o_i[X + 1], o_i[X + 2]];
@@ -507,12 +520,21 @@ fn keep_apart(
     push: &mut [f64; 3],
 ) {
     let p = [x_hold[X] - x_j[X], x_hold[X + 1] - x_j[X + 1], x_hold[X + 2] - x_j[X + 2]];
+    push_apart(p, separation, || formation.slot(id).map(|s| (s.offset_m - slot_i.offset_m).norm()), push);
+}
+
+/// Separation keeping from `p = X_hold − X_j` (positions, m): adds to `push` how far to move
+/// to be `separation` m from the neighbour, when closer than that and closer than
+/// [`SEPARATION_SLOT_FRACTION`] of their slots' distance (`slots_m`, asked only then; None: not
+/// in the formation).
+#[inline]
+pub fn push_apart(p: [f64; 3], separation: f64, slots_m: impl FnOnce() -> Option<f64>, push: &mut [f64; 3]) {
     let d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
     if d2 >= separation * separation {
         return;
     }
-    let Some(slot_j) = formation.slot(id) else { return };
-    let limit = separation.min(SEPARATION_SLOT_FRACTION * (slot_j.offset_m - slot_i.offset_m).norm());
+    let Some(slots_m) = slots_m() else { return };
+    let limit = separation.min(SEPARATION_SLOT_FRACTION * slots_m);
     let d = d2.sqrt();
     if d < limit && d > 1e-9 {
         for k in 0..3 {

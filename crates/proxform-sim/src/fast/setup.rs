@@ -78,13 +78,11 @@ pub struct Consts {
     pub coast_decay_s: f64,
     /// Measurement noise σ per parameter.
     pub sigma: [f32; 9],
-    pub lambda: f64,
     /// The formation turns with the course (W's offset rotated by the neighbour's course).
     pub course_frame: bool,
     /// Envelope: Δ per parameter and ρ².
     pub inv_threshold: [f64; 9],
     pub rho2: f64,
-    pub closing_time_s: Option<f64>,
     /// The stopping limit's deceleration (m/s²), when on.
     pub stopping: Option<f64>,
     pub separation: f64,
@@ -158,11 +156,9 @@ impl Consts {
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
             coast_decay_s: p.coast_decay_s,
             sigma: std::array::from_fn(|k| sigma[k] as f32),
-            lambda: p.lambda,
             course_frame: sc.formation().frame == proxform_core::FormationFrame::Course,
             inv_threshold: std::array::from_fn(|k| 1.0 / p.envelope.thresholds[k]),
             rho2: p.envelope.rho * p.envelope.rho,
-            closing_time_s: p.closing_time_s,
             stopping: p.stop_closing.then_some(setup.braking_mps2()),
             separation: p.separation_m.unwrap_or(0.0),
             avoid: p.avoid_m.filter(|&d| d > 0.0).map(|d| (d, setup.braking_mps2())),

@@ -9,7 +9,7 @@
 //! the reference's own rule ([`proxform_core::controller::Avoidance`]), kept per UAV only while
 //! it remembers a side.
 
-use proxform_core::controller::Avoidance;
+use proxform_core::controller::{centre_from, push_apart, Avoidance};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{State9, ALPHA, BETA, VX, X};
 use proxform_core::{Observation, ObservationSource, Outcome, UavId};
@@ -462,7 +462,8 @@ fn decide(
         let Some(slot_j) = formation.slot(UavId(id)) else { continue };
         if c.separation > 0.0 {
             let xj = [0, 1, 2].map(|a| f64::from(f_x_j[a]));
-            keep_apart(slot_i.offset_m - slot_j.offset_m, &xj, &x_hold, c.separation, &mut e.push);
+            let p = [0, 1, 2].map(|a| x_hold[X + a] - xj[a]);
+            push_apart(p, c.separation, || Some((slot_j.offset_m - slot_i.offset_m).norm()), &mut e.push);
         }
         let x_hat = implied(c.course_frame, &slot_i, slot_j, &f_x_j, &xh);
         e.add_bar(w, &x_hat);
@@ -504,25 +505,10 @@ fn decide(
     if e.n_bar == 0 && e.main_refs == 0 {
         return None;
     }
-    // Step 4: the envelope centre O_i − X_hold.
+    // Step 4: the envelope centre O_i − X_hold (the reference's own, from the averages).
     let x_bar = if e.n_bar > 0 { e.bar / e.w_bar } else { e.dep / e.c_sum };
-    let mut o_i = if e.main_refs > 0 { (1.0 - c.lambda) * x_bar + c.lambda * (e.dep / e.c_sum) } else { x_bar };
-    for a in 0..3 {
-        o_i[X + a] += e.push[a];
-    }
-    let goal = [o_i[X], o_i[X + 1], o_i[X + 2]];
-    if let Some(tau) = c.closing_time_s {
-        for a in X..VX {
-            let gap = o_i[a];
-            match c.stopping {
-                Some(acc) if gap.abs() > 2.0 * acc * tau * tau => {
-                    o_i[a + 3] += gap.signum() * (2.0 * acc * gap.abs()).sqrt();
-                    o_i[a] = 0.5 * dt * o_i[a + 3];
-                }
-                _ => o_i[a + 3] += gap / tau,
-            }
-        }
-    }
+    let x_hat_d = (e.main_refs > 0).then(|| e.dep / e.c_sum);
+    let (mut o_i, goal) = centre_from(sc.controller(), &x_bar, x_hat_d.as_ref(), &e.push, c.stopping);
     // Collision avoidance: the reference's rule; a UAV's own copy only while it remembers.
     if c.avoid.is_some() {
         let params = sc.controller();
@@ -557,9 +543,16 @@ fn decide(
     if normalised_sq <= c.rho2 {
         return Some((Outcome::Held, [0.0; 6]));
     }
-    // Step 7: the one-step input, r = X_hold − O_i, in closed form within the limits.
-    let r = -o_i;
-    let q = &c.q;
+    // Step 7: the one-step input, r = X_hold − O_i.
+    Some((Outcome::Adjusted { normalised_sq }, one_step_input(c, own, &-o_i)))
+}
+
+/// Step 7 on the kinematic vehicle: the input toward the target whose course-keeping
+/// deviation is `r`, within the limits at `own`. Its cost Hessian is diagonal, so
+/// `ControllerSetup::input_toward`'s solver takes one sweep: `u_a = clamp(−g_a/h_a)`, written
+/// out here (tested against it).
+fn one_step_input(c: &Consts, own: &State9, r: &State9) -> [f64; 6] {
+    let (q, dt) = (&c.q, c.dt);
     let mut u = [0.0; 6];
     for a in 0..6 {
         let g =
@@ -569,7 +562,7 @@ fn decide(
         let hi = (c.state_max[a] - vel).max(0.0).min(c.scale[a]);
         u[a] = if c.h[a] > 0.0 { (-g / c.h[a]).clamp(lo, hi) } else { 0.0 };
     }
-    Some((Outcome::Adjusted { normalised_sq }, u))
+    u
 }
 
 /// `X̂_ij − X_hold` (eq. 10): the neighbour's prediction plus `W_ij` (the slots' offset,
@@ -610,20 +603,35 @@ fn implied(
     d
 }
 
-/// Separation keeping (the reference's `keep_apart`): `slots` is d_i − d_j.
-#[inline]
-fn keep_apart(slots: nalgebra::Vector3<f64>, x_j: &[f64; 3], x_hold: &State9, separation: f64, push: &mut [f64; 3]) {
-    let p = [x_hold[X] - x_j[0], x_hold[X + 1] - x_j[1], x_hold[X + 2] - x_j[2]];
-    let d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-    if d2 >= separation * separation {
-        return;
-    }
-    let slot_d = slots.norm();
-    let limit = separation.min(proxform_core::controller::SEPARATION_SLOT_FRACTION * slot_d);
-    let d = d2.sqrt();
-    if d < limit && d > 1e-9 {
-        for a in 0..3 {
-            push[a] += (limit - d) * p[a] / d;
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_closed_form_input_is_the_reference_solvers() {
+        // Random deviations and states, near and beyond the limits: the same input as the
+        // reference controller's solver.
+        let sc = proxform_scenario::builtin::swarm(50).expect("valid");
+        let c = Consts::new(&sc);
+        let setup = sc.agents().controller();
+        let mut seed = 99u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..2000 {
+            let mut own = State9::zeros();
+            let mut r = State9::zeros();
+            for k in 0..9 {
+                own[k] = [100.0, 100.0, 100.0, 160.0, 50.0, 40.0, 1.2, 0.6, 1.2][k] * next();
+                r[k] = [20.0, 20.0, 20.0, 10.0, 10.0, 10.0, 0.2, 0.2, 0.2][k] * next();
+            }
+            own[VX] += 75.0;
+            let want = setup.input_toward(&own, &r);
+            let got = one_step_input(&c, &own, &r);
+            for a in 0..6 {
+                assert!((got[a] - want[a]).abs() <= 1e-12 * want[a].abs().max(1e-3), "{a}: {got:?} vs {want:?}");
+            }
         }
     }
 }
