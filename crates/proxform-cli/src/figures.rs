@@ -339,7 +339,92 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
     plan_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
     plan_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
     written.extend([png, svg]);
+    let moves = !scenario.placement().in_slots()
+        || !scenario.schedule().is_empty()
+        || scenario.reassign_on_loss().is_some()
+        || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. }));
+    if moves && nav < s.n {
+        let png = dir.join("approach_plan.png");
+        let svg = dir.join("approach_plan.svg");
+        approach_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s, nav)?;
+        approach_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s, nav)?;
+        written.extend([png, svg]);
+    }
     Ok(written)
+}
+
+/// Equal scales on a chart of `SIZE`: the narrower of the two ranges widened around its
+/// centre.
+fn equal_scales(x: (f64, f64), y: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+    let aspect = f64::from(SIZE.0 - 120) / f64::from(SIZE.1 - 100);
+    let (wx, wy) = (x.1 - x.0, y.1 - y.0);
+    if wx / wy > aspect {
+        let c = 0.5 * (y.0 + y.1);
+        (x, (c - 0.5 * wx / aspect, c + 0.5 * wx / aspect))
+    } else {
+        let c = 0.5 * (x.0 + x.1);
+        ((c - 0.5 * wy * aspect, c + 0.5 * wy * aspect), y)
+    }
+}
+
+/// The followers' tracks relative to the navigator, seen from above (x forward, y left of
+/// the world axes; equal scales): how the formation came together or changed. A hollow
+/// circle marks each follower's start, a filled square its end, dots every 10 s.
+fn approach_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series, nav: usize) -> Result<()> {
+    root.fill(&WHITE).map_err(plot_err)?;
+    // The navigator's position at each recorded step, by step index from the start.
+    let step = |t: f64| ((t - s.t0) / s.dt).round() as usize;
+    let mut nav_at = vec![None; s.rows[nav].last().map_or(0, |r| step(r.0) + 1)];
+    for r in &s.rows[nav] {
+        nav_at[step(r.0)] = Some((r.1[0], r.1[1]));
+    }
+    let relative: Vec<Vec<(f64, f64, f64)>> = (0..s.n)
+        .map(|u| {
+            if u == nav {
+                return Vec::new();
+            }
+            s.rows[u]
+                .iter()
+                .filter_map(|r| {
+                    let (nx, ny) = nav_at.get(step(r.0)).copied().flatten()?;
+                    Some((r.0, r.1[0] - nx, r.1[1] - ny))
+                })
+                .collect()
+        })
+        .collect();
+    let all = || relative.iter().flatten().chain(std::iter::once(&(0.0, 0.0, 0.0)));
+    let (x, y) = equal_scales(range(all().map(|p| p.1)), range(all().map(|p| p.2)));
+    let mut chart = ChartBuilder::on(root)
+        .caption("Approach relative to the navigator (m): ○ start, ■ end, dots every 10 s", ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(plot_err)?;
+    chart.configure_mesh().x_desc("x − x_navigator (m)").y_desc("y − y_navigator (m)").draw().map_err(plot_err)?;
+    let every = ((10.0 / s.dt).round() as usize).max(1);
+    chart.draw_series(std::iter::once(TriangleMarker::new((0.0, 0.0), 7, BLACK.filled()))).map_err(plot_err)?;
+    for (u, pts) in relative.iter().enumerate() {
+        let (Some(first), Some(last)) = (pts.first(), pts.last()) else { continue };
+        let color = PALETTE[u % PALETTE.len()];
+        let drawn = chart
+            .draw_series(LineSeries::new(pts.iter().map(|p| (p.1, p.2)), color.stroke_width(1)))
+            .map_err(plot_err)?;
+        if s.legend() {
+            label_uav(drawn, u, color);
+        }
+        let dots = pts.iter().filter(|p| step(p.0) % every == 0);
+        chart.draw_series(dots.map(|p| Circle::new((p.1, p.2), 2, color.filled()))).map_err(plot_err)?;
+        chart
+            .draw_series(std::iter::once(Circle::new((first.1, first.2), 6, color.stroke_width(2))))
+            .map_err(plot_err)?;
+        let square = EmptyElement::at((last.1, last.2)) + Rectangle::new([(-5, -5), (5, 5)], color.filled());
+        chart.draw_series(std::iter::once(square)).map_err(plot_err)?;
+    }
+    if s.legend() {
+        legend_box(&mut chart, SeriesLabelPosition::UpperRight)?;
+    }
+    root.present().map_err(plot_err)
 }
 
 /// The tracks seen from above (x right, y up, equal scales), with each UAV's position marked
@@ -347,17 +432,7 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
 fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
     root.fill(&WHITE).map_err(plot_err)?;
     let coord = |i: usize| range(s.rows.iter().flatten().map(|r| r.1[i]));
-    let (x, y) = (coord(0), coord(1));
-    // Equal scales: widen the narrower range around its centre.
-    let aspect = f64::from(SIZE.0 - 120) / f64::from(SIZE.1 - 100);
-    let (wx, wy) = (x.1 - x.0, y.1 - y.0);
-    let (x, y) = if wx / wy > aspect {
-        let c = 0.5 * (y.0 + y.1);
-        (x, (c - 0.5 * wx / aspect, c + 0.5 * wx / aspect))
-    } else {
-        let c = 0.5 * (x.0 + x.1);
-        ((c - 0.5 * wy * aspect, c + 0.5 * wy * aspect), y)
-    };
+    let (x, y) = equal_scales(coord(0), coord(1));
     let mut chart = ChartBuilder::on(root)
         .caption("Tracks seen from above (m); dots every 10 s", ("sans-serif", 24))
         .margin(15)

@@ -45,15 +45,19 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
     let faults = runs.first().is_some_and(|r| r.sensor_faults.is_some());
     let isolation = runs.first().is_some_and(|r| r.isolation.is_some());
     let forming = runs.first().is_some_and(|r| r.forming.is_some());
-    let transitions = runs.first().is_some_and(|r| r.transitions.is_some());
+    let transitions = runs.iter().any(|r| r.transitions.is_some());
+    let flown = runs.first().is_some_and(|r| r.flown.is_some());
     if faults {
         header.extend(["healthy_pass", "rejoin_s"].map(String::from));
     }
     if forming {
-        header.extend(["time_to_form_s", "transient_error_ratio", "path_length_m_per_uav"].map(String::from));
+        header.extend(["time_to_form_s", "transient_error_ratio", "settled_error_ratio"].map(String::from));
     }
     if transitions {
         header.extend(["transition_s", "transition_error_ratio"].map(String::from));
+    }
+    if flown {
+        header.extend(["path_length_m_per_uav", "delta_v_mps_per_uav", "work_j_per_kg_per_uav"].map(String::from));
     }
     if isolation {
         header.extend(
@@ -89,11 +93,22 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
             rec.extend([
                 format!("{:.3}", f.time_to_form_s),
                 format!("{:.4}", f.transient_error_ratio),
-                format!("{:.1}", f.path_length_m_per_uav),
+                f.settled_error_ratio.map_or_else(String::new, |v| format!("{v:.4}")),
             ]);
         }
-        if let (true, Some(c)) = (transitions, r.transitions) {
-            rec.extend([format!("{:.3}", c.transition_s), format!("{:.4}", c.transient_error_ratio)]);
+        if transitions {
+            // Slots re-assigned in flight change the formation in some runs only.
+            rec.extend(match r.transitions {
+                Some(c) => [format!("{:.3}", c.transition_s), format!("{:.4}", c.transient_error_ratio)],
+                None => [String::new(), String::new()],
+            });
+        }
+        if let (true, Some(f)) = (flown, r.flown) {
+            rec.extend([
+                format!("{:.1}", f.path_length_m_per_uav),
+                format!("{:.2}", f.delta_v_mps_per_uav),
+                format!("{:.1}", f.work_j_per_kg_per_uav),
+            ]);
         }
         if let (true, Some(i)) = (isolation, r.isolation) {
             rec.extend([

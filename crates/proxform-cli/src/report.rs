@@ -117,14 +117,24 @@ pub fn print(
         let formed = result.runs.iter().filter(|r| r.forming.is_some_and(|f| f.time_to_form_s.is_finite())).count();
         writeln!(
             out,
-            "forming                  formed (every follower within the allowable errors to the end) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable; {} m flown per follower",
+            "forming                  formed (every follower within the allowable errors to the end) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable{}",
             fraction(f.formed_fraction),
             s.runs,
             number(f.time_to_form_s_median),
             number(f.time_to_form_s_p99),
             number(f.time_to_form_s_max),
             number(f.transient_error_ratio_max),
-            number(f.path_length_m_per_uav)
+            f.settled_error_ratio_max
+                .map_or_else(String::new, |v| format!("; of the followers that started in their slots {}×", number(v)))
+        )?;
+    }
+    if let Some(f) = &s.flown {
+        writeln!(
+            out,
+            "flown per follower       {} m, Δv {} m/s, work {} J/kg (Σ|Δ(½v² + g·z)|), means over runs",
+            number(f.path_length_m_per_uav),
+            number(f.delta_v_mps_per_uav),
+            number(f.work_j_per_kg_per_uav)
         )?;
     }
     if let Some(c) = &s.transitions {

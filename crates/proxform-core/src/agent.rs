@@ -8,6 +8,7 @@
 
 use std::sync::Arc;
 
+use crate::assignment::{relabel, Reassignment};
 use crate::controller::{ControllerSetup, Decision};
 use crate::dependency::DependencySet;
 use crate::error::ConfigError;
@@ -118,6 +119,9 @@ pub struct Agent {
 struct Changes {
     schedule: Arc<FormationSchedule>,
     next: usize,
+    /// Slots re-assigned in flight (None: every UAV keeps its own): later stages are flown
+    /// relabelled by it.
+    assignment: Option<Reassignment>,
     id: UavId,
     method: Method,
     navigator: UavId,
@@ -149,6 +153,7 @@ impl Agent {
             Box::new(Changes {
                 schedule: setup.schedule.clone(),
                 next: 0,
+                assignment: None,
                 id,
                 method: setup.method,
                 navigator: setup.navigator,
@@ -170,13 +175,47 @@ impl Agent {
         }
         let Some(k) = switched else { return };
         let stage = &stages[k];
-        let deps = stage.dependencies.get(ch.id.index()).cloned().unwrap_or_default();
+        let (formation, deps) = match &ch.assignment {
+            None => (stage.formation.clone(), stage.dependencies.get(ch.id.index()).cloned().unwrap_or_default()),
+            Some(a) => {
+                let (f, mut tables) = relabel(&stage.formation, &stage.dependencies, &a.slot_of, &a.flying);
+                let own = std::mem::take(&mut tables[ch.id.index()]);
+                (Arc::new(f), own)
+            }
+        };
         let setup = ch.setup.clone();
         // The stage was checked with the first formation's setup: the same UAVs, the same
-        // navigator, tables of slots of its own formation.
-        self.controller =
-            FormationController::new(&ch.method, ch.id, ch.navigator, setup, stage.formation.clone(), deps)
-                .expect("a checked schedule's stages are valid for every UAV");
+        // navigator, tables of slots of its own formation (relabelled, of UAVs of it).
+        self.controller = FormationController::new(&ch.method, ch.id, ch.navigator, setup, formation, deps)
+            .expect("a checked schedule's stages are valid for every UAV");
+    }
+
+    /// Flies the slots of `assignment` from now on (and the later stages of the schedule
+    /// relabelled by it): the controller is set up afresh for UAV `id`'s new slot and table
+    /// (its neighbour tracks restart from the next observations), as at a change of formation.
+    pub fn reassign(&mut self, setup: &AgentSetup, id: UavId, assignment: &Reassignment) -> Result<(), ConfigError> {
+        let table = assignment.tables.get(id.index()).cloned().unwrap_or_default();
+        self.controller = FormationController::new(
+            &setup.method,
+            id,
+            setup.navigator,
+            setup.controller.clone(),
+            assignment.formation.clone(),
+            table,
+        )?;
+        let ch = self.changes.get_or_insert_with(|| {
+            Box::new(Changes {
+                schedule: setup.schedule.clone(),
+                next: setup.schedule.stages().len(),
+                assignment: None,
+                id,
+                method: setup.method,
+                navigator: setup.navigator,
+                setup: setup.controller.clone(),
+            })
+        });
+        ch.assignment = Some(assignment.clone());
+        Ok(())
     }
 
     /// One update period at `now_s`: `own_measured` is the UAV's measurement of its own state,

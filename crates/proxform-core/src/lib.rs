@@ -8,6 +8,7 @@
 
 pub mod agent;
 pub mod angle;
+pub mod assignment;
 pub mod azimuth;
 pub mod baseline;
 pub mod control;

@@ -182,10 +182,14 @@ impl PyScenario {
         let rows: Vec<Vec<f64>> = (0..states.len())
             .map(|i| match i == nav {
                 true => vec![0.0; 6],
-                false => {
-                    proxform_sim::measure::observer::formation_error_to(&self.inner, 0.0, &states, &states[nav], i)
-                        .to_vec()
-                }
+                false => proxform_sim::measure::observer::formation_error_to(
+                    &self.inner,
+                    self.inner.formation(),
+                    &states,
+                    &states[nav],
+                    i,
+                )
+                .to_vec(),
             })
             .collect();
         PyArray2::from_vec2(py, &rows).map_err(|e| PyRuntimeError::new_err(e.to_string()))

@@ -26,6 +26,11 @@ pub const FORM_WITHIN_S: f64 = 120.0;
 /// quarter more, since the avoidance holds its distance only to within the lag of the UAVs'
 /// rate-limited inputs.
 pub const AVOID_PER_SAFETY: f64 = 1.25;
+/// Robust fusion's gate (in permissible errors) when `controller.isolation_gate` is unset and
+/// UAVs are off their slots by design (scattered starts, joins, formation changes, slots
+/// re-assigned on a loss): there a neighbour far from its own slot is normal, and leaning on
+/// it drags the UAV that leans (METHOD §8, "Forming from scattered starts"). Unset otherwise.
+pub const ISOLATION_GATE_OFF_SLOTS: f64 = 1.0;
 
 /// Position noise 1σ (m).
 pub const NOISE_POSITION_M: f64 = 0.02;

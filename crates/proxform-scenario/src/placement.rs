@@ -3,8 +3,10 @@
 //! the simulator for each run (a seeded stream of its own), so that every run of a batch starts
 //! differently and the same seed starts the same way. With `assign_slots`, the followers are
 //! not bound to the slots nearest their draw order: the drawn starts are assigned to the slots
-//! so that the total distance from start to slot is least (Kuhn-Munkres).
+//! so that the total (or, with `assign_by = "largest"`, the largest) distance from start to
+//! slot is least ([`proxform_core::assignment`]).
 
+use proxform_core::assignment::AssignBy;
 use proxform_core::UavId;
 
 /// How the followers are placed at t = 0 (the navigator starts on its path).
@@ -17,8 +19,8 @@ pub enum Placement {
     Box {
         /// Size along x, y and z (m).
         size_m: [f64; 3],
-        /// Slots assigned to the drawn starts to minimise the total distance to them.
-        assign: bool,
+        /// Slots assigned to the drawn starts, minimising this (None: in draw order).
+        assign: Option<AssignBy>,
     },
     /// Uniformly in a horizontal disc centred on the followers' slots' centre, spread evenly
     /// over a height band.
@@ -27,8 +29,8 @@ pub enum Placement {
         radius_m: f64,
         /// Height of the band (m).
         height_m: f64,
-        /// Slots assigned to the drawn starts to minimise the total distance to them.
-        assign: bool,
+        /// Slots assigned to the drawn starts, minimising this (None: in draw order).
+        assign: Option<AssignBy>,
     },
     /// On the ground in a row across the initial course (along the world y axis), centred
     /// under the centre of the followers' slots, standing still and level: a take-off.
@@ -37,8 +39,8 @@ pub enum Placement {
         spacing_m: f64,
         /// Height of the ground below the navigator's start (m).
         below_m: f64,
-        /// Slots assigned to the starts to minimise the total distance to them.
-        assign: bool,
+        /// Slots assigned to the starts, minimising this (None: in row order).
+        assign: Option<AssignBy>,
     },
     /// The listed followers at their positions (m, relative to the navigator's start, world
     /// axes); the others in their slots.

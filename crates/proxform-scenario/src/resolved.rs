@@ -75,6 +75,7 @@ fn formation(sc: &Scenario) -> FormationSpec {
         .collect();
     FormationSpec {
         frame: Some(frame.into()),
+        reassign_on_loss: Some(sc.reassign_on_loss().is_some()),
         slot: slot_specs(sc, f, sc.dependencies()),
         shape: None,
         dependencies: None,
@@ -234,24 +235,34 @@ fn noise(sc: &Scenario) -> NoiseSpec {
 fn initial(sc: &Scenario) -> InitialSpec {
     use crate::placement::Placement;
     let speed_kmh = Some(kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()])));
-    let base = InitialSpec { speed_kmh, form_within_s: sc.form_within_s(), ..InitialSpec::default() };
+    let assign_by = sc
+        .reassign_on_loss()
+        .or(match sc.placement() {
+            Placement::Box { assign, .. } | Placement::Disc { assign, .. } | Placement::Row { assign, .. } => *assign,
+            _ => None,
+        })
+        .map(|by| by.label().to_string());
+    let base = InitialSpec { speed_kmh, form_within_s: sc.form_within_s(), assign_by, ..InitialSpec::default() };
     match sc.placement() {
         Placement::Slots => InitialSpec { placement: Some("slots".into()), ..base },
-        Placement::Box { size_m, assign } => {
-            InitialSpec { placement: Some("box".into()), box_m: Some(*size_m), assign_slots: Some(*assign), ..base }
-        }
+        Placement::Box { size_m, assign } => InitialSpec {
+            placement: Some("box".into()),
+            box_m: Some(*size_m),
+            assign_slots: Some(assign.is_some()),
+            ..base
+        },
         Placement::Disc { radius_m, height_m, assign } => InitialSpec {
             placement: Some("disc".into()),
             radius_m: Some(*radius_m),
             height_m: Some(*height_m),
-            assign_slots: Some(*assign),
+            assign_slots: Some(assign.is_some()),
             ..base
         },
         Placement::Row { spacing_m, below_m, assign } => InitialSpec {
             placement: Some("row".into()),
             row_spacing_m: Some(*spacing_m),
             ground_below_m: Some(*below_m),
-            assign_slots: Some(*assign),
+            assign_slots: Some(assign.is_some()),
             ..base
         },
         Placement::Explicit(list) => InitialSpec {

@@ -112,6 +112,7 @@ pub struct Scenario {
     pub(crate) initial: Vec<State9>,
     pub(crate) placement: crate::placement::Placement,
     pub(crate) form_within_s: Option<f64>,
+    pub(crate) reassign_on_loss: Option<proxform_core::assignment::AssignBy>,
     pub(crate) noise: MeasurementNoise,
     pub(crate) gnss_bias: Option<CorrelatedNoise>,
     pub(crate) actuation_error: f64,
@@ -224,6 +225,12 @@ impl Scenario {
     /// formed to pass (`[initial] form_within_s`); None for in-slot starts.
     pub fn form_within_s(&self) -> Option<f64> {
         self.form_within_s
+    }
+
+    /// `[formation] reassign_on_loss`: when a UAV is lost, the others are re-assigned slots
+    /// minimising this ([`proxform_core::assignment::after_loss`]); None: slots stay fixed.
+    pub fn reassign_on_loss(&self) -> Option<proxform_core::assignment::AssignBy> {
+        self.reassign_on_loss
     }
 
     /// Dependency table of every UAV (the navigator's is unused).

@@ -77,6 +77,9 @@ pub struct ScenarioSpec {
 pub struct FormationSpec {
     /// "world" (default) or "course".
     pub frame: Option<String>,
+    /// When a UAV is lost, the others take new slots: a slot at the formation's edge is left
+    /// empty and the survivors re-assigned (by `[initial] assign_by`). Default false.
+    pub reassign_on_loss: Option<bool>,
     /// Explicit slots (`[[formation.slot]]`), or …
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub slot: Vec<SlotSpec>,
@@ -214,9 +217,12 @@ pub struct InitialSpec {
     pub radius_m: Option<f64>,
     /// "disc": the height of its band (m). Default 0.
     pub height_m: Option<f64>,
-    /// "box", "disc": assign the drawn starts to the slots so that the total distance from
-    /// start to slot is least (else in draw order). Default false.
+    /// "box", "disc", "row": assign the starts to the slots so that the distance from start
+    /// to slot is least (else in draw order). Default false.
     pub assign_slots: Option<bool>,
+    /// What the assignment minimises (with `assign_slots` and `formation.reassign_on_loss`):
+    /// "total" (default) or "largest" (the largest distance, then the total).
+    pub assign_by: Option<String>,
     /// "row": distance between neighbours in the take-off row (m).
     pub row_spacing_m: Option<f64>,
     /// "row": height of the ground below the navigator's start (m).

@@ -23,8 +23,8 @@ pub mod world;
 
 pub use batch::compare;
 pub use batch::runs::{
-    run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FormingSummary,
-    IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
+    run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FlownSummary,
+    FormingSummary, IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
 };
 pub use flight::{engine_for, EngineKind, Flight};
 pub use measure::metrics::{

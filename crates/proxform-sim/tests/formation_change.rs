@@ -47,13 +47,14 @@ fn a_change_that_is_never_flown_to_fails_the_run() {
 }
 
 #[test]
-fn a_uav_joining_behind_its_slot_leaves_the_others_in_place_with_the_robust_fusion() {
+fn a_uav_joining_behind_its_slot_leaves_the_others_in_place_by_default() {
     // UAV5 of the paper appears 20 m behind its slot at 30 s. UAVs 4 and 6 lean on it with
     // degree 0.5: with the paper's plain means they follow it out of their allowable errors;
-    // the robust fusion weighs its estimate against those of the UAVs ahead and leaves it out.
-    let join = |gate: f64| {
+    // the robust fusion, on by default where a UAV joins, weighs its estimate against those
+    // of the UAVs ahead and leaves it out.
+    let join = |gate: Option<f64>| {
         Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
-            s.controller.isolation_gate = Some(gate);
+            s.controller.isolation_gate = gate;
             s.fault = vec![proxform_scenario::spec::FaultSpec {
                 kind: Some("join".into()),
                 uav: Some(5),
@@ -68,11 +69,72 @@ fn a_uav_joining_behind_its_slot_leaves_the_others_in_place_with_the_robust_fusi
         let k = s.per_uav.iter().position(|&u| u == uav).expect("detail");
         s.per_uav_worst[k].as_array()[0]
     };
-    let fused = batch(&join(1.0), 10);
-    let plain = batch(&join(0.0), 10);
+    let by_default = join(None);
+    assert_eq!(by_default.controller().isolation_gate, Some(1.0), "on by default with a join");
+    let fused = batch(&by_default, 10);
+    let plain = batch(&join(Some(0.0)), 10);
     for uav in [2, 3, 4, 6] {
         let (w, a) = (worst_x(&fused, uav), fused.allowable_error.as_array()[0]);
         assert!(w <= a, "UAV{} x error {w} with the fusion", uav);
     }
     assert!(worst_x(&plain, 4) > 2.0, "{}", worst_x(&plain, 4));
+    // A join passes when the others kept their errors and the joiner formed.
+    let (f, p) = (fused.forming.as_ref().expect("a join forms"), plain.forming.as_ref().expect("a join forms"));
+    assert!(f.settled_error_ratio_max.is_some_and(|r| r <= 1.0), "{f:?}");
+    assert!(p.settled_error_ratio_max.is_some_and(|r| r > 4.0), "{p:?}");
+    assert_eq!((fused.pass_fraction, plain.pass_fraction), (1.0, 0.0));
+    // The paper itself, nobody joining, keeps the paper's plain means.
+    assert_eq!(proxform_scenario::builtin::paper().controller().isolation_gate, None);
+}
+
+/// The paper's six, UAV2 (leaned on by UAVs 3, 4 and 5) lost at 40 s.
+fn loss(reassign: bool, by: Option<&str>) -> Scenario {
+    Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
+        s.formation.reassign_on_loss = Some(reassign);
+        s.initial.assign_by = by.map(String::from);
+        s.fault = vec![proxform_scenario::spec::FaultSpec::remove(2, 40.0)];
+    }))
+    .expect("valid")
+}
+
+/// Where UAV `uav` ends, relative to where slot `slot` of the paper's formation is then.
+fn end_offset(sc: &Scenario, uav: usize, slot: usize) -> f64 {
+    let mut sim = proxform_sim::Simulation::new(sc, RunOptions::default(), 3, 0);
+    while sim.k() < sc.steps() {
+        sim.step();
+    }
+    let s = sim.states();
+    let f = sc.formation();
+    let at = s[0] + f.w(&f.slots[slot], &f.slots[0], &s[0]);
+    ((s[uav][0] - at[0]).powi(2) + (s[uav][1] - at[1]).powi(2) + (s[uav][2] - at[2]).powi(2)).sqrt()
+}
+
+#[test]
+fn a_lost_uav_inside_the_formation_is_replaced_from_its_edge() {
+    // Slots 4 and 6 are the edge (nobody leans on them); UAV4 is the nearer to slot 2.
+    let sc = loss(true, None);
+    assert!(end_offset(&sc, 3, 1) < 1.0, "UAV4 flies slot 2 at the end: {} m off", end_offset(&sc, 3, 1));
+    let r = batch(&sc, 6);
+    let c = r.transitions.as_ref().expect("a re-assignment is a change of formation");
+    assert_eq!((c.completed_fraction, r.pass_fraction), (1.0, 1.0), "{c:?}");
+    assert!(c.transition_s_max < 30.0, "{c:?}");
+    assert_eq!(r.unsafe_runs, 0);
+    // Without re-assignment slot 2 stays empty and UAV4 in its own.
+    let fixed = loss(false, None);
+    assert!(end_offset(&fixed, 3, 3) < 1.0 && end_offset(&fixed, 3, 1) > 50.0);
+    assert!(batch(&fixed, 2).transitions.is_none());
+}
+
+#[test]
+fn a_lost_uav_at_the_edge_moves_nobody() {
+    let sc = Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
+        s.formation.reassign_on_loss = Some(true);
+        s.fault = vec![proxform_scenario::spec::FaultSpec::remove(6, 40.0)];
+    }))
+    .expect("valid");
+    let r = batch(&sc, 4);
+    let c = r.transitions.as_ref().expect("re-assigned");
+    assert_eq!(c.transition_s_max, 0.0, "{c:?}");
+    assert!(c.transient_error_ratio_max <= 1.0, "{c:?}");
+    assert_eq!(r.pass_fraction, 1.0);
 }

@@ -69,6 +69,12 @@ pub fn run(
              the agents' processes; relaying is not part of the wire yet: fly it without --distributed"
         );
     }
+    if scenario.reassign_on_loss().is_some() {
+        bail!(
+            "formation.reassign_on_loss: the new slots are handed to the agents in the simulator's process; \
+             re-assignment is not part of the wire yet: fly it without --distributed"
+        );
+    }
     let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
     let (session, endpoint) = serve(args.listen.as_deref())?;
     let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;

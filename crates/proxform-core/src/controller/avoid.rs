@@ -55,6 +55,53 @@ impl Near {
     }
 }
 
+/// Which UAVs a sensor serving the collision avoidance reports besides the nearest of each
+/// azimuth area: every UAV within [`super::AVOID_WATCH`] avoidance distances (one hidden behind
+/// another in its area may be the one closing fastest), and every UAV in sensing range closing
+/// fast enough that the rule may bind on it, whatever its distance: a pair closing at 40 m/s
+/// needs some 140 m to stop short of the avoidance distance, more than a fixed radius gives.
+/// "Fast enough" counts on twice the present closing speed (the UAVs' velocities change
+/// while they close), so that the rule sees it before it binds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CloseWatch {
+    /// Squared radius within which every UAV is reported (m²; 0: none).
+    near2: f64,
+    /// The avoidance distance (m) and the braking the rule counts on (m/s²); 0: no closing
+    /// test.
+    avoid_m: f64,
+    braking_mps2: f64,
+    /// The update period (s).
+    dt_s: f64,
+}
+
+impl CloseWatch {
+    /// The watch of a rule with avoidance distance `avoid_m`, braking `braking_mps2` and
+    /// update period `dt_s`, for a sensor of range `range_m` (no watch when `avoid_m` ≤ 0).
+    pub fn new(avoid_m: f64, braking_mps2: f64, dt_s: f64, range_m: f64) -> Self {
+        if !(avoid_m > 0.0 && braking_mps2 > 0.0) {
+            return Self::default();
+        }
+        let near = (super::AVOID_WATCH * avoid_m).min(range_m);
+        Self { near2: near * near, avoid_m, braking_mps2, dt_s }
+    }
+
+    /// Whether a UAV at `p` from the observer (m, `d2` = |p|²) moving at `w` relative to it
+    /// (m/s) is reported.
+    #[inline]
+    pub fn sees(&self, d2: f64, p: [f64; 3], w: [f64; 3]) -> bool {
+        if d2 < self.near2 {
+            return true;
+        }
+        let pw = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
+        if self.avoid_m <= 0.0 || pw >= 0.0 {
+            return false;
+        }
+        let d = d2.sqrt();
+        let c = -2.0 * pw / d;
+        d - self.avoid_m - c * self.dt_s < c * c / (2.0 * self.braking_mps2)
+    }
+}
+
 /// The side on which the UAV passes a neighbour, and for how long its limit has bound.
 #[derive(Debug, Clone, Copy)]
 struct Side {
@@ -100,6 +147,9 @@ pub struct Avoidance {
 /// closing speed taken out (and faster than [`SLIDE_NOISE_MPS`]) passes it on that side;
 /// slower than that, on the right.
 const SLIDE_COMMITTED: f64 = 0.25;
+/// A side on which the UAV slides slower than this share of the closing speed taken out is
+/// closed by the vehicle's limits: the other side may take over.
+const SIDE_OPEN: f64 = 0.5;
 /// Slides slower than this (m/s) do not decide the side.
 const SLIDE_NOISE_MPS: f64 = 1.0;
 
@@ -216,9 +266,12 @@ impl Avoidance {
                     (w, achieved)
                 };
                 let (mut w, achieved) = try_side(t_hat);
-                if passing {
-                    // A side the vehicle's limits close (it already flies as fast that way as it
-                    // can) is no way past: the other side, if it gets past faster.
+                if passing && achieved < SIDE_OPEN * excess {
+                    // A side the vehicle's limits close (it already flies that way nearly as
+                    // fast as it can) is no way past: the other side, if it gets past faster.
+                    // Only a side so closed gives way: two open sides compared step by step
+                    // would trade places as the geometry wavers, and the UAV would swing
+                    // between them without passing.
                     let other = scale(t_hat, -1.0);
                     let (w_other, achieved_other) = try_side(other);
                     if achieved_other > achieved + SLIDE_NOISE_MPS {

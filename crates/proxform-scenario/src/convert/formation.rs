@@ -383,6 +383,7 @@ pub fn schedule(
             shape: c.shape.clone(),
             dependencies: c.dependencies.clone(),
             change: Vec::new(),
+            reassign_on_loss: None,
         };
         // Errors name the change's own keys.
         let within = |e: SpecError| SpecError {

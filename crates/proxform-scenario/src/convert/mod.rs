@@ -125,6 +125,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let can_hover = matches!(vehicle, VehicleModel::Kinematic(k) if k.limits.vx_min_mps == 0.0);
         let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m, can_hover)?;
         let form_within_s = placement::form_within(&spec.initial, &placement, duration_s)?;
+        let reassign_on_loss = spec.formation.reassign_on_loss.unwrap_or(false);
+        if spec.initial.assign_by.is_some() && spec.initial.assign_slots != Some(true) && !reassign_on_loss {
+            return Err(err(
+                "initial.assign_by",
+                "applies with initial.assign_slots = true or formation.reassign_on_loss = true only",
+            ));
+        }
+        let reassign_on_loss = reassign_on_loss.then(|| placement::assign_by(&spec.initial)).transpose()?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
 
         let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
@@ -192,6 +200,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
+        // Robust fusion by default where UAVs are off their slots by design: a neighbour far
+        // from its own slot must not drag the UAVs that lean on it.
+        let off_slots = !placement.in_slots()
+            || !schedule.is_empty()
+            || reassign_on_loss.is_some()
+            || faults.iter().any(|f| matches!(f, crate::faults::Fault::Join { .. }));
+        if spec.controller.isolation_gate.is_none() && off_slots {
+            params.isolation_gate = Some(defaults::ISOLATION_GATE_OFF_SLOTS);
+        }
         // Collision avoidance by default for the kinematic vehicle; the fixed wing's braking is a
         // rough figure (it avoids by turning), so there it is asked for, like the stopping limit.
         let avoid_default = match vehicle {
@@ -226,6 +243,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             initial,
             placement,
             form_within_s,
+            reassign_on_loss,
             noise,
             gnss_bias,
             actuation_error,

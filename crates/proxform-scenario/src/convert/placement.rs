@@ -3,6 +3,7 @@
 //! simulator draws each start away from those already placed); explicit starts must keep every
 //! pair of UAVs the safety distance apart.
 
+use proxform_core::assignment::AssignBy;
 use proxform_core::state::{self, State9};
 use proxform_core::UavId;
 
@@ -32,6 +33,18 @@ pub fn form_within(spec: &InitialSpec, placement: &Placement, duration_s: f64) -
     Ok(Some(t))
 }
 
+/// `[initial] assign_by`: what slot assignments minimise (default the total distance).
+pub fn assign_by(spec: &InitialSpec) -> Result<AssignBy, SpecError> {
+    match spec.assign_by.as_deref() {
+        None | Some("total") => Ok(AssignBy::Total),
+        Some("largest") => Ok(AssignBy::Largest),
+        Some(other) => Err(err(
+            "initial.assign_by",
+            format!("unknown objective {other:?}: \"total\" (the total distance) or \"largest\" (the largest)"),
+        )),
+    }
+}
+
 /// The placement of `[initial]`, for `initial` (every UAV in its slot) and the navigator.
 pub fn placement(
     spec: &InitialSpec,
@@ -53,10 +66,10 @@ pub fn placement(
     only("uav", !spec.uavs.is_empty(), "explicit")?;
     only("row_spacing_m", spec.row_spacing_m.is_some(), "row")?;
     only("ground_below_m", spec.ground_below_m.is_some(), "row")?;
-    let assign = spec.assign_slots.unwrap_or(false);
     if spec.assign_slots.is_some() && !matches!(kind, "box" | "disc" | "row") {
         return Err(err("initial.assign_slots", "applies to placement = \"box\", \"disc\" or \"row\" only"));
     }
+    let assign = spec.assign_slots.unwrap_or(false).then(|| assign_by(spec)).transpose()?;
     let n = initial.len() as f64;
     let cell = 2.0 * safety_distance_m;
     let room = |extent: [f64; 3]| extent.iter().map(|e| (e / cell).floor() + 1.0).product::<f64>();

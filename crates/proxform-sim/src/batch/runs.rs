@@ -111,6 +111,9 @@ pub struct Summary {
     /// otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub transitions: Option<TransitionSummary>,
+    /// What the followers flew, when the formation forms, changes or may be re-assigned.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flown: Option<FlownSummary>,
 }
 
 /// How the changes of formation of a batch went.
@@ -143,8 +146,20 @@ pub struct FormingSummary {
     pub time_to_form_s_max: f64,
     /// Largest error over its allowable error before forming, over all runs.
     pub transient_error_ratio_max: f64,
-    /// Distance flown per follower (m), mean over runs.
+    /// Largest error over its allowable error of the followers that started in their slots
+    /// and did not join, over all runs (None when every follower started off its slot).
+    pub settled_error_ratio_max: Option<f64>,
+}
+
+/// What the followers of a batch flew (means over runs of the means per follower).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FlownSummary {
+    /// Distance flown (m).
     pub path_length_m_per_uav: f64,
+    /// Velocity change flown, Σ|Δv| (m/s).
+    pub delta_v_mps_per_uav: f64,
+    /// Specific mechanical work, Σ|Δ(½v² + g·z)| (J/kg).
+    pub work_j_per_kg_per_uav: f64,
 }
 
 /// How the formations of a batch rode out faults of some UAVs' own sensors.
@@ -471,6 +486,7 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         sensor_faults: sensor_fault_summary(runs),
         forming: forming_summary(runs),
         transitions: transition_summary(runs),
+        flown: flown_summary(runs),
         isolation: isolation_summary(runs),
     }
 }
@@ -523,7 +539,21 @@ fn forming_summary(runs: &[RunSummary]) -> Option<FormingSummary> {
         time_to_form_s_p99: p99,
         time_to_form_s_max: t.last().copied().unwrap_or(0.0),
         transient_error_ratio_max: f.iter().map(|m| m.transient_error_ratio).fold(0.0, f64::max),
+        settled_error_ratio_max: f.iter().filter_map(|m| m.settled_error_ratio).reduce(f64::max),
+    })
+}
+
+/// What the followers of a batch flew (None when it is not measured).
+fn flown_summary(runs: &[RunSummary]) -> Option<FlownSummary> {
+    let f: Vec<_> = runs.iter().filter_map(|r| r.flown).collect();
+    if f.is_empty() {
+        return None;
+    }
+    let n = f.len() as f64;
+    Some(FlownSummary {
         path_length_m_per_uav: f.iter().map(|m| m.path_length_m_per_uav).sum::<f64>() / n,
+        delta_v_mps_per_uav: f.iter().map(|m| m.delta_v_mps_per_uav).sum::<f64>() / n,
+        work_j_per_kg_per_uav: f.iter().map(|m| m.work_j_per_kg_per_uav).sum::<f64>() / n,
     })
 }
 
@@ -568,6 +598,7 @@ mod tests {
             min_separation_m: 90.0 + k as f64,
             model_error_rms: [model; 9],
             duration_s: 60.0,
+            flown: None,
             held_fraction: 0.5,
             within_allowable_fraction: 1.0,
             control_effort: 0.1,

@@ -292,6 +292,8 @@ impl<'s> FastSimulation<'s> {
             uavs: &self.uavs,
             active: &self.active,
             radio_sent: self.messages.len(),
+            formation: None,
+            reassigned: false,
         }
     }
 

@@ -22,7 +22,7 @@ pub struct Unsupported(pub &'static str);
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 18] = [
+    let checks: [(bool, &'static str); 19] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (matches!(sc.vehicle(), VehicleModel::Kinematic(_)), "the fixed-wing vehicle"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
@@ -35,6 +35,7 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (sc.faults().is_empty(), "faults"),
         (sc.schedule().is_empty(), "formation changes"),
         (sc.placement().in_slots(), "scattered starts"),
+        (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (radio.delay_steps == 0, "radio delay"),
         (radio.burst.is_none(), "bursty radio loss"),
         (!radio.relay_navigator, "relays of the navigator"),
@@ -66,8 +67,8 @@ pub struct Consts {
     /// Sensing range (m) and its square.
     pub range: f64,
     pub r2: f64,
-    /// Close-range detections within this distance squared (0: none).
-    pub watch2: f64,
+    /// Which UAVs are close-range detections (as the reference engine's sensor).
+    pub watch: proxform_core::controller::CloseWatch,
     /// Track records per UAV.
     pub capacity: usize,
     pub filter: Filter,
@@ -115,10 +116,6 @@ impl Consts {
         let n = sc.len();
         let nav = sc.navigator().index();
         let range = p.areas.sensing_range_m;
-        let watch = match p.avoid_m {
-            Some(d) if d > 0.0 => (proxform_core::controller::AVOID_WATCH * d).min(range),
-            _ => 0.0,
-        };
         let steps = |s: f64| (s / dt + 1e-6).floor() as i64;
         let timeout_steps = steps(p.track_timeout_s);
         let q: [f64; 9] = std::array::from_fn(|k| setup.q()[k]);
@@ -149,7 +146,7 @@ impl Consts {
             classifier: AreaClassifier::new(p.areas.areas),
             range,
             r2: range * range,
-            watch2: watch * watch,
+            watch: crate::world::engine::close_watch(sc),
             capacity: (p.areas.areas + max_refs(sc)).max(1),
             filter: Filter { alpha, beta, dt, timeout_steps, coast_accel_s: p.coast_accel_s },
             coast_steps: steps(p.coast_s.min(p.track_timeout_s)),

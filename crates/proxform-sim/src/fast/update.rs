@@ -194,11 +194,14 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
     s.picked.clear();
     s.heard.clear();
     let (best_d2, best_id, close) = (&mut s.best_d2, &mut s.best_id, &mut s.close);
+    let states = v.states;
     v.grid.for_each_within(p, c.range, |j, q, d2| {
         if j as usize == i {
             return;
         }
-        if d2 < c.watch2 {
+        let o = &states[j as usize];
+        let w = [o[VX] - me[VX], o[VX + 1] - me[VX + 1], o[VX + 2] - me[VX + 2]];
+        if c.watch.sees(d2, [q[0] - p[0], q[1] - p[1], q[2] - p[2]], w) {
             close.push(j);
         }
         let a = c.classifier.area(sin_yaw, cos_yaw, q[0] - p[0], q[1] - p[1]);

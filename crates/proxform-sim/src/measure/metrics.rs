@@ -87,8 +87,24 @@ pub struct RunSummary {
     /// How the formation formed, when it did not start in its slots (scattered starts, UAVs
     /// joining).
     pub forming: Option<FormingMetrics>,
-    /// How the formation changed in flight, when it has `[[formation.change]]`s.
+    /// How the formation changed in flight, when it has `[[formation.change]]`s or its slots
+    /// were re-assigned after a loss.
     pub transitions: Option<TransitionMetrics>,
+    /// What the followers flew, when the formation forms, changes or may be re-assigned.
+    pub flown: Option<FlownMetrics>,
+}
+
+/// What the followers flew over a run (means per follower).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct FlownMetrics {
+    /// Distance flown (m).
+    pub path_length_m_per_uav: f64,
+    /// Velocity change flown, Σ|v_k − v_{k−1}| (m/s): the manoeuvring a propulsion pays for,
+    /// turns at constant speed included.
+    pub delta_v_mps_per_uav: f64,
+    /// Specific mechanical work, Σ|Δ(½|v|² + g·z)| (J/kg): energy put into (or taken out of)
+    /// speed and height, drag aside; times the mass, joules.
+    pub work_j_per_kg_per_uav: f64,
 }
 
 /// How the changes of formation of a run went.
@@ -122,8 +138,10 @@ pub struct FormingMetrics {
     pub time_to_form_s: f64,
     /// Largest error over its allowable error (any axis, any follower) before that time.
     pub transient_error_ratio: f64,
-    /// Distance flown per follower (m, mean).
-    pub path_length_m_per_uav: f64,
+    /// Largest error over its allowable error, over the whole flight, of the followers that
+    /// started in their slots and did not join: how far the others
+    /// were pushed by those forming. None when every follower started off its slot.
+    pub settled_error_ratio: Option<f64>,
 }
 
 /// How a formation rode out faults of some UAVs' own sensors.
@@ -220,7 +238,16 @@ pub struct RunMetrics {
     last_out_any: f64,
     ratio_so_far: f64,
     ratio_before_formed: f64,
+    /// Per UAV: started in its slot and does not join (judged from the start).
+    settled: Vec<bool>,
+    settled_ratio: f64,
+    /// Whether what the followers flew is measured, and its sums.
+    flown: bool,
     path_m: f64,
+    delta_v: f64,
+    work: f64,
+    /// Per UAV: velocity and specific energy at the last frame (NaN: not flying then).
+    last_flown: Vec<[f64; 4]>,
 }
 
 /// Steps between connectivity samples for swarms larger than [`CONNECTIVITY_EVERY_STEP_UP_TO`].
@@ -286,7 +313,41 @@ impl RunMetrics {
             last_out_any: f64::NEG_INFINITY,
             ratio_so_far: 0.0,
             ratio_before_formed: 0.0,
+            settled: settled(scenario),
+            settled_ratio: 0.0,
+            flown: !scenario.placement().in_slots()
+                || !scenario.schedule().is_empty()
+                || scenario.reassign_on_loss().is_some()
+                || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. })),
             path_m: 0.0,
+            delta_v: 0.0,
+            work: 0.0,
+            last_flown: Vec::new(),
+        }
+    }
+
+    /// What the followers flew in the period that ends at `frame` (nothing before the first).
+    fn fly(&mut self, frame: &StepFrame<'_>, speeds: f64) {
+        let n = frame.states.len();
+        if self.last_flown.len() != n {
+            self.last_flown = vec![[f64::NAN; 4]; n];
+        }
+        if frame.k > 0 {
+            self.path_m += speeds * self.dt;
+        }
+        for (i, s) in frame.states.iter().enumerate() {
+            let last = &mut self.last_flown[i];
+            if i == self.nav || !frame.active[i] {
+                *last = [f64::NAN; 4];
+                continue;
+            }
+            let v = [s[3], s[4], s[5]];
+            let e = 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + proxform_core::vehicle::G * s[2];
+            if !last[0].is_nan() {
+                self.delta_v += ((v[0] - last[0]).powi(2) + (v[1] - last[1]).powi(2) + (v[2] - last[2]).powi(2)).sqrt();
+                self.work += (e - last[3]).abs();
+            }
+            *last = [v[0], v[1], v[2], e];
         }
     }
 
@@ -365,6 +426,8 @@ impl RunMetrics {
                 // A formation that changes passes when it kept its errors before the first
                 // change and completed every change before the next.
                 (None, Some(t)) => t.before_error_ratio <= 1.0 && t.transition_s.is_finite(),
+                // UAVs joining: the others kept their errors and the joiners formed.
+                (None, None) if self.forming => self.settled_ratio <= 1.0 && time_to_form_s.is_finite(),
                 (None, None) => self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a),
             };
         let uav_s = self.uav_steps.max(1) as f64 * self.dt;
@@ -405,7 +468,15 @@ impl RunMetrics {
             forming: self.forming.then(|| FormingMetrics {
                 time_to_form_s,
                 transient_error_ratio: self.ratio_before_formed,
-                path_length_m_per_uav: self.path_m / self.followers.max(1) as f64,
+                settled_error_ratio: self.settled.iter().any(|s| *s).then_some(self.settled_ratio),
+            }),
+            flown: self.flown.then(|| {
+                let per = self.followers.max(1) as f64;
+                FlownMetrics {
+                    path_length_m_per_uav: self.path_m / per,
+                    delta_v_mps_per_uav: self.delta_v / per,
+                    work_j_per_kg_per_uav: self.work / per,
+                }
             }),
             transitions,
             isolation: self.isolating.then(|| {
@@ -440,6 +511,29 @@ impl RunMetrics {
             duration_s,
         }
     }
+}
+
+/// Per UAV: whether it is judged from the start, having started in its slot and not joining.
+fn settled(scenario: &Scenario) -> Vec<bool> {
+    use proxform_scenario::faults::Fault;
+    use proxform_scenario::placement::Placement;
+    let nav = scenario.navigator().index();
+    let mut settled: Vec<bool> = (0..scenario.len())
+        .map(|i| {
+            i != nav
+                && match scenario.placement() {
+                    Placement::Slots => true,
+                    Placement::Explicit(list) => list.iter().all(|(id, _)| id.index() != i),
+                    _ => false,
+                }
+        })
+        .collect();
+    for f in scenario.faults() {
+        if let Fault::Join { uav, .. } = f {
+            settled[uav.index()] = false;
+        }
+    }
+    settled
 }
 
 /// The time after one sensor fault of a UAV, until its next one.
@@ -508,12 +602,14 @@ struct Partial {
     healthy_max: [f64; 6],
     /// Largest error over its allowable error among the chunk's followers.
     max_ratio: f64,
+    /// The same among those judged from the start ([`RunMetrics`]'s `settled`).
+    settled_ratio: f64,
     /// Sum of the followers' speeds (m/s).
     speed_sum: f64,
 }
 
 fn partial(
-    nav: usize,
+    (nav, settled): (usize, &[bool]),
     faulty: &[usize],
     scenario: &Scenario,
     frame: &StepFrame<'_>,
@@ -539,10 +635,14 @@ fn partial(
         if i == nav {
             continue;
         }
-        let e = formation_error_to(scenario, frame.t, frame.states, reference, i);
+        let e = formation_error_to(scenario, frame.formation(scenario), frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
         p.speed_sum += speed;
-        p.max_ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(p.max_ratio, f64::max);
+        let ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(0.0, f64::max);
+        p.max_ratio = p.max_ratio.max(ratio);
+        if settled.get(i).copied().unwrap_or(false) {
+            p.settled_ratio = p.settled_ratio.max(ratio);
+        }
         if faulty.binary_search(&i).is_err() {
             for k in 0..6 {
                 p.healthy_max[k] = p.healthy_max[k].max(e[k].abs());
@@ -574,12 +674,12 @@ impl Observer for RunMetrics {
         self.samples += 1;
         let n = frame.states.len();
         let nav = self.nav;
-        let reference = navigator_reference(scenario, frame.t, frame.states, frame.active);
+        let reference = navigator_reference(scenario, frame.formation(scenario), frame.states, frame.active);
         self.separation.observe(frame.states, frame.active);
         self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
         let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| {
-            partial(nav, &self.faulty, scenario, frame, &reference, r)
+            partial((nav, &self.settled), &self.faulty, scenario, frame, &reference, r)
         });
         let mut active = 0u64;
         let mut heading = [0.0f64; 3];
@@ -602,6 +702,7 @@ impl Observer for RunMetrics {
                 self.healthy_max[k] = self.healthy_max[k].max(p.healthy_max[k]);
             }
             step_ratio = step_ratio.max(p.max_ratio);
+            self.settled_ratio = self.settled_ratio.max(p.settled_ratio);
             speeds += p.speed_sum;
             self.model_sq += p.model_sq;
             self.model_n += p.model_n;
@@ -612,11 +713,26 @@ impl Observer for RunMetrics {
                 heading[k] += p.heading[k];
             }
         }
-        if self.forming {
-            // Distance flown over the period that ends here (none before the first frame).
-            if frame.k > 0 {
-                self.path_m += speeds * self.dt;
+        if self.flown {
+            self.fly(frame, speeds);
+        }
+        if frame.reassigned {
+            // Slots re-assigned: a change of formation from now until the next scheduled one.
+            let t = frame.t;
+            let until = scenario.schedule().stages().iter().map(|s| s.at_s).find(|&a| a > t + 1e-9);
+            for c in self.transitions.iter_mut().filter(|c| c.at_s <= t + 1e-9 && c.until_s > t) {
+                c.until_s = t;
             }
+            let at = self.transitions.iter().position(|c| c.at_s > t).unwrap_or(self.transitions.len());
+            let change = Transition {
+                at_s: t,
+                until_s: until.unwrap_or(f64::INFINITY),
+                last_out: f64::NEG_INFINITY,
+                ratio: 0.0,
+            };
+            self.transitions.insert(at, change);
+        }
+        if self.forming {
             self.ratio_so_far = self.ratio_so_far.max(step_ratio);
             if step_ratio > 1.0 {
                 self.last_out_any = frame.t;
@@ -631,7 +747,8 @@ impl Observer for RunMetrics {
                 }
             }
         }
-        if self.transitions.first().is_some_and(|c| frame.t < c.at_s - 1e-9) {
+        // Before the first change (one made in flight is not known until it is made).
+        if self.transitions.first().is_none_or(|c| frame.t < c.at_s - 1e-9) {
             self.before_ratio = self.before_ratio.max(step_ratio);
         }
         let order = (heading[0].powi(2) + heading[1].powi(2) + heading[2].powi(2)).sqrt() / (active.max(1) as f64);
@@ -647,7 +764,7 @@ impl Observer for RunMetrics {
             if !frame.active[a.uav] || t < a.end_s - 1e-9 || t >= a.until_s - 1e-9 {
                 continue;
             }
-            let e = formation_error_to(scenario, frame.t, frame.states, &reference, a.uav);
+            let e = formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, a.uav);
             if !e.iter().zip(&self.allowable).all(|(e, al)| e.abs() <= *al) {
                 a.last_out = t;
             }
@@ -663,7 +780,7 @@ impl Observer for RunMetrics {
             if !frame.active[*i] {
                 continue;
             }
-            let e = formation_error_to(scenario, frame.t, frame.states, &reference, *i);
+            let e = formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
         }
     }
@@ -673,7 +790,7 @@ impl Observer for RunMetrics {
 mod tests {
     use super::*;
     use crate::measure::observer::UavStep;
-    use proxform_core::state::{VX, X, Y};
+    use proxform_core::state::{VX, VZ, X, Y, Z};
     use proxform_scenario::builtin::paper;
 
     /// The paper's six UAVs in their slots around a navigator at the origin flying along x.
@@ -684,7 +801,7 @@ mod tests {
     }
 
     fn frame<'a>(k: u64, states: &'a [State9], uavs: &'a [UavStep], active: &'a [bool]) -> StepFrame<'a> {
-        StepFrame { k, t: k as f64 * 0.1, states, uavs, active, radio_sent: 2 }
+        StepFrame { radio_sent: 2, ..StepFrame::new(k, k as f64 * 0.1, states, uavs, active) }
     }
 
     fn step(outcome: proxform_core::Outcome, effort: f32) -> UavStep {
@@ -753,17 +870,32 @@ mod tests {
             } else if t < 1.95 {
                 states[2][Y] += 1.2;
             }
+            // The formation climbs at 1 m/s from 1 s on, 0.1 m a period.
+            if t > 0.95 {
+                for s in states.iter_mut() {
+                    s[VZ] = 1.0;
+                    s[Z] += 0.1 * (k - 9) as f64;
+                }
+            }
             m.on_step(&sc, &frame(k, &states, &uavs, &active));
         }
-        let f = m.finish(0, 3.0).forming.expect("a scattered start is measured");
+        let r = m.finish(0, 3.0);
+        let f = r.forming.expect("a scattered start is measured");
         assert!((f.time_to_form_s - 2.0).abs() < 1e-9, "{f:?}");
         assert!((f.transient_error_ratio - 5.0).abs() < 1e-9, "{f:?}");
-        // Every follower at 70 m/s for the 29 periods after the first frame.
-        assert!((f.path_length_m_per_uav - 70.0 * 0.1 * 29.0).abs() < 1e-6, "{f:?}");
+        assert_eq!(f.settled_error_ratio, None, "every follower started off its slot");
+        // Every follower at 70 m/s for the 29 periods after the first frame; one velocity
+        // change of 1 m/s each; ½v² up by 0.5 J/kg and g·z by g·0.1 m a period for 20.
+        let w = r.flown.expect("measured where the formation forms");
+        assert!((w.path_length_m_per_uav - 70.0 * 0.1 * 29.0).abs() < 0.02, "{w:?}");
+        assert!((w.delta_v_mps_per_uav - 1.0).abs() < 1e-9, "{w:?}");
+        let work = 0.5 + proxform_core::vehicle::G * 0.1 * 20.0;
+        assert!((w.work_j_per_kg_per_uav - work).abs() < 1e-6, "{w:?}");
         // In the slots from the start (the paper), nothing is measured.
         let mut plain = RunMetrics::new(&paper());
         plain.on_step(&paper(), &frame(0, &good, &uavs, &active));
-        assert!(plain.finish(0, 0.1).forming.is_none());
+        let r = plain.finish(0, 0.1);
+        assert!(r.forming.is_none() && r.flown.is_none());
     }
 
     #[test]

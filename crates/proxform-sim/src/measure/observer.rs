@@ -4,6 +4,7 @@
 //! and once after every step with the new states and the decisions that produced them.
 
 use proxform_core::state::State9;
+use proxform_core::Formation;
 use proxform_core::Outcome;
 
 use proxform_scenario::Scenario;
@@ -23,6 +24,23 @@ pub struct StepFrame<'a> {
     pub active: &'a [bool],
     /// Radio messages sent in the step that led here (one per broadcasting UAV).
     pub radio_sent: usize,
+    /// The formation flown, indexed by UAV, when slots were re-assigned in flight (None: the
+    /// scenario's formation in force, [`Scenario::formation_at`]).
+    pub formation: Option<&'a Formation>,
+    /// Slots were re-assigned in the step that led here.
+    pub reassigned: bool,
+}
+
+impl<'a> StepFrame<'a> {
+    /// A frame of the scenario's own formation (no re-assignment).
+    pub fn new(k: u64, t: f64, states: &'a [State9], uavs: &'a [UavStep], active: &'a [bool]) -> Self {
+        Self { k, t, states, uavs, active, radio_sent: 0, formation: None, reassigned: false }
+    }
+
+    /// The formation the UAVs fly now, indexed by UAV.
+    pub fn formation<'x>(&'x self, scenario: &'x Scenario) -> &'x Formation {
+        self.formation.unwrap_or_else(|| scenario.formation_at(self.t))
+    }
 }
 
 /// What one UAV's update produced, besides its next state.
@@ -115,17 +133,22 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     }
 }
 
-/// Formation errors of UAV `i` at `t_s` (in the formation then in force) relative to the
-/// reference `nav_state` (METHOD §7):
+/// Formation errors of UAV `i` in formation `f` (the one in force, indexed by UAV:
+/// [`StepFrame::formation`]) relative to the reference `nav_state` (METHOD §7):
 /// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped). W is the one
 /// the controllers use: for a formation that turns by banking (the controller's
 /// `bank_turn_feedforward`, the fixed wing) the slot's heading and bank in the turn are part of
 /// it, so a wing UAV flying along its own velocity in a coordinated turn is not counted as a
 /// yaw error.
 #[inline]
-pub fn formation_error_to(scenario: &Scenario, t_s: f64, states: &[State9], nav_state: &State9, i: usize) -> [f64; 6] {
+pub fn formation_error_to(
+    scenario: &Scenario,
+    f: &Formation,
+    states: &[State9],
+    nav_state: &State9,
+    i: usize,
+) -> [f64; 6] {
     let nav = scenario.navigator().index();
-    let f = scenario.formation_at(t_s);
     let mut slot = *nav_state;
     f.add_w_with(scenario.controller().bank_turn_feedforward, &f.slots[i], &f.slots[nav], nav_state, &mut slot);
     let e = proxform_core::state::difference(&states[i], &slot);
@@ -133,14 +156,13 @@ pub fn formation_error_to(scenario: &Scenario, t_s: f64, states: &[State9], nav_
 }
 
 /// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
-/// over flying followers of `X_i − W_i,nav` (attitudes averaged as small differences from the
-/// first follower's).
-pub fn navigator_reference(scenario: &Scenario, t_s: f64, states: &[State9], active: &[bool]) -> State9 {
+/// over flying followers of `X_i − W_i,nav` in formation `f` (indexed by UAV; attitudes
+/// averaged as small differences from the first follower's).
+pub fn navigator_reference(scenario: &Scenario, f: &Formation, states: &[State9], active: &[bool]) -> State9 {
     let nav = scenario.navigator().index();
     if active[nav] {
         return states[nav];
     }
-    let f = scenario.formation_at(t_s);
     let mut sum = State9::zeros();
     let mut base: Option<State9> = None;
     let mut n = 0.0;
@@ -176,17 +198,17 @@ mod tests {
         states[4][X] += 1.0;
         states[4][Y] -= 2.0;
         states[4][BETA] += 0.01;
-        let e = formation_error_to(&sc, 0.0, &states, &nav, 4);
+        let e = formation_error_to(&sc, sc.formation(), &states, &nav, 4);
         for (k, want) in [1.0, -2.0, 0.0, 0.0, 0.01, 0.0].into_iter().enumerate() {
             assert!((e[k] - want).abs() < 1e-9, "component {k}: {} vs {want}", e[k]);
         }
-        assert_eq!(formation_error_to(&sc, 0.0, &states, &nav, 2), [0.0; 6]);
+        assert_eq!(formation_error_to(&sc, sc.formation(), &states, &nav, 2), [0.0; 6]);
         // Without the navigator, the reference is the mean of the followers' implied
         // navigator states: UAV5's offset moves it by a fifth.
         let mut active = [true; 6];
-        assert_eq!(navigator_reference(&sc, 0.0, &states, &active), nav);
+        assert_eq!(navigator_reference(&sc, sc.formation(), &states, &active), nav);
         active[0] = false;
-        let r = navigator_reference(&sc, 0.0, &states, &active);
+        let r = navigator_reference(&sc, sc.formation(), &states, &active);
         assert!((r[X] - 0.2).abs() < 1e-9 && (r[Y] + 0.4).abs() < 1e-9 && (r[Z] - 300.0).abs() < 1e-9, "{r:?}");
     }
 }

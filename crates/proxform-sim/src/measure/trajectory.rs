@@ -104,13 +104,16 @@ impl Observer for Trajectory {
         }
         let nav = scenario.navigator().index();
         let allowable = scenario.allowable().as_array();
-        let reference = navigator_reference(scenario, frame.t, frame.states, frame.active);
+        let reference = navigator_reference(scenario, frame.formation(scenario), frame.states, frame.active);
         for (i, s) in frame.states.iter().enumerate().take(self.sample) {
             if !frame.active[i] {
                 continue;
             }
-            let error =
-                if i == nav { [0.0; 6] } else { formation_error_to(scenario, frame.t, frame.states, &reference, i) };
+            let error = if i == nav {
+                [0.0; 6]
+            } else {
+                formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, i)
+            };
             let (outcome, in_envelope) = match frame.uavs[i].outcome {
                 Some(o) => (o.label(), o == crate::measure::observer::StepOutcome::Held),
                 None if i == nav => ("navigator", false),
@@ -157,8 +160,7 @@ mod tests {
         let mut t = Trajectory::for_flight(3_000_000, Some(Box::new(Count(streamed.clone()))));
         assert_eq!((t.stream_every, t.keep_every), (3, 600));
         for k in 0..6000 {
-            let frame =
-                StepFrame { k, t: k as f64 * 0.1, states: &states, uavs: &uavs, active: &active, radio_sent: 0 };
+            let frame = StepFrame::new(k, k as f64 * 0.1, &states, &uavs, &active);
             t.on_step(&sc, &frame);
         }
         assert_eq!(streamed.load(std::sync::atomic::Ordering::Relaxed), 2000 * 6);

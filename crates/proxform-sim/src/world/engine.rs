@@ -19,6 +19,7 @@
 
 use std::collections::VecDeque;
 
+use proxform_core::assignment::{self, Reassignment};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
 use proxform_core::{Agent, Decision};
@@ -100,6 +101,23 @@ struct World<'s> {
     sensor: ProximitySensor,
     start: [f64; 3],
     parallel: bool,
+    /// Slots re-assigned in flight (None: every UAV flies its own).
+    slots: Option<Reassigned>,
+    /// When the next re-assignment is due (s): a UAV was lost.
+    reassign_due: Option<f64>,
+}
+
+/// The slots of a flight after a re-assignment.
+#[derive(Debug)]
+struct Reassigned {
+    /// What the agents were handed.
+    assignment: Reassignment,
+    /// The formation flown now, indexed by UAV (the one in force relabelled), and the stage it
+    /// is of (None: the first formation).
+    flown: std::sync::Arc<proxform_core::Formation>,
+    stage: Option<usize>,
+    /// The first frame flown with it (made at the start of the step before).
+    at_k: u64,
 }
 
 impl<'s> Simulation<'s> {
@@ -161,14 +179,12 @@ impl<'s> Simulation<'s> {
             sent_now: 0,
             active: initially_flying(scenario),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
-            sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma()).with_watch(
-                match (scenario.method(), scenario.controller().avoid_m) {
-                    (proxform_core::Method::Proximity, Some(d)) => proxform_core::controller::AVOID_WATCH * d,
-                    _ => 0.0,
-                },
-            ),
+            sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma())
+                .with_watch(close_watch(scenario)),
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
+            slots: None,
+            reassign_due: None,
         };
         Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] }
     }
@@ -257,16 +273,26 @@ impl<'s> Simulation<'s> {
 
     fn frame(&self) -> StepFrame<'_> {
         let w = &self.world;
-        StepFrame { k: w.k, t: w.t(), states: &w.current, uavs: &self.uavs, active: &w.active, radio_sent: w.sent_now }
+        StepFrame {
+            k: w.k,
+            t: w.t(),
+            states: &w.current,
+            uavs: &self.uavs,
+            active: &w.active,
+            radio_sent: w.sent_now,
+            formation: w.slots.as_ref().map(|s| &*s.flown),
+            reassigned: w.slots.as_ref().is_some_and(|s| s.at_k == w.k),
+        }
     }
 
     /// Advances one update period.
     pub fn step(&mut self) {
-        let w = &mut self.world;
-        w.apply_schedule();
+        self.world.apply_schedule();
         if let Some(out) = &mut self.outside {
-            out.apply_membership(w);
+            out.apply_membership(&mut self.world);
         }
+        self.reassign_slots();
+        let w = &mut self.world;
         if w.options.neighbour_search == NeighbourSearch::Grid {
             w.index_positions();
         }
@@ -294,6 +320,66 @@ impl<'s> Simulation<'s> {
         }
         std::mem::swap(&mut self.world.current, &mut self.next);
         self.world.k += 1;
+    }
+
+    /// Slot re-assignment (`formation.reassign_on_loss`), when due: from the positions of the
+    /// UAVs and of the slots now, every UAV still flying gets its slot by
+    /// [`assignment::after_loss`] and its agent flies it from this step on. The formation
+    /// flown is kept relabelled for the measures, across later changes of formation.
+    fn reassign_slots(&mut self) {
+        // Agents outside the engine do not receive new slots (the command line refuses such a
+        // scenario with them): nothing is re-assigned.
+        if self.outside.is_some() {
+            return;
+        }
+        let w = &mut self.world;
+        let sc = w.scenario;
+        let Some(by) = sc.reassign_on_loss() else { return };
+        let t = w.t();
+        let stage = sc.schedule().stages().iter().rposition(|s| t >= s.at_s - 1e-9);
+        let (formation, tables) = match stage {
+            Some(k) => {
+                let s = &sc.schedule().stages()[k];
+                (&*s.formation, &s.dependencies[..])
+            }
+            None => (&**sc.formation(), sc.dependencies()),
+        };
+        if w.reassign_due.is_some_and(|due| t >= due - 1e-9) {
+            w.reassign_due = None;
+            let n = sc.len();
+            let slot_of: Vec<usize> =
+                w.slots.as_ref().map_or_else(|| (0..n).collect(), |s| s.assignment.slot_of.to_vec());
+            let flown = w.slots.as_ref().map_or(formation, |s| &*s.flown);
+            let reference = crate::measure::observer::navigator_reference(sc, flown, &w.current, &w.active);
+            let nav_slot = &formation.slots[slot_of[sc.navigator().index()]];
+            let at = |s: &State9| [s[state::X], s[state::Y], s[state::Z]];
+            let slot_at: Vec<[f64; 3]> =
+                formation.slots.iter().map(|slot| at(&(reference + formation.w(slot, nav_slot, &reference)))).collect();
+            let uav_at: Vec<[f64; 3]> = w.current.iter().map(at).collect();
+            let new = assignment::after_loss(
+                formation,
+                tables,
+                sc.navigator(),
+                (&slot_of, &w.active),
+                (&uav_at, &slot_at),
+                by,
+            );
+            let r = Reassignment::new(formation, tables, new, w.active.clone());
+            for (i, a) in self.agents.iter_mut().enumerate() {
+                if let (Some(a), true) = (a, w.active[i]) {
+                    // The relabelled tables name UAVs of the formation, other than the owner.
+                    a.reassign(sc.agents(), proxform_core::UavId(i as u32), &r)
+                        .expect("a relabelled formation is valid for every UAV");
+                }
+            }
+            w.slots = Some(Reassigned { flown: r.formation.clone(), assignment: r, stage, at_k: w.k + 1 });
+        } else if let Some(s) = w.slots.as_mut().filter(|s| s.stage != stage) {
+            // A change of formation after the re-assignment: flown relabelled too (the agents
+            // relabel it themselves).
+            let (f, _) = assignment::relabel(formation, tables, &s.assignment.slot_of, &s.assignment.flying);
+            s.flown = std::sync::Arc::new(f);
+            s.stage = stage;
+        }
     }
 
     /// Runs the whole flight, showing every step (and the initial state) to `observer`.
@@ -329,6 +415,25 @@ fn initially_flying(sc: &Scenario) -> Vec<bool> {
     active
 }
 
+/// What the sensor reports for the followers' collision avoidance (none for the baselines).
+pub(crate) fn close_watch(sc: &Scenario) -> proxform_core::controller::CloseWatch {
+    let p = sc.controller();
+    match (sc.method(), p.avoid_m) {
+        (proxform_core::Method::Proximity, Some(d)) => proxform_core::controller::CloseWatch::new(
+            d,
+            sc.agents().controller().braking_mps2(),
+            p.dt_s,
+            p.areas.sensing_range_m,
+        ),
+        _ => proxform_core::controller::CloseWatch::default(),
+    }
+}
+
+/// UAV `i`'s slot in formation `f` (indexed by UAV) around the navigator's state `nav`.
+fn slot_state(sc: &Scenario, f: &proxform_core::Formation, i: usize, nav: &State9) -> State9 {
+    nav + f.w(&f.slots[i], &f.slots[sc.navigator().index()], nav)
+}
+
 /// The engine's per-UAV buffers, as the block phases take them.
 type Buffers<'b> = (&'b mut Vec<Option<Agent>>, &'b mut Vec<State9>, &'b mut Vec<UavStep>);
 
@@ -347,9 +452,9 @@ impl Outside<'_> {
             if !here && w.active[i] {
                 (w.active[i], self.absent[i]) = (false, true);
             } else if here && self.absent[i] {
-                let reference =
-                    crate::measure::observer::navigator_reference(sc, w.k as f64 * sc.dt_s(), &w.current, &w.active);
-                w.current[i] = sc.slot_state(i, &reference);
+                let f = w.flown();
+                let reference = crate::measure::observer::navigator_reference(sc, f, &w.current, &w.active);
+                w.current[i] = slot_state(sc, f, i, &reference);
                 (w.active[i], self.absent[i]) = (true, false);
             }
         }
@@ -378,6 +483,14 @@ impl<'s> World<'s> {
         self.k as f64 * self.scenario.dt_s()
     }
 
+    /// The formation flown now, indexed by UAV.
+    fn flown(&self) -> &proxform_core::Formation {
+        match &self.slots {
+            Some(s) => &s.flown,
+            None => self.scenario.formation_at(self.t()),
+        }
+    }
+
     /// Phase 1, schedule: removals, joins, and the sensor and radio faults in force now.
     fn apply_schedule(&mut self) {
         let sc = self.scenario;
@@ -396,16 +509,25 @@ impl<'s> World<'s> {
         }
         for f in sc.faults() {
             match *f {
-                Fault::Remove { uav, .. } => self.active[uav.index()] = flies[&uav.index()],
+                Fault::Remove { uav, .. } => {
+                    let now = flies[&uav.index()];
+                    if self.active[uav.index()] && !now && sc.reassign_on_loss().is_some() {
+                        // The others learn of the loss when their tracks of it end.
+                        let due = t + sc.controller().track_timeout_s;
+                        self.reassign_due = Some(self.reassign_due.map_or(due, |d| d.min(due)));
+                    }
+                    self.active[uav.index()] = now;
+                }
                 Fault::Join { uav, offset_m, .. } => {
                     let i = uav.index();
                     let now = flies[&i];
                     if now && !self.active[i] {
                         // Appears in its slot relative to the navigator (or to the formation's
                         // estimate of it), shifted by the offset.
+                        let f = self.flown();
                         let reference =
-                            crate::measure::observer::navigator_reference(sc, t, &self.current, &self.active);
-                        let mut s = sc.slot_state(i, &reference);
+                            crate::measure::observer::navigator_reference(sc, f, &self.current, &self.active);
+                        let mut s = slot_state(sc, f, i, &reference);
                         s[state::X] += offset_m.x;
                         s[state::Y] += offset_m.y;
                         s[state::Z] += offset_m.z;

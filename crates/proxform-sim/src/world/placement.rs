@@ -2,10 +2,11 @@
 //! in the scenario's box or disc (each start drawn from the UAV's own placement stream, again
 //! until it is the safety distance from every UAV already placed, the navigator first), or at
 //! the scenario's explicit positions, or on the ground in a take-off row at rest. Velocities
-//! and attitudes are otherwise the in-slot ones: the navigator's. With `assign_slots` the drawn starts go to the followers whose slots make the
-//! total distance from start to slot least (Kuhn-Munkres, from the `pathfinding` crate, on
-//! distances in millimetres).
+//! and attitudes are otherwise the in-slot ones: the navigator's. With `assign_slots` the drawn
+//! starts go to the followers whose slots make the total (or the largest) distance from start
+//! to slot least ([`proxform_core::assignment`]).
 
+use proxform_core::assignment::{self, AssignBy};
 use proxform_core::state::{State9, X, Y, Z};
 use proxform_scenario::placement::Placement;
 use proxform_scenario::Scenario;
@@ -34,7 +35,10 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
             let starts: Vec<[f64; 3]> = (0..m)
                 .map(|k| [centre[0], centre[1] + (k as f64 - (m as f64 - 1.0) / 2.0) * spacing_m, nav_at[2] - below_m])
                 .collect();
-            let order = if *assign { assigned(&starts, &followers, &states) } else { (0..m).collect() };
+            let order = match assign {
+                Some(by) => assigned(&starts, &followers, &states, *by),
+                None => (0..m).collect(),
+            };
             for (f, &i) in followers.iter().enumerate() {
                 let s = &mut states[i];
                 *s = State9::zeros();
@@ -80,8 +84,8 @@ pub fn initial_states(sc: &Scenario, run: RunKey) -> Vec<State9> {
             let followers: Vec<usize> = (0..n).filter(|&i| i != nav).collect();
             let starts = &placed[1..];
             let order = match region {
-                Placement::Box { assign: true, .. } | Placement::Disc { assign: true, .. } => {
-                    assigned(starts, &followers, &states)
+                Placement::Box { assign: Some(by), .. } | Placement::Disc { assign: Some(by), .. } => {
+                    assigned(starts, &followers, &states, *by)
                 }
                 _ => (0..followers.len()).collect(),
             };
@@ -109,15 +113,17 @@ fn slots_centre(slots: &[State9], followers: &[usize]) -> [f64; 3] {
 }
 
 /// For each follower (in `followers` order), the index of the start it takes: the assignment of
-/// starts to the followers' slots (their positions in `slots`) with the least total distance.
-fn assigned(starts: &[[f64; 3]], followers: &[usize], slots: &[State9]) -> Vec<usize> {
-    let cost = pathfinding::matrix::Matrix::from_fn(followers.len(), starts.len(), |(f, s)| {
-        let slot = &slots[followers[f]];
-        let d = (0..3).map(|k| (slot[X + k] - starts[s][k]).powi(2)).sum::<f64>().sqrt();
-        // Millimetres: exact enough, and far from i64's range for flights of up to 1000 km.
-        (d * 1000.0).round() as i64
-    });
-    pathfinding::kuhn_munkres::kuhn_munkres_min(&cost).1
+/// starts to the followers' slots (their positions in `slots`) by `by`.
+fn assigned(starts: &[[f64; 3]], followers: &[usize], slots: &[State9], by: AssignBy) -> Vec<usize> {
+    assignment::assign(
+        followers.len(),
+        starts.len(),
+        |f, s| {
+            let slot = &slots[followers[f]];
+            (0..3).map(|k| (slot[X + k] - starts[s][k]).powi(2)).sum::<f64>().sqrt()
+        },
+        by,
+    )
 }
 
 #[cfg(test)]
@@ -205,6 +211,32 @@ mod tests {
             better += usize::from(total(&a) < total(&b) - 1.0);
         }
         assert!(better > 30, "the assignment shortens the approach in most runs ({better} of 40)");
+    }
+
+    #[test]
+    fn assigned_by_the_largest_distance_the_farthest_start_is_nearer() {
+        let disc = |by: &str| {
+            scattered(|s| {
+                s.initial.placement = Some("disc".into());
+                s.initial.radius_m = Some(1000.0);
+                s.initial.assign_slots = Some(true);
+                s.initial.assign_by = Some(by.into());
+            })
+        };
+        let (total, largest) = (disc("total"), disc("largest"));
+        let slots = total.initial();
+        let far = |s: &[State9]| -> f64 {
+            (1..6)
+                .map(|i| (0..3).map(|k| (s[i][X + k] - slots[i][X + k]).powi(2)).sum::<f64>().sqrt())
+                .fold(0.0, f64::max)
+        };
+        let mut nearer = 0;
+        for r in 0..40 {
+            let (a, b) = (initial_states(&largest, RunKey::new(5, r)), initial_states(&total, RunKey::new(5, r)));
+            assert!(far(&a) <= far(&b) + 1e-2, "run {r}: {} > {}", far(&a), far(&b));
+            nearer += usize::from(far(&a) < far(&b) - 1.0);
+        }
+        assert!(nearer >= 4, "the largest distance is shorter in some runs ({nearer} of 40)");
     }
 
     #[test]

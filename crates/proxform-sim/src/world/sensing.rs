@@ -7,6 +7,7 @@
 //! all-pairs reference search.
 
 use proxform_core::azimuth::AreaClassifier;
+use proxform_core::controller::CloseWatch;
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
 use proxform_core::{DependencySet, Observation, ObservationSource, UavId};
@@ -69,22 +70,21 @@ pub struct ProximitySensor {
     classifier: AreaClassifier,
     range_m: f64,
     sigma: State9,
-    /// Every UAV closer than this (m) is also reported, as a close-range detection for
-    /// collision avoidance (0: none).
-    watch_m: f64,
+    /// Which UAVs are also reported as close-range detections for collision avoidance.
+    watch: CloseWatch,
 }
 
 impl ProximitySensor {
     /// A sensor with `m` areas, range `range_m` and noise σ per parameter.
     pub fn new(m: usize, range_m: f64, sigma: State9) -> Self {
-        Self { classifier: AreaClassifier::new(m), range_m, sigma, watch_m: 0.0 }
+        Self { classifier: AreaClassifier::new(m), range_m, sigma, watch: CloseWatch::default() }
     }
 
-    /// The same sensor also reporting every UAV closer than `watch_m` (at most the range) as a
-    /// close-range detection ([`ObservationSource::Close`]): collision avoidance must see a
-    /// UAV hidden behind another in its azimuth area.
-    pub fn with_watch(mut self, watch_m: f64) -> Self {
-        self.watch_m = watch_m.min(self.range_m);
+    /// The same sensor also reporting the UAVs `watch` sees (within its range) as close-range
+    /// detections ([`ObservationSource::Close`]): collision avoidance must see a UAV hidden
+    /// behind another in its azimuth area, and one closing fast from afar.
+    pub fn with_watch(mut self, watch: CloseWatch) -> Self {
+        self.watch = watch;
         self
     }
 
@@ -107,12 +107,14 @@ impl ProximitySensor {
         scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
         scratch.refs.clear();
         scratch.close.clear();
-        let watch2 = self.watch_m * self.watch_m;
+        let watch = self.watch;
         let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
             if j as usize == i {
                 return;
             }
-            if d2 < watch2 {
+            let o = &states[j as usize];
+            let w = [o[state::VX] - me[state::VX], o[state::VY] - me[state::VY], o[state::VZ] - me[state::VZ]];
+            if watch.sees(d2, [q[0] - me[0], q[1] - me[1], q[2] - me[2]], w) {
                 scratch.close.push(j);
             }
             let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
@@ -334,7 +336,7 @@ mod tests {
         messages: &[Message],
         fuse: bool,
     ) -> Vec<Observation> {
-        perceive_watching(states, deps, dropout, messages, fuse, 0.0)
+        perceive_watching(states, deps, dropout, messages, fuse, CloseWatch::default())
     }
 
     fn perceive_watching(
@@ -343,9 +345,9 @@ mod tests {
         dropout: f64,
         messages: &[Message],
         fuse: bool,
-        watch_m: f64,
+        watch: CloseWatch,
     ) -> Vec<Observation> {
-        let sensor = ProximitySensor::new(8, 250.0, State9::zeros()).with_watch(watch_m);
+        let sensor = ProximitySensor::new(8, 250.0, State9::zeros()).with_watch(watch);
         let mut grid = NeighbourGrid::new();
         grid.rebuild(states.iter().map(|s| [s[0], s[1], s[2]]), 250.0);
         let scene = Scene { states, grid: &grid, search: NeighbourSearch::Grid, dependencies: deps };
@@ -389,13 +391,42 @@ mod tests {
         states.push(close);
         states.push(nearer);
         let deps = [deps, vec![DependencySet::default(); 2]].concat();
-        let plain = perceive_watching(&states, &deps, 0.0, &[], false, 0.0);
+        let plain = perceive_watching(&states, &deps, 0.0, &[], false, CloseWatch::default());
         assert!(!plain.iter().any(|o| o.id.0 == 5), "hidden behind UAV 6 in its area");
-        let watching = perceive_watching(&states, &deps, 0.0, &[], false, 50.0);
+        // Avoidance distance 25 m: every UAV within 50 m is reported.
+        let watch = CloseWatch::new(25.0, 2.5, 0.1, 250.0);
+        let watching = perceive_watching(&states, &deps, 0.0, &[], false, watch);
         // The same reports first (the same draws), then the close one.
         assert_eq!(&watching[..plain.len()], &plain[..]);
         let extra: Vec<_> = watching[plain.len()..].iter().map(|o| (o.id.0, o.source)).collect();
         assert_eq!(extra, vec![(5, ObservationSource::Close)]);
+    }
+
+    #[test]
+    fn a_watching_sensor_reports_a_hidden_uav_closing_fast_from_afar() {
+        // UAV 5, 200 m ahead behind UAV 6 in the same area: reported once it closes fast
+        // enough for the avoidance to need it, not while it keeps its distance or flies away.
+        let (mut states, deps) = setup();
+        let mut far = states[1];
+        far[0] = 200.0;
+        far[1] = 1.0;
+        let mut nearer = states[1];
+        nearer[0] = 20.0;
+        nearer[1] = 0.1;
+        states.push(far);
+        states.push(nearer);
+        let deps = [deps, vec![DependencySet::default(); 2]].concat();
+        let watch = CloseWatch::new(25.0, 2.5, 0.1, 250.0);
+        let closing = |speed: f64| {
+            let mut s = states.clone();
+            s[5][state::VX] -= speed;
+            perceive_watching(&s, &deps, 0.0, &[], false, watch).iter().any(|o| o.id.0 == 5)
+        };
+        // Doubled closing speed c: reported when c²/(2·2.5) exceeds the room 200 − 25 − c·0.1.
+        assert!(closing(40.0), "80²/5 = 1280 m > 167 m");
+        assert!(closing(20.0), "40²/5 = 320 m > 171 m");
+        assert!(!closing(10.0), "20²/5 = 80 m < 173 m");
+        assert!(!closing(2.0) && !closing(0.0) && !closing(-20.0), "slow, steady or opening");
     }
 
     #[test]
