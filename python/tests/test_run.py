@@ -140,3 +140,26 @@ def test_progress_true_without_tqdm_writes_a_line(capsys, monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_tqdm)
     proxform.run("paper", runs=3, threads=1, trajectories=False, progress=True)
     assert "3/3 runs" in capsys.readouterr().err
+
+
+def test_the_columns_of_forming_and_robust_checks_equal_the_cli_file(cli, tmp_path):
+    # The aggregate forms from scattered starts with the robust fusion on: runs.csv gains the
+    # forming, flown and isolation columns, and Python's table has the same.
+    out = tmp_path / "cli"
+    subprocess.run(
+        [cli, "run", "--scenario", "aggregate", "--runs", "2", "--out", out, "--no-figures", "--no-trajectories", "-q"],
+        check=True, timeout=600, stdout=subprocess.DEVNULL,
+    )
+    r = proxform.run("aggregate", runs=2, trajectories=False)
+    with open(out / "runs.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert set(rows[0]) == set(r.runs.columns)
+    for name in ["time_to_form_s", "transient_error_ratio", "isolating_s_per_uav"]:
+        np.testing.assert_allclose(r.runs[name], [float(row[name]) for row in rows], atol=1e-3, rtol=0, err_msg=name)
+    # The whole flight at ~70 m/s: metres to the CLI's one decimal.
+    np.testing.assert_allclose(
+        r.runs["path_length_m_per_uav"], [float(row["path_length_m_per_uav"]) for row in rows], atol=0.06, rtol=0
+    )
+    assert all(t <= 120.0 for t in r.runs["time_to_form_s"])
+    # Every follower scattered: none was judged from the start.
+    assert all(row["settled_error_ratio"] == "" for row in rows) and np.isnan(r.runs["settled_error_ratio"]).all()

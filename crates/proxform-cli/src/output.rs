@@ -54,7 +54,7 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
         header.extend(["time_to_form_s", "transient_error_ratio", "settled_error_ratio"].map(String::from));
     }
     if transitions {
-        header.extend(["transition_s", "transition_error_ratio"].map(String::from));
+        header.extend(["transition_s", "transition_error_ratio", "transition_closest_m"].map(String::from));
     }
     if flown {
         header.extend(["path_length_m_per_uav", "delta_v_mps_per_uav", "work_j_per_kg_per_uav"].map(String::from));
@@ -99,8 +99,12 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
         if transitions {
             // Slots re-assigned in flight change the formation in some runs only.
             rec.extend(match r.transitions {
-                Some(c) => [format!("{:.3}", c.transition_s), format!("{:.4}", c.transient_error_ratio)],
-                None => [String::new(), String::new()],
+                Some(c) => [
+                    format!("{:.3}", c.transition_s),
+                    format!("{:.4}", c.transient_error_ratio),
+                    format!("{:.3}", c.closest_m),
+                ],
+                None => [String::new(), String::new(), String::new()],
             });
         }
         if let (true, Some(f)) = (flown, r.flown) {

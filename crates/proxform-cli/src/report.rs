@@ -140,12 +140,13 @@ pub fn print(
     if let Some(c) = &s.transitions {
         writeln!(
             out,
-            "formation changes        completed (every follower within the allowable errors of the new formation until the next change) in {} of runs; slowest change per run {} s (median), {} s (p99), {} s (max); largest error during the changes {}× the allowable",
+            "formation changes        completed (every follower within the allowable errors of the new formation until the next change) in {} of runs; slowest change per run {} s (median), {} s (p99), {} s (max); largest error during the changes {}× the allowable; closest pair during them {} m",
             fraction(c.completed_fraction),
             number(c.transition_s_median),
             number(c.transition_s_p99),
             number(c.transition_s_max),
-            number(c.transient_error_ratio_max)
+            number(c.transient_error_ratio_max),
+            number(c.closest_m)
         )?;
     }
     if let Some(i) = &s.isolation {

@@ -29,6 +29,9 @@ fn a_v_closes_into_a_column_and_opens_again_without_a_close_pair() {
     assert!(c.transition_s_max < 60.0, "{c:?}");
     assert_eq!(r.unsafe_runs, 0, "closest {}", r.min_separation_m);
     assert_eq!(r.pass_fraction, 1.0);
+    // The closest pair during the changes: no closer than over the whole flight, and as far as
+    // the slots' spacing allows (the V's pairs are 100 m apart).
+    assert!(c.closest_m >= r.min_separation_m && c.closest_m >= 50.0 && c.closest_m < 100.0, "{c:?}");
 }
 
 #[test]
@@ -137,4 +140,39 @@ fn a_lost_uav_at_the_edge_moves_nobody() {
     assert_eq!(c.transition_s_max, 0.0, "{c:?}");
     assert!(c.transient_error_ratio_max <= 1.0, "{c:?}");
     assert_eq!(r.pass_fraction, 1.0);
+}
+
+#[test]
+fn after_a_loss_a_later_formation_leaves_its_own_edge_empty() {
+    // The V of nine loses UAV2 at 60 s, then becomes a column of 100 m spacing at 100 s: the
+    // column's last slot (800 m behind the navigator) is the one left empty, not the V's
+    // (which in the column lies 700 m behind, between two UAVs).
+    let sc = file("reassign-v-loss.toml", |s| {
+        let column = proxform_scenario::spec::ShapeSpec {
+            kind: Some("column".into()),
+            uavs: Some(9),
+            spacing_m: Some(100.0),
+            level_step_m: Some(-5.0),
+            ..Default::default()
+        };
+        s.formation.change = vec![proxform_scenario::spec::FormationChangeSpec {
+            at_s: Some(100.0),
+            shape: Some(column),
+            dependencies: s.formation.dependencies.clone(),
+            ..Default::default()
+        }];
+    });
+    let mut sim = proxform_sim::Simulation::new(&sc, RunOptions::default(), 3, 0);
+    while sim.k() < sc.steps() {
+        sim.step();
+    }
+    let s = sim.states();
+    let mut behind: Vec<f64> = (1..9).filter(|&i| i != 1).map(|i| s[0][0] - s[i][0]).collect();
+    behind.sort_by(f64::total_cmp);
+    for (k, b) in behind.iter().enumerate() {
+        assert!((b - 100.0 * (k + 1) as f64).abs() < 1.0, "the column's places 100 to 700 m: {behind:?}");
+    }
+    let r = batch(&sc, 4);
+    let c = r.transitions.expect("a loss and a change");
+    assert_eq!((c.completed_fraction, r.pass_fraction), (1.0, 1.0), "{c:?}");
 }

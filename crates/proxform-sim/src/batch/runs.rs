@@ -130,6 +130,8 @@ pub struct TransitionSummary {
     pub transition_s_max: f64,
     /// Largest error over its allowable error during the changes, over all runs.
     pub transient_error_ratio_max: f64,
+    /// Smallest distance between two UAVs during the changes, over all runs (m).
+    pub closest_m: f64,
 }
 
 /// How the formations of a batch formed (scattered starts, UAVs joining).
@@ -521,6 +523,7 @@ fn transition_summary(runs: &[RunSummary]) -> Option<TransitionSummary> {
         transition_s_p99: p99,
         transition_s_max: t.last().copied().unwrap_or(0.0),
         transient_error_ratio_max: c.iter().map(|m| m.transient_error_ratio).fold(0.0, f64::max),
+        closest_m: c.iter().map(|m| m.closest_m).fold(f64::INFINITY, f64::min),
     })
 }
 

@@ -118,6 +118,8 @@ pub struct TransitionMetrics {
     pub transient_error_ratio: f64,
     /// Largest error over its allowable error before the first change.
     pub before_error_ratio: f64,
+    /// Smallest distance between two flying UAVs during the changes (m; ∞ when none flew).
+    pub closest_m: f64,
 }
 
 /// One change of formation, as measured: its window (until the next change or the end) and
@@ -234,6 +236,8 @@ pub struct RunMetrics {
     form_within_s: Option<f64>,
     /// Changes of formation in flight, and the largest error ratio before the first.
     transitions: Vec<Transition>,
+    /// Separation during the changes (made when the formation may change).
+    change_separation: Option<super::separation::Separation>,
     before_ratio: f64,
     last_out_any: f64,
     ratio_so_far: f64,
@@ -309,6 +313,8 @@ impl RunMetrics {
                     })
                     .collect()
             },
+            change_separation: (!scenario.schedule().is_empty() || scenario.reassign_on_loss().is_some())
+                .then(|| super::separation::Separation::new(scenario.safety_distance_m())),
             before_ratio: 0.0,
             last_out_any: f64::NEG_INFINITY,
             ratio_so_far: 0.0,
@@ -419,6 +425,7 @@ impl RunMetrics {
                 .fold(0.0, f64::max),
             transient_error_ratio: self.transitions.iter().map(|c| c.ratio).fold(0.0, f64::max),
             before_error_ratio: self.before_ratio,
+            closest_m: self.change_separation.as_ref().map_or(f64::INFINITY, |s| s.min_m()),
         });
         let pass = self.total.follower_steps > 0
             && match (self.form_within_s, &transitions) {
@@ -716,9 +723,12 @@ impl Observer for RunMetrics {
         if self.flown {
             self.fly(frame, speeds);
         }
-        if frame.reassigned {
-            // Slots re-assigned: a change of formation from now until the next scheduled one.
-            let t = frame.t;
+        // Slots re-assigned: a change of formation from now until the next scheduled one (one
+        // made with a scheduled change, in the step that began it, is that change).
+        let t = frame.t;
+        let (dt, transitions) = (self.dt, &self.transitions);
+        let begun = || transitions.iter().any(|c| c.at_s >= t - dt - 1e-9 && c.at_s <= t + 1e-9);
+        if frame.reassigned && !begun() {
             let until = scenario.schedule().stages().iter().map(|s| s.at_s).find(|&a| a > t + 1e-9);
             for c in self.transitions.iter_mut().filter(|c| c.at_s <= t + 1e-9 && c.until_s > t) {
                 c.until_s = t;
@@ -731,6 +741,11 @@ impl Observer for RunMetrics {
                 ratio: 0.0,
             };
             self.transitions.insert(at, change);
+        }
+        if let Some(sep) = self.change_separation.as_mut() {
+            if self.transitions.iter().any(|c| frame.t >= c.at_s - 1e-9 && frame.t < c.until_s - 1e-9) {
+                sep.observe(frame.states, frame.active);
+            }
         }
         if self.forming {
             self.ratio_so_far = self.ratio_so_far.max(step_ratio);

@@ -322,10 +322,11 @@ impl<'s> Simulation<'s> {
         self.world.k += 1;
     }
 
-    /// Slot re-assignment (`formation.reassign_on_loss`), when due: from the positions of the
-    /// UAVs and of the slots now, every UAV still flying gets its slot by
-    /// [`assignment::after_loss`] and its agent flies it from this step on. The formation
-    /// flown is kept relabelled for the measures, across later changes of formation.
+    /// Slot re-assignment (`formation.reassign_on_loss`), when a loss becomes known and at
+    /// every change of formation after one: from the positions of the UAVs and of the slots
+    /// now, every UAV still flying gets its slot by [`assignment::after_loss`] and its agent
+    /// flies it from this step on (so a later formation's vacated slot is at its own edge).
+    /// The formation flown is kept relabelled for the measures.
     fn reassign_slots(&mut self) {
         // Agents outside the engine do not receive new slots (the command line refuses such a
         // scenario with them): nothing is re-assigned.
@@ -344,8 +345,13 @@ impl<'s> Simulation<'s> {
             }
             None => (&**sc.formation(), sc.dependencies()),
         };
-        if w.reassign_due.is_some_and(|due| t >= due - 1e-9) {
-            w.reassign_due = None;
+        // A loss made known now, or a change of formation after a re-assignment: the vacated
+        // slots are chosen again at the new formation's edge.
+        let due = w.reassign_due.is_some_and(|due| t >= due - 1e-9);
+        if due || w.slots.as_ref().is_some_and(|s| s.stage != stage) {
+            if due {
+                w.reassign_due = None;
+            }
             let n = sc.len();
             let slot_of: Vec<usize> =
                 w.slots.as_ref().map_or_else(|| (0..n).collect(), |s| s.assignment.slot_of.to_vec());
@@ -373,12 +379,6 @@ impl<'s> Simulation<'s> {
                 }
             }
             w.slots = Some(Reassigned { flown: r.formation.clone(), assignment: r, stage, at_k: w.k + 1 });
-        } else if let Some(s) = w.slots.as_mut().filter(|s| s.stage != stage) {
-            // A change of formation after the re-assignment: flown relabelled too (the agents
-            // relabel it themselves).
-            let (f, _) = assignment::relabel(formation, tables, &s.assignment.slot_of, &s.assignment.flying);
-            s.flown = std::sync::Arc::new(f);
-            s.stage = stage;
         }
     }
 
