@@ -117,7 +117,7 @@ pub fn print(
         let formed = result.runs.iter().filter(|r| r.forming.is_some_and(|f| f.time_to_form_s.is_finite())).count();
         writeln!(
             out,
-            "forming                  formed (every follower within the allowable errors to the end) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable{}",
+            "forming                  formed (every follower within the allowable errors to the end, or to the first change of formation) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable{}",
             fraction(f.formed_fraction),
             s.runs,
             number(f.time_to_form_s_median),

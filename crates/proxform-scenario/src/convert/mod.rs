@@ -229,6 +229,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &spec.formation));
+        if fixed_wing && !placement.in_slots() {
+            // Forming is built and measured for the kinematic vehicle: a fixed wing cannot
+            // stop or hover, and turns only by banking (METHOD §8).
+            warnings.push(err(
+                "initial.placement",
+                "the fixed wing does not form from scattered starts by this method (measured: none of 50 runs \
+                 formed from an 800 m disc in 80 s); it needs a path to its slot that the method does not plan",
+            ));
+        }
         let agents = AgentSetup::new(method, navigator, setup, formation, dependencies)
             .map_err(|e| err("controller.method", e.to_string()))?
             .with_schedule(schedule)

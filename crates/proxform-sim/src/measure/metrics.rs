@@ -402,11 +402,11 @@ impl RunMetrics {
     pub fn finish(self, run: u64, duration_s: f64) -> RunSummary {
         let steps = self.samples.max(1) as f64;
         let rms = |a: &Acc, n: f64| a.sum_sq.map(|v| (v / n).sqrt());
-        let time_to_form_s = if self.last_out_any >= self.t_last - 1e-9 {
-            f64::INFINITY
-        } else {
-            (self.last_out_any + self.dt).max(0.0)
-        };
+        // Formed when every follower was within its errors from some time to the last frame
+        // before the first change of formation (or the end).
+        let form_end = self.transitions.first().map_or(self.t_last, |c| (c.at_s - self.dt).min(self.t_last));
+        let time_to_form_s =
+            if self.last_out_any >= form_end - 1e-9 { f64::INFINITY } else { (self.last_out_any + self.dt).max(0.0) };
         // A run in which no follower flew has nothing to judge: it does not pass. A formation
         // that did not start in its slots passes when it formed in time and stayed formed.
         let transitions = (!self.transitions.is_empty()).then(|| TransitionMetrics {
@@ -429,12 +429,19 @@ impl RunMetrics {
         });
         let pass = self.total.follower_steps > 0
             && match (self.form_within_s, &transitions) {
-                (Some(limit), _) => time_to_form_s <= limit + 1e-9,
+                // Formed in time, then every change completed.
+                (Some(limit), t) => {
+                    time_to_form_s <= limit + 1e-9 && t.as_ref().is_none_or(|t| t.transition_s.is_finite())
+                }
+                // UAVs joining: the others kept their errors and the joiners formed (before the
+                // first change, then every change completed).
+                (None, None) if self.forming => self.settled_ratio <= 1.0 && time_to_form_s.is_finite(),
+                (None, Some(t)) if self.forming => {
+                    self.settled_ratio <= 1.0 && time_to_form_s.is_finite() && t.transition_s.is_finite()
+                }
                 // A formation that changes passes when it kept its errors before the first
                 // change and completed every change before the next.
                 (None, Some(t)) => t.before_error_ratio <= 1.0 && t.transition_s.is_finite(),
-                // UAVs joining: the others kept their errors and the joiners formed.
-                (None, None) if self.forming => self.settled_ratio <= 1.0 && time_to_form_s.is_finite(),
                 (None, None) => self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a),
             };
         let uav_s = self.uav_steps.max(1) as f64 * self.dt;
@@ -690,7 +697,7 @@ impl Observer for RunMetrics {
         });
         let mut active = 0u64;
         let mut heading = [0.0f64; 3];
-        let (mut step_ratio, mut speeds) = (0.0f64, 0.0f64);
+        let (mut step_ratio, mut speeds, mut settled_ratio) = (0.0f64, 0.0f64, 0.0f64);
         for p in parts {
             for k in 0..6 {
                 self.total.max_abs[k] = self.total.max_abs[k].max(p.acc.max_abs[k]);
@@ -709,7 +716,7 @@ impl Observer for RunMetrics {
                 self.healthy_max[k] = self.healthy_max[k].max(p.healthy_max[k]);
             }
             step_ratio = step_ratio.max(p.max_ratio);
-            self.settled_ratio = self.settled_ratio.max(p.settled_ratio);
+            settled_ratio = settled_ratio.max(p.settled_ratio);
             speeds += p.speed_sum;
             self.model_sq += p.model_sq;
             self.model_n += p.model_n;
@@ -747,7 +754,13 @@ impl Observer for RunMetrics {
                 sep.observe(frame.states, frame.active);
             }
         }
-        if self.forming {
+        // Forming is judged up to the first change of formation (each change is judged on its
+        // own), and so are the followers that started in their slots.
+        let before_change = self.transitions.first().is_none_or(|c| frame.t < c.at_s - 1e-9);
+        if before_change {
+            self.settled_ratio = self.settled_ratio.max(settled_ratio);
+        }
+        if self.forming && before_change {
             self.ratio_so_far = self.ratio_so_far.max(step_ratio);
             if step_ratio > 1.0 {
                 self.last_out_any = frame.t;
@@ -911,6 +924,47 @@ mod tests {
         plain.on_step(&paper(), &frame(0, &good, &uavs, &active));
         let r = plain.finish(0, 0.1);
         assert!(r.forming.is_none() && r.flown.is_none());
+    }
+
+    #[test]
+    fn forming_is_judged_up_to_the_first_change_and_each_change_after_it() {
+        // Scattered starts, then at 2 s a change to the same slots: UAV3 3 m off until 0.9 s
+        // (formed at 1 s); in `late`, 3 m off again from 2.5 s to the end, so that the change
+        // is never completed (but the formation had formed before it).
+        let sc = Scenario::try_from(proxform_scenario::builtin::paper_spec().with(|s| {
+            s.initial.placement = Some("disc".into());
+            s.initial.radius_m = Some(1000.0);
+            s.formation.change = vec![proxform_scenario::spec::FormationChangeSpec {
+                at_s: Some(2.0),
+                slot: s.formation.slot.clone(),
+                ..Default::default()
+            }];
+        }))
+        .expect("valid");
+        let good = in_slots(&sc);
+        let uavs = vec![UavStep::default(); 6];
+        let active = [true; 6];
+        let fly = |late: bool| {
+            let mut m = RunMetrics::new(&sc);
+            for k in 0..40u64 {
+                let t = k as f64 * 0.1;
+                let mut states = good.clone();
+                if t < 0.95 || (late && t > 2.45) {
+                    states[2][Y] += 3.0;
+                }
+                m.on_step(&sc, &frame(k, &states, &uavs, &active));
+            }
+            m.finish(0, 4.0)
+        };
+        let (ok, late) = (fly(false), fly(true));
+        for r in [&ok, &late] {
+            let f = r.forming.expect("scattered");
+            assert!((f.time_to_form_s - 1.0).abs() < 1e-9, "formed before the change: {f:?}");
+        }
+        assert_eq!(ok.transitions.expect("a change").transition_s, 0.0);
+        assert!(ok.pass);
+        assert!(late.transitions.expect("a change").transition_s.is_infinite());
+        assert!(!late.pass, "a change never completed fails the run");
     }
 
     #[test]
