@@ -157,3 +157,16 @@ fn a_follower_ahead_of_the_navigator_passes_it_to_reach_a_slot_behind() {
     }
     assert!(reached.is_some_and(|t| t < 30.0), "in its slot at {reached:?} s");
 }
+
+#[test]
+fn scattered_followers_home_on_the_navigators_broadcast_by_default() {
+    // The aggregate without its `[radio] beacons` line broadcasts the navigator all the same;
+    // `beacons = []` says none, and then the followers out of everyone's sight never form.
+    let default = aggregate(|s| s.radio.beacons = None);
+    assert_eq!(default.beacons(), &[proxform_core::UavId(0)]);
+    let none = aggregate(|s| s.radio.beacons = Some(Vec::new()));
+    assert!(none.beacons().is_empty());
+    let s = batch(&none, 4);
+    assert_eq!(s.forming.expect("scattered").formed_fraction, 0.0);
+    assert_eq!(batch(&default, 4).pass_fraction, 1.0);
+}

@@ -156,6 +156,13 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if navigator_by_radio && !radio.broadcast_all && !beacons.contains(&navigator) {
             beacons.push(navigator);
         }
+        // Followers scattered out of sight of their references head for the formation on the
+        // navigator's broadcast (METHOD §8, homing): it broadcasts unless the file names the
+        // beacons (`beacons = []` for none).
+        let homing = !placement.in_slots() && spec.radio.beacons.is_none();
+        if homing && !radio.broadcast_all && !beacons.contains(&navigator) {
+            beacons.push(navigator);
+        }
         // The radio carries what the method needs: the navigator's broadcasts or everybody's.
         match method.radio_need() {
             RadioNeed::None => {}
