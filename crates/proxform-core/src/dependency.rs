@@ -21,6 +21,12 @@ impl DependencySet {
     /// positive; references must be other UAVs of the formation, each named once. Entries are
     /// kept in id order.
     pub fn new(owner: UavId, size: usize, refs: Vec<(UavId, f64)>) -> Result<Self, ConfigError> {
+        Self::from_slice(owner, size, &refs)
+    }
+
+    /// [`Self::new`] from a slice (a caller's scratch buffer): the table is the one
+    /// allocation it makes.
+    pub fn from_slice(owner: UavId, size: usize, refs: &[(UavId, f64)]) -> Result<Self, ConfigError> {
         for (k, &(id, degree)) in refs.iter().enumerate() {
             if id == owner {
                 return Err(ConfigError::BadReference {
@@ -44,9 +50,11 @@ impl DependencySet {
             }
         }
         // Canonical order (by id), so that equal tables give equal sums bit for bit.
-        let mut refs = refs;
-        refs.sort_by_key(|r| r.0);
-        Ok(Self { refs: refs.into() })
+        let mut refs: Arc<[(UavId, f64)]> = Arc::from(refs);
+        if let Some(r) = Arc::get_mut(&mut refs) {
+            r.sort_by_key(|r| r.0);
+        }
+        Ok(Self { refs })
     }
 
     /// The dependency degree of `id`, if it is a main reference.

@@ -25,10 +25,16 @@ pub fn derive(
     let nav = slots.get(navigator.index()).ok_or(ConfigError::UnknownUav { id: navigator, size: n })?.offset_m;
     let to_nav: Vec<f64> = slots.iter().map(|s| (s.offset_m - nav).norm()).collect();
     let at = |i: usize| [slots[i].offset_m.x, slots[i].offset_m.y, slots[i].offset_m.z];
-    // Each UAV's candidates: the slots closer to the navigator within the search radius. The
-    // radius grows by doubling up to `max_distance_m`, and only for the UAVs still short of k
-    // candidates, so a generous maximum does not make every search cover the whole formation.
-    let mut found: Vec<Vec<(f64, u32)>> = vec![Vec::new(); n];
+    // Each UAV's k nearest candidates (the slots closer to the navigator), kept in one flat
+    // array of k per UAV, sorted, with how many each has: the search radius grows by doubling
+    // up to `max_distance_m`, and only for the UAVs still short of k candidates, so a generous
+    // maximum does not make every search cover the whole formation. One scratch list serves
+    // every search (a list per UAV left the heap fragmented for a swarm of millions).
+    // No UAV has more references than the others.
+    let k = k.min(n);
+    let mut best: Vec<(f64, u32)> = vec![(f64::INFINITY, u32::MAX); n * k];
+    let mut count: Vec<u32> = vec![0; n];
+    let mut scratch: Vec<(f64, u32)> = Vec::new();
     let mut pending: Vec<usize> = (0..n).filter(|&i| i != navigator.index()).collect();
     let spread = to_nav.iter().copied().fold(0.0, f64::max);
     let mut radius = max_distance_m.min((spread / (n as f64).sqrt().max(1.0)).max(1.0) * 4.0);
@@ -37,35 +43,38 @@ pub fn derive(
         let last = radius >= max_distance_m;
         grid.rebuild((0..n).map(at), radius);
         pending.retain(|&i| {
-            let cands = &mut found[i];
-            cands.clear();
+            scratch.clear();
             grid.for_each_within(at(i), radius, |j, _, d2| {
                 if to_nav[j as usize] < to_nav[i] - 1e-9 {
-                    cands.push((d2.sqrt(), j));
+                    scratch.push((d2.sqrt(), j));
                 }
             });
-            cands.len() < k && !last
+            let enough = scratch.len() >= k;
+            scratch.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            scratch.truncate(k);
+            best[i * k..i * k + scratch.len()].copy_from_slice(&scratch);
+            count[i] = scratch.len() as u32;
+            !enough && !last
         });
         radius = (2.0 * radius).min(max_distance_m);
     }
     let mut out = Vec::with_capacity(n);
-    for (i, cands) in found.iter_mut().enumerate() {
+    let mut refs: Vec<(UavId, f64)> = Vec::with_capacity(k + 1);
+    for i in 0..n {
         if i == navigator.index() {
             out.push(DependencySet::default());
             continue;
         }
-        cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        cands.truncate(k);
+        let cands = &best[i * k..i * k + count[i] as usize];
         let nav_in_cands = cands.iter().any(|c| c.1 == navigator.0);
         let local_share = if navigator_degree > 0.0 && !nav_in_cands { 1.0 - navigator_degree } else { 1.0 };
         let total: f64 = cands.iter().map(|(d, _)| 1.0 / d.max(1e-9)).sum();
-        let mut refs: Vec<(UavId, f64)> =
-            cands.iter().map(|&(d, j)| (UavId(j), local_share * (1.0 / d.max(1e-9)) / total)).collect();
+        refs.clear();
+        refs.extend(cands.iter().map(|&(d, j)| (UavId(j), local_share * (1.0 / d.max(1e-9)) / total)));
         if navigator_degree > 0.0 && !nav_in_cands {
             refs.push((navigator, if refs.is_empty() { 1.0 } else { navigator_degree }));
         }
-        out.push(DependencySet::new(UavId(i as u32), n, refs)?);
-        *cands = Vec::new();
+        out.push(DependencySet::from_slice(UavId(i as u32), n, &refs)?);
     }
     Ok(out)
 }
