@@ -353,18 +353,33 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
     Ok(written)
 }
 
-/// Equal scales on a chart of `SIZE`: the narrower of the two ranges widened around its
-/// centre.
-fn equal_scales(x: (f64, f64), y: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+/// A chart seen from above on `root` of `SIZE`, captioned (text, font size), over the ranges
+/// of x and y with equal scales (the narrower range widened around its centre), its axes
+/// described.
+fn plan_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    (caption, font): (&str, u32),
+    (x, y): ((f64, f64), (f64, f64)),
+    (x_desc, y_desc): (&str, &str),
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>> {
     let aspect = f64::from(SIZE.0 - 120) / f64::from(SIZE.1 - 100);
     let (wx, wy) = (x.1 - x.0, y.1 - y.0);
-    if wx / wy > aspect {
+    let (x, y) = if wx / wy > aspect {
         let c = 0.5 * (y.0 + y.1);
         (x, (c - 0.5 * wx / aspect, c + 0.5 * wx / aspect))
     } else {
         let c = 0.5 * (x.0 + x.1);
         ((c - 0.5 * wy * aspect, c + 0.5 * wy * aspect), y)
-    }
+    };
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, ("sans-serif", font))
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(plot_err)?;
+    chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw().map_err(plot_err)?;
+    Ok(chart)
 }
 
 /// The followers' tracks relative to the navigator, seen from above (x forward, y left of
@@ -393,15 +408,12 @@ fn approach_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series
         })
         .collect();
     let all = || relative.iter().flatten().chain(std::iter::once(&(0.0, 0.0, 0.0)));
-    let (x, y) = equal_scales(range(all().map(|p| p.1)), range(all().map(|p| p.2)));
-    let mut chart = ChartBuilder::on(root)
-        .caption("Approach relative to the navigator (m): ○ start, ■ end, dots every 10 s", ("sans-serif", 22))
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(x.0..x.1, y.0..y.1)
-        .map_err(plot_err)?;
-    chart.configure_mesh().x_desc("x − x_navigator (m)").y_desc("y − y_navigator (m)").draw().map_err(plot_err)?;
+    let mut chart = plan_chart(
+        root,
+        ("Approach relative to the navigator (m): ○ start, ■ end, dots every 10 s", 22),
+        (range(all().map(|p| p.1)), range(all().map(|p| p.2))),
+        ("x − x_navigator (m)", "y − y_navigator (m)"),
+    )?;
     let every = ((10.0 / s.dt).round() as usize).max(1);
     chart.draw_series(std::iter::once(TriangleMarker::new((0.0, 0.0), 7, BLACK.filled()))).map_err(plot_err)?;
     for (u, pts) in relative.iter().enumerate() {
@@ -432,15 +444,12 @@ fn approach_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series
 fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) -> Result<()> {
     root.fill(&WHITE).map_err(plot_err)?;
     let coord = |i: usize| range(s.rows.iter().flatten().map(|r| r.1[i]));
-    let (x, y) = equal_scales(coord(0), coord(1));
-    let mut chart = ChartBuilder::on(root)
-        .caption("Tracks seen from above (m); dots every 10 s", ("sans-serif", 24))
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(x.0..x.1, y.0..y.1)
-        .map_err(plot_err)?;
-    chart.configure_mesh().x_desc("x (m)").y_desc("y (m)").draw().map_err(plot_err)?;
+    let mut chart = plan_chart(
+        root,
+        ("Tracks seen from above (m); dots every 10 s", 24),
+        (coord(0), coord(1)),
+        ("x (m)", "y (m)"),
+    )?;
     let every = ((10.0 / s.dt).round() as usize).max(1);
     for u in 0..s.n {
         let color = PALETTE[u % PALETTE.len()];

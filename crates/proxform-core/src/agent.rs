@@ -137,6 +137,21 @@ struct OwnPrediction {
     unaccepted_s: f64,
 }
 
+impl Changes {
+    /// UAV `id`'s, before the first stage.
+    fn new(setup: &AgentSetup, id: UavId) -> Box<Self> {
+        Box::new(Self {
+            schedule: setup.schedule.clone(),
+            next: 0,
+            assignment: None,
+            id,
+            method: setup.method,
+            navigator: setup.navigator,
+            setup: setup.controller.clone(),
+        })
+    }
+}
+
 impl Agent {
     /// The agent of follower `id`.
     pub fn new(setup: &AgentSetup, id: UavId) -> Result<Self, ConfigError> {
@@ -149,17 +164,7 @@ impl Agent {
             setup.formation.clone(),
             deps,
         )?;
-        let changes = (!setup.schedule.is_empty()).then(|| {
-            Box::new(Changes {
-                schedule: setup.schedule.clone(),
-                next: 0,
-                assignment: None,
-                id,
-                method: setup.method,
-                navigator: setup.navigator,
-                setup: setup.controller.clone(),
-            })
-        });
+        let changes = (!setup.schedule.is_empty()).then(|| Changes::new(setup, id));
         Ok(Self { controller, changes, own_prediction: None })
     }
 
@@ -203,17 +208,8 @@ impl Agent {
             assignment.formation.clone(),
             table,
         )?;
-        let ch = self.changes.get_or_insert_with(|| {
-            Box::new(Changes {
-                schedule: setup.schedule.clone(),
-                next: setup.schedule.stages().len(),
-                assignment: None,
-                id,
-                method: setup.method,
-                navigator: setup.navigator,
-                setup: setup.controller.clone(),
-            })
-        });
+        // Without a schedule there is no stage to come (next = 0 = the number of stages).
+        let ch = self.changes.get_or_insert_with(|| Changes::new(setup, id));
         ch.assignment = Some(assignment.clone());
         Ok(())
     }

@@ -101,46 +101,57 @@ fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) -> PyResult<B
     d.set_item("connectivity_min", col(&|r| r.connectivity_min))?;
     d.set_item("alone_s_per_uav", col(&|r| r.alone_s_per_uav))?;
     // The columns of sensor faults, forming, changes of formation, what was flown and the
-    // robust checks, when some run has them (NaN for a run without).
-    if runs.iter().any(|r| r.sensor_faults.is_some()) {
-        d.set_item(
-            "healthy_pass",
-            col(&|r| r.sensor_faults.map_or(f64::NAN, |m| f64::from(u8::from(m.healthy_pass)))),
-        )?;
-        d.set_item("rejoin_s", col(&|r| r.sensor_faults.map_or(f64::NAN, |m| m.rejoin_s)))?;
-    }
-    if runs.iter().any(|r| r.forming.is_some()) {
-        let f = |g: &dyn Fn(&proxform_sim::measure::metrics::FormingMetrics) -> Option<f64>| {
-            col(&|r| r.forming.as_ref().and_then(g).unwrap_or(f64::NAN))
-        };
-        d.set_item("time_to_form_s", f(&|m| Some(m.time_to_form_s)))?;
-        d.set_item("transient_error_ratio", f(&|m| Some(m.transient_error_ratio)))?;
-        d.set_item("settled_error_ratio", f(&|m| m.settled_error_ratio))?;
-    }
-    if runs.iter().any(|r| r.transitions.is_some()) {
-        let t = |g: &dyn Fn(&proxform_sim::measure::metrics::TransitionMetrics) -> f64| {
-            col(&|r| r.transitions.as_ref().map_or(f64::NAN, g))
-        };
-        d.set_item("transition_s", t(&|m| m.transition_s))?;
-        d.set_item("transition_error_ratio", t(&|m| m.transient_error_ratio))?;
-        d.set_item("transition_closest_m", t(&|m| m.closest_m))?;
-    }
-    if runs.iter().any(|r| r.flown.is_some()) {
-        let w = |g: &dyn Fn(&proxform_sim::measure::metrics::FlownMetrics) -> f64| {
-            col(&|r| r.flown.as_ref().map_or(f64::NAN, g))
-        };
-        d.set_item("path_length_m_per_uav", w(&|m| m.path_length_m_per_uav))?;
-        d.set_item("delta_v_mps_per_uav", w(&|m| m.delta_v_mps_per_uav))?;
-        d.set_item("work_j_per_kg_per_uav", w(&|m| m.work_j_per_kg_per_uav))?;
-    }
-    if runs.iter().any(|r| r.isolation.is_some()) {
-        let i = |g: &dyn Fn(&proxform_sim::measure::metrics::IsolationMetrics) -> f64| {
-            col(&|r| r.isolation.as_ref().map_or(f64::NAN, g))
-        };
-        d.set_item("isolating_s_per_uav", i(&|m| m.isolating_s_per_uav))?;
-        d.set_item("isolated_per_uav_s", i(&|m| m.isolated_per_uav_s))?;
-        d.set_item("own_suspect_s_per_uav", i(&|m| m.own_suspect_s_per_uav))?;
-        d.set_item("own_suspect_episodes", i(&|m| m.own_suspect_episodes as f64))?;
+    // robust checks, as runs.csv has them: each group when some run has it (NaN for a run
+    // without, or a value it does not have).
+    type Column = (&'static str, fn(&RunSummary) -> Option<f64>);
+    let groups: [(fn(&RunSummary) -> bool, &[Column]); 5] = [
+        (
+            |r| r.sensor_faults.is_some(),
+            &[
+                ("healthy_pass", |r| r.sensor_faults.map(|m| f64::from(u8::from(m.healthy_pass)))),
+                ("rejoin_s", |r| r.sensor_faults.map(|m| m.rejoin_s)),
+            ],
+        ),
+        (
+            |r| r.forming.is_some(),
+            &[
+                ("time_to_form_s", |r| r.forming.map(|m| m.time_to_form_s)),
+                ("transient_error_ratio", |r| r.forming.map(|m| m.transient_error_ratio)),
+                ("settled_error_ratio", |r| r.forming.and_then(|m| m.settled_error_ratio)),
+            ],
+        ),
+        (
+            |r| r.transitions.is_some(),
+            &[
+                ("transition_s", |r| r.transitions.map(|m| m.transition_s)),
+                ("transition_error_ratio", |r| r.transitions.map(|m| m.transient_error_ratio)),
+                ("transition_closest_m", |r| r.transitions.map(|m| m.closest_m)),
+            ],
+        ),
+        (
+            |r| r.flown.is_some(),
+            &[
+                ("path_length_m_per_uav", |r| r.flown.map(|m| m.path_length_m_per_uav)),
+                ("delta_v_mps_per_uav", |r| r.flown.map(|m| m.delta_v_mps_per_uav)),
+                ("work_j_per_kg_per_uav", |r| r.flown.map(|m| m.work_j_per_kg_per_uav)),
+            ],
+        ),
+        (
+            |r| r.isolation.is_some(),
+            &[
+                ("isolating_s_per_uav", |r| r.isolation.map(|m| m.isolating_s_per_uav)),
+                ("isolated_per_uav_s", |r| r.isolation.map(|m| m.isolated_per_uav_s)),
+                ("own_suspect_s_per_uav", |r| r.isolation.map(|m| m.own_suspect_s_per_uav)),
+                ("own_suspect_episodes", |r| r.isolation.map(|m| m.own_suspect_episodes as f64)),
+            ],
+        ),
+    ];
+    for (has, columns) in groups {
+        if runs.iter().any(has) {
+            for (name, value) in columns {
+                d.set_item(*name, col(&|r| value(r).unwrap_or(f64::NAN)))?;
+            }
+        }
     }
     Ok(d)
 }

@@ -62,10 +62,16 @@ impl Near {
 /// needs some 140 m to stop short of the avoidance distance, more than a fixed radius gives.
 /// "Fast enough" counts on twice the present closing speed (the UAVs' velocities change
 /// while they close), so that the rule sees it before it binds.
+///
+/// Beyond the distance at which no pair closing at the largest relative speed of the step
+/// could bind ([`Self::for_speeds`]), the closing test is not made: nothing there is reported
+/// either way, and a swarm flying steadily reads no neighbour's velocity.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CloseWatch {
     /// Squared radius within which every UAV is reported (m²; 0: none).
     near2: f64,
+    /// Squared radius beyond which none is (m²; 0: none known, the test decides).
+    far2: f64,
     /// The avoidance distance (m) and the braking the rule counts on (m/s²); 0: no closing
     /// test.
     avoid_m: f64,
@@ -82,7 +88,26 @@ impl CloseWatch {
             return Self::default();
         }
         let near = (super::AVOID_WATCH * avoid_m).min(range_m);
-        Self { near2: near * near, avoid_m, braking_mps2, dt_s }
+        Self { near2: near * near, far2: 0.0, avoid_m, braking_mps2, dt_s }
+    }
+
+    /// The watch for a step in which no two UAVs move relative to each other faster than
+    /// `max_relative_mps`: beyond `avoid_m + c·Δt + c²/(2a)`, c twice that speed, the closing
+    /// test could not report anything.
+    pub fn for_speeds(mut self, max_relative_mps: f64) -> Self {
+        if self.avoid_m > 0.0 && max_relative_mps.is_finite() {
+            let c = 2.0 * max_relative_mps.max(0.0);
+            let far = self.avoid_m + c * self.dt_s + c * c / (2.0 * self.braking_mps2);
+            self.far2 = far * far;
+        }
+        self
+    }
+
+    /// Whether a UAV `d2` m² away may be reported without knowing its velocity: false when
+    /// [`Self::sees`] is false whatever its velocity this step.
+    #[inline]
+    pub fn may_see(&self, d2: f64) -> bool {
+        d2 < self.near2 || (self.avoid_m > 0.0 && (self.far2 == 0.0 || d2 < self.far2))
     }
 
     /// Whether a UAV at `p` from the observer (m, `d2` = |p|²) moving at `w` relative to it
@@ -92,6 +117,9 @@ impl CloseWatch {
         if d2 < self.near2 {
             return true;
         }
+        if self.far2 > 0.0 && d2 >= self.far2 {
+            return false;
+        }
         let pw = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
         if self.avoid_m <= 0.0 || pw >= 0.0 {
             return false;
@@ -100,6 +128,18 @@ impl CloseWatch {
         let c = -2.0 * pw / d;
         d - self.avoid_m - c * self.dt_s < c * c / (2.0 * self.braking_mps2)
     }
+}
+
+/// A bound on the speed of any of `velocities` relative to any other: twice the largest
+/// distance of one from the first (0 for none).
+pub fn relative_speed_bound(velocities: impl Iterator<Item = [f64; 3]>) -> f64 {
+    let mut first: Option<[f64; 3]> = None;
+    let mut far2 = 0.0f64;
+    for v in velocities {
+        let f = *first.get_or_insert(v);
+        far2 = far2.max((v[0] - f[0]).powi(2) + (v[1] - f[1]).powi(2) + (v[2] - f[2]).powi(2));
+    }
+    2.0 * far2.sqrt()
 }
 
 /// The side on which the UAV passes a neighbour, and for how long its limit has bound.
@@ -567,5 +607,32 @@ mod tests {
             av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g)
         });
         assert_eq!(o_i, before);
+    }
+
+    #[test]
+    fn the_watch_bounded_by_the_step_speeds_reports_what_the_unbounded_one_does() {
+        // Random pairs moving relative to each other no faster than the bound: the bound
+        // skips no pair the closing test would report, and beyond its distance reports none.
+        let free = CloseWatch::new(62.5, 2.5, 0.1, 250.0);
+        let mut seed = 99u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut seen = 0;
+        for _ in 0..20_000 {
+            let bound = 40.0 * (next() + 0.5);
+            let bounded = free.for_speeds(bound);
+            let p = [500.0 * next(), 500.0 * next(), 100.0 * next()];
+            let w = [next(), next(), next()];
+            let k = bound * (next() + 0.5) / norm(w).max(1e-9);
+            let w = scale(w, k);
+            let d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+            let (a, b) = (free.sees(d2, p, w), bounded.sees(d2, p, w));
+            assert_eq!(a, b, "p {p:?} w {w:?} bound {bound}");
+            assert!(bounded.may_see(d2) || !a);
+            seen += usize::from(a);
+        }
+        assert!(seen > 1000, "{seen}");
     }
 }

@@ -29,7 +29,7 @@ mod setup;
 mod tracks;
 mod update;
 
-use proxform_core::controller::Avoidance;
+use proxform_core::controller::{relative_speed_bound, Avoidance};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{ALPHA, VX, X};
 use proxform_core::State9;
@@ -187,6 +187,8 @@ impl<'s> FastSimulation<'s> {
             self.states.iter().enumerate().map(|(i, s)| (i as u32, [s[X], s[X + 1], s[X + 2]])),
             self.c.range,
         );
+        let spread = relative_speed_bound(self.states.iter().map(|s| [s[VX], s[VX + 1], s[VX + 2]]));
+        self.c.watch = self.c.watch.for_speeds(spread);
         let Self { sc, c, run, states, uavs, applied, tracks, used, avoid, grid, messages, ring, origin0, .. } = self;
         let view = View {
             c,

@@ -199,10 +199,12 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
         if j as usize == i {
             return;
         }
-        let o = &states[j as usize];
-        let w = [o[VX] - me[VX], o[VX + 1] - me[VX + 1], o[VX + 2] - me[VX + 2]];
-        if c.watch.sees(d2, [q[0] - p[0], q[1] - p[1], q[2] - p[2]], w) {
-            close.push(j);
+        if c.watch.may_see(d2) {
+            let o = &states[j as usize];
+            let w = [o[VX] - me[VX], o[VX + 1] - me[VX + 1], o[VX + 2] - me[VX + 2]];
+            if c.watch.sees(d2, [q[0] - p[0], q[1] - p[1], q[2] - p[2]], w) {
+                close.push(j);
+            }
         }
         let a = c.classifier.area(sin_yaw, cos_yaw, q[0] - p[0], q[1] - p[1]);
         let better = d2 < best_d2[a];

@@ -218,6 +218,7 @@ impl<'s> Simulation<'s> {
                 *s = if i == nav { nav_state } else { sc.slot_state(i, &nav_state) };
             }
             self.world.index_positions();
+            self.world.note_speeds();
             let key = self.world.run.at(WARMUP_STEP_BASE + w);
             self.world.send_radio((key, t), 0, false, &self.agents);
             let world = &self.world;
@@ -296,6 +297,7 @@ impl<'s> Simulation<'s> {
         if w.options.neighbour_search == NeighbourSearch::Grid {
             w.index_positions();
         }
+        w.note_speeds();
         w.advance_environment();
         let delay = w.scenario.radio().delay_steps as usize;
         w.send_radio((w.run.at(w.k), w.t()), delay, true, &self.agents);
@@ -554,6 +556,16 @@ impl<'s> World<'s> {
             self.current.iter().enumerate().filter(|(i, _)| active[*i]).map(|(i, s)| (i as u32, [s[0], s[1], s[2]])),
             range,
         );
+    }
+
+    /// With phase 2: how fast the active UAVs move relative to each other at most, for the
+    /// sensor's close-range watch ([`proxform_core::controller::CloseWatch::for_speeds`]).
+    fn note_speeds(&mut self) {
+        let active = &self.active;
+        let spread = proxform_core::controller::relative_speed_bound(
+            self.current.iter().enumerate().filter(|(i, _)| active[*i]).map(|(_, s)| [s[3], s[4], s[5]]),
+        );
+        self.sensor.set_speeds(spread);
     }
 
     /// Phase 3, environment: every active UAV's wind, position-fix bias and radio channel over

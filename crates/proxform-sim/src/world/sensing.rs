@@ -88,6 +88,12 @@ impl ProximitySensor {
         self
     }
 
+    /// For a step in which no two UAVs move relative to each other faster than
+    /// `max_relative_mps` ([`CloseWatch::for_speeds`]).
+    pub fn set_speeds(&mut self, max_relative_mps: f64) {
+        self.watch = self.watch.for_speeds(max_relative_mps);
+    }
+
     /// Appends to `out` what UAV `i` perceives of `scene` through `link`.
     pub fn perceive(
         &self,
@@ -112,10 +118,12 @@ impl ProximitySensor {
             if j as usize == i {
                 return;
             }
-            let o = &states[j as usize];
-            let w = [o[state::VX] - me[state::VX], o[state::VY] - me[state::VY], o[state::VZ] - me[state::VZ]];
-            if watch.sees(d2, [q[0] - me[0], q[1] - me[1], q[2] - me[2]], w) {
-                scratch.close.push(j);
+            if watch.may_see(d2) {
+                let o = &states[j as usize];
+                let w = [o[state::VX] - me[state::VX], o[state::VY] - me[state::VY], o[state::VZ] - me[state::VZ]];
+                if watch.sees(d2, [q[0] - me[0], q[1] - me[1], q[2] - me[2]], w) {
+                    scratch.close.push(j);
+                }
             }
             let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
             // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
