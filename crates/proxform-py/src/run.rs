@@ -104,7 +104,8 @@ fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) -> PyResult<B
     // robust checks, as runs.csv has them: each group when some run has it (NaN for a run
     // without, or a value it does not have).
     type Column = (&'static str, fn(&RunSummary) -> Option<f64>);
-    let groups: [(fn(&RunSummary) -> bool, &[Column]); 5] = [
+    type Group = (fn(&RunSummary) -> bool, &'static [Column]);
+    let groups: [Group; 5] = [
         (
             |r| r.sensor_faults.is_some(),
             &[
