@@ -22,7 +22,6 @@ pub struct NeighbourGrid {
     start: Vec<u32>,
     ids: Vec<u32>,
     pos: Vec<[f64; 3]>,
-    cell_of: Vec<u32>,
 }
 
 impl NeighbourGrid {
@@ -66,12 +65,14 @@ impl NeighbourGrid {
         self.nx = (wx * self.inv_cell) as usize + 1;
         self.ny = (wy * self.inv_cell) as usize + 1;
         let cells = self.nx * self.ny;
+        // Stable counting sort in place (within a column, members keep id order): `start[c]`
+        // counts column c − 1's members, then is where column c begins and, while filling,
+        // where its next member goes; filled, `start[c]` is where column c ends, and one shift
+        // makes it where it begins. No buffer but the grid's own.
         self.start.clear();
         self.start.resize(cells + 1, 0);
-        self.cell_of.clear();
-        for p in positions.clone() {
+        for p in positions {
             let c = self.cell_index(p);
-            self.cell_of.push(c as u32);
             self.start[c + 1] += 1;
         }
         for c in 0..cells {
@@ -81,15 +82,15 @@ impl NeighbourGrid {
         self.ids.resize(n, 0);
         self.pos.clear();
         self.pos.resize(n, [0.0; 3]);
-        // Stable counting sort: within a column, members keep id order.
-        let mut fill: Vec<u32> = self.start[..cells].to_vec();
-        for (k, (id, p)) in points.enumerate() {
-            let c = self.cell_of[k] as usize;
-            let slot = fill[c] as usize;
-            fill[c] += 1;
+        for (id, p) in points {
+            let c = self.cell_index(p);
+            let slot = self.start[c] as usize;
+            self.start[c] += 1;
             self.ids[slot] = id;
             self.pos[slot] = p;
         }
+        self.start.copy_within(0..cells, 1);
+        self.start[0] = 0;
     }
 
     #[inline]
@@ -132,7 +133,7 @@ impl NeighbourGrid {
 
     /// Bytes held by the grid's buffers.
     pub fn heap_bytes(&self) -> usize {
-        self.start.capacity() * 4 + self.ids.capacity() * 4 + self.pos.capacity() * 24 + self.cell_of.capacity() * 4
+        self.start.capacity() * 4 + self.ids.capacity() * 4 + self.pos.capacity() * 24
     }
 }
 

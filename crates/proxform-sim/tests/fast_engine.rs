@@ -101,7 +101,9 @@ fn the_engines_agree_on_a_lossy_single_level_lattice() {
         s.radio.range_m = Some(120.0);
         s.controller.separation_m = Some(36.0);
     });
-    agree(&sc, RunOptions::default(), 4);
+    // Twelve runs: with losses the figures of one run of 200 UAVs vary by ±15 % between runs
+    // (measured over 40 runs, the engines agree within 8 %); four left the comparison to chance.
+    agree(&sc, RunOptions::default(), 12);
 }
 
 #[test]
@@ -174,4 +176,17 @@ fn the_engine_is_chosen_by_the_scenario() {
     assert_eq!(engine_for(&windy("auto")), Ok(EngineKind::Reference));
     let paper = proxform_scenario::builtin::paper();
     assert_eq!(engine_for(&paper), Ok(EngineKind::Reference));
+}
+
+#[test]
+fn a_swarm_of_a_million_fits_in_a_gibibyte() {
+    // The engine's arrays per UAV (tracks of 46 bytes, states, records, inputs, grid), measured
+    // on 20 000 UAVs: with the scenario (~210 bytes a UAV: initial states, slots, shared
+    // dependency tables) and the metrics (~50), 10^6 UAVs stay under 1 GiB with room for the
+    // program itself (measured: 968 MiB peak for `proxform run --scenario swarm --uavs 1000000`).
+    let sc = swarm(20_000, |s| s.duration_s = Some(0.3));
+    let sim = FastSimulation::new(&sc, RunOptions::default(), 1, 0).expect("supported");
+    let per_uav = sim.heap_bytes() as f64 / sc.len() as f64;
+    eprintln!("engine heap per UAV: {per_uav:.1} bytes");
+    assert!(per_uav < 760.0, "{per_uav} bytes a UAV");
 }

@@ -6,6 +6,7 @@
 //! references form a tree-like graph without cycles that leads to the navigator. Uses the
 //! neighbour grid: O(N) for N slots.
 
+use proxform_core::dependency::TableBuilder;
 use proxform_core::{ConfigError, DependencySet, FormationSlot, UavId};
 
 use proxform_core::grid::NeighbourGrid;
@@ -58,11 +59,11 @@ pub fn derive(
         });
         radius = (2.0 * radius).min(max_distance_m);
     }
-    let mut out = Vec::with_capacity(n);
+    let mut out = TableBuilder::new(n, n * (k + 1));
     let mut refs: Vec<(UavId, f64)> = Vec::with_capacity(k + 1);
     for i in 0..n {
         if i == navigator.index() {
-            out.push(DependencySet::default());
+            out.push(navigator, &[])?;
             continue;
         }
         let cands = &best[i * k..i * k + count[i] as usize];
@@ -74,9 +75,9 @@ pub fn derive(
         if navigator_degree > 0.0 && !nav_in_cands {
             refs.push((navigator, if refs.is_empty() { 1.0 } else { navigator_degree }));
         }
-        out.push(DependencySet::from_slice(UavId(i as u32), n, &refs)?);
+        out.push(UavId(i as u32), &refs)?;
     }
-    Ok(out)
+    Ok(out.finish())
 }
 
 #[cfg(test)]

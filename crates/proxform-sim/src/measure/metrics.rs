@@ -214,7 +214,6 @@ pub struct RunMetrics {
     order_min: f64,
     connectivity_min: f64,
     dt: f64,
-    grid: proxform_core::grid::NeighbourGrid,
     /// UAVs with a sensor fault, sorted, each once.
     faulty: Vec<usize>,
     /// Each sensor fault's aftermath: its UAV, when the fault ends, when the UAV's next
@@ -284,7 +283,6 @@ impl RunMetrics {
             order_min: f64::INFINITY,
             connectivity_min: f64::INFINITY,
             dt: scenario.dt_s(),
-            grid: proxform_core::grid::NeighbourGrid::new(),
             faulty: {
                 let mut u: Vec<usize> = aftermaths.iter().map(|a| a.uav).collect();
                 u.dedup();
@@ -362,7 +360,8 @@ impl RunMetrics {
         let states = frame.states;
         let n = states.len();
         let active = frame.active;
-        self.grid.rebuild_ids(
+        let grid = self.separation.grid_mut();
+        grid.rebuild_ids(
             states.iter().enumerate().filter(|(i, _)| active[*i]).map(|(i, s)| (i as u32, [s[0], s[1], s[2]])),
             self.range,
         );
@@ -379,7 +378,7 @@ impl RunMetrics {
             if !active[i] {
                 continue;
             }
-            self.grid.for_each_within([s[0], s[1], s[2]], self.range, |j, _, _| {
+            grid.for_each_within([s[0], s[1], s[2]], self.range, |j, _, _| {
                 let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j));
                 if a != b {
                     parent[a.max(b) as usize] = a.min(b);

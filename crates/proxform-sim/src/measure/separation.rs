@@ -35,6 +35,12 @@ impl Separation {
         self.close.len()
     }
 
+    /// The neighbour grid's buffers, lent to another search between snapshots (each snapshot
+    /// rebuilds it): one grid's memory serves both.
+    pub(crate) fn grid_mut(&mut self) -> &mut NeighbourGrid {
+        &mut self.grid
+    }
+
     /// Looks at one snapshot.
     pub fn observe(&mut self, states: &[State9], active: &[bool]) {
         let flying =
