@@ -71,11 +71,12 @@ fn round_small(x: f32) -> i32 {
     ((x + ROUNDER).to_bits() as i32).wrapping_sub(ROUNDER.to_bits() as i32)
 }
 
-/// `x` to the nearest whole number as a 16-bit integer within ±32 767 (NaN to −32 767).
+/// `x` to the nearest whole number as a 16-bit integer within ±32 767 (a clamp and the
+/// rounder: vector instructions for the six rates at once). Finite inputs only: NaN, which the
+/// filter never produces from finite measurements, gives an unspecified value.
 #[inline]
-#[expect(clippy::manual_clamp, reason = "max then min maps NaN to an end; clamp would keep it")]
 fn to_i16(x: f32) -> i16 {
-    round_small(x.max(-32767.0).min(32767.0)) as i16
+    round_small(x.clamp(-32767.0, 32767.0)) as i16
 }
 
 /// An angle (rad, any turn) as a binary angle: wraps modulo 2π.
@@ -131,6 +132,8 @@ pub struct Filter {
     pub timeout_steps: i64,
     /// A coasting track extrapolates its acceleration for at most this long (s).
     pub coast_accel_s: f64,
+    /// β/Δt (a track measured every period).
+    pub beta_dt: f32,
     /// Units per rate (1 / quantum) of the six rates (velocity m/s², attitude rad/s).
     pub rate_units: [f32; 6],
     /// The quantum of each rate.
@@ -148,6 +151,7 @@ impl Filter {
             dt,
             timeout_steps,
             coast_accel_s,
+            beta_dt: (beta / dt) as f32,
             rate_units: quantum.map(|q| 1.0 / q),
             rate_quantum: quantum,
         }
@@ -160,21 +164,32 @@ impl Filter {
         std::array::from_fn(|c| (8.0 * std::f64::consts::SQRT_2 * sigma[c] / dt).max(2.0 * limit[c]))
     }
 
+    /// A record as f32: position, velocity, attitude (rad, in [−π, π)), then the six rates.
     #[inline]
-    fn rate(&self, tr: &Track, c: usize) -> f32 {
-        f32::from(tr.rate[c]) * self.rate_quantum[c]
+    fn load(&self, tr: &Track) -> [f32; 15] {
+        let (pv, att, rate) = (tr.pv, tr.att, tr.rate);
+        let mut v = [0.0f32; 15];
+        v[..6].copy_from_slice(&pv);
+        for c in 0..3 {
+            v[6 + c] = f32::from(att[c]) * ANGLE_QUANTUM;
+        }
+        for c in 0..6 {
+            v[9 + c] = f32::from(rate[c]) * self.rate_quantum[c];
+        }
+        v
     }
 
-    #[inline]
-    fn set_rate(&self, tr: &mut Track, c: usize, r: f32) {
-        tr.rate[c] = to_i16(r * self.rate_units[c]);
+    /// Stores `v` (as [`Self::load`] gives it) in a record, its word unchanged.
+    #[inline(always)]
+    fn store(&self, tr: &mut Track, v: &[f32; 15]) {
+        tr.pv = [v[0], v[1], v[2], v[3], v[4], v[5]];
+        tr.att = [to_angle(v[6]), to_angle(v[7]), to_angle(v[8])];
+        let mut rate = [0i16; 6];
+        for c in 0..6 {
+            rate[c] = to_i16(v[9 + c] * self.rate_units[c]);
+        }
+        tr.rate = rate;
     }
-}
-
-/// The attitude of a track (rad, in [−π, π)).
-#[inline]
-fn attitude(tr: &Track, c: usize) -> f32 {
-    f32::from(tr.att[c]) * ANGLE_QUANTUM
 }
 
 /// The tracks of one UAV: its records and how many are in use.
@@ -238,50 +253,46 @@ impl Owner<'_> {
         let tr = &mut self.tracks[s];
         let steps = tr.age(k);
         let zf: [f32; 9] = std::array::from_fn(|c| z[c] as f32);
-        let set = |tr: &mut Track| {
-            tr.pv = [zf[0], zf[1], zf[2], zf[3], zf[4], zf[5]];
-            tr.att = [0, 1, 2].map(|c| to_angle(zf[6 + c]));
-        };
+        // The record as f32 (value 0-8, rates 9-14), filtered, then stored once.
+        let mut v = [0.0f32; 15];
         if !tr.is(id) || steps > f.timeout_steps {
             // Start: the measurement, no rates.
             tr.word = Track::word(id, k, false);
-            set(tr);
-            tr.rate = [0; 6];
+            v[..9].copy_from_slice(&zf);
+            f.store(tr, &v);
         } else if steps > 0 {
+            v = f.load(tr);
             let dt = (steps as f64 * f.dt) as f32;
             if tr.word & SEEN_TWICE == 0 {
                 // Two-point start: value from the measurement, rate from the difference.
                 for c in 0..6 {
-                    let before = if c < 3 { tr.pv[3 + c] } else { attitude(tr, c - 3) };
-                    let diff = proxform_core::state::difference_component(VX + c, z[VX + c], f64::from(before));
-                    f.set_rate(tr, c, (diff / f64::from(dt)) as f32);
+                    let diff = proxform_core::state::difference_component(VX + c, z[VX + c], f64::from(v[3 + c]));
+                    v[9 + c] = (diff / f64::from(dt)) as f32;
                 }
-                set(tr);
+                v[..9].copy_from_slice(&zf);
             } else {
                 // The α-β update.
                 let d = shift(k - steps as i32);
-                let (alpha, beta_dt) = (f.alpha as f32, (f.beta / f64::from(dt)) as f32);
+                let alpha = f.alpha as f32;
+                let beta_dt = if steps == 1 { f.beta_dt } else { (f.beta / f64::from(dt)) as f32 };
                 for c in 0..3 {
-                    let pred = tr.pv[c] + d[c] as f32 + dt * (tr.pv[3 + c] + 0.5 * dt * f.rate(tr, c));
-                    tr.pv[c] = pred + alpha * (zf[c] - pred);
+                    let pred = v[c] + d[c] as f32 + dt * (v[3 + c] + 0.5 * dt * v[9 + c]);
+                    v[c] = pred + alpha * (zf[c] - pred);
                 }
                 for c in 0..6 {
-                    let r = f.rate(tr, c);
-                    let value = if c < 3 { tr.pv[3 + c] } else { attitude(tr, c - 3) };
-                    let pred = value + dt * r;
+                    let pred = v[3 + c] + dt * v[9 + c];
                     let raw = zf[3 + c] - pred;
                     let res = if c >= 3 { wrap_pi(raw) } else { raw };
-                    if c < 3 {
-                        tr.pv[3 + c] = pred + alpha * res;
-                    } else {
-                        tr.att[c - 3] = to_angle(pred + alpha * res);
-                    }
-                    f.set_rate(tr, c, r + beta_dt * res);
+                    v[3 + c] = pred + alpha * res;
+                    v[9 + c] += beta_dt * res;
                 }
             }
             tr.word = Track::word(id, k, true);
+            f.store(tr, &v);
+        } else {
+            v = f.load(tr);
         }
-        (s, extrapolate(f, tr, f.dt as f32, [0.0; 3], f32::INFINITY))
+        (s, extrapolate(&v, f.dt as f32, [0.0; 3], f32::INFINITY))
     }
 
     /// The neighbour of slot `s` if its track can coast at step `k`: measured before, no longer
@@ -314,7 +325,7 @@ impl Owner<'_> {
     /// The state of slot `s` `h` seconds after its measurement (a coasting neighbour), relative
     /// to the reference point `d` metres from that of its measurement.
     pub fn state_at(&self, f: &Filter, s: usize, h: f64, d: [f64; 3]) -> [f32; 9] {
-        extrapolate(f, &self.tracks[s], h as f32, d.map(|x| x as f32), f.coast_accel_s as f32)
+        extrapolate(&f.load(&self.tracks[s]), h as f32, d.map(|x| x as f32), f.coast_accel_s as f32)
     }
 }
 
@@ -322,17 +333,17 @@ impl Owner<'_> {
 /// acceleration is extrapolated for at most `ha` seconds (then the velocity reached carries
 /// on), attitude rates carry on.
 #[inline]
-fn extrapolate(f: &Filter, tr: &Track, h: f32, d: [f32; 3], ha: f32) -> [f32; 9] {
+fn extrapolate(v: &[f32; 15], h: f32, d: [f32; 3], ha: f32) -> [f32; 9] {
     let mut s = [0.0f32; 9];
     let ta = h.min(ha);
     for c in 0..3 {
-        let (p, vel, a) = (tr.pv[c], tr.pv[3 + c], f.rate(tr, c));
+        let (p, vel, a) = (v[c], v[3 + c], v[9 + c]);
         // p + h·v + a·ta·(h − ta/2): h·(v + h·a/2) while h ≤ ha.
         s[c] = p + d[c] + h * vel + a * ta * (h - 0.5 * ta);
         s[3 + c] = vel + ta * a;
     }
-    for c in 0..3 {
-        s[6 + c] = attitude(tr, c) + h * f.rate(tr, 3 + c);
+    for c in 6..9 {
+        s[c] = v[c] + h * v[c + 6];
     }
     s
 }
@@ -458,14 +469,18 @@ mod tests {
         }
         let f = Filter::new(0.8, 0.5, 0.1, 10, 0.2, [1.0; 6]);
         let mut t = Track::default();
-        f.set_rate(&mut t, 0, 0.25);
-        assert!((f.rate(&t, 0) - 0.25).abs() <= 0.5 * f.rate_quantum[0]);
-        f.set_rate(&mut t, 1, -5.0);
-        assert_eq!(t.rate[1], -i16::MAX, "beyond the span: the span's end");
-        f.set_rate(&mut t, 2, f32::INFINITY);
-        assert_eq!(t.rate[2], i16::MAX);
-        f.set_rate(&mut t, 3, f32::NAN);
-        assert_eq!(t.rate[3], -i16::MAX, "NaN: an end, not a value in the span");
+        let mut v = [0.0f32; 15];
+        v[6] = 3.5;
+        v[9] = 0.25;
+        v[10] = -5.0;
+        v[11] = f32::INFINITY;
+        f.store(&mut t, &v);
+        let back = f.load(&t);
+        assert!((back[9] - 0.25).abs() <= 0.5 * f.rate_quantum[0]);
+        assert!((back[6] - (3.5 - std::f32::consts::TAU)).abs() <= ANGLE_QUANTUM, "{}", back[6]);
+        let rate = t.rate;
+        assert_eq!(rate[1], -i16::MAX, "beyond the span: the span's end");
+        assert_eq!(rate[2], i16::MAX);
         for x in [-32767.4f32, -1.5, -0.5, 0.49, 0.5, 1.5, 12.7, 32766.6] {
             assert_eq!(i32::from(to_i16(x)), x.round_ties_even() as i32, "{x}");
         }
