@@ -360,11 +360,17 @@ impl Avoidance {
     ) -> bool {
         let v =
             vehicle.clamp_velocity([x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]]);
+        // Written out component by component: it runs over every observation of every UAV's
+        // update, and the generic array and iterator forms did not always inline.
+        let h = x_hold.as_slice();
         observations.iter().any(|o| {
-            let x = &o.state;
-            let p = [0, 1, 2].map(|a| x_hold[X + a] - (x[X + a] + dt * x[VX + a]));
-            let d = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            let w2 = (0..3).map(|a| (v[a] - x[VX + a]).powi(2)).sum::<f64>();
+            let x = o.state.as_slice();
+            let px = h[X] - (x[X] + dt * x[VX]);
+            let py = h[X + 1] - (x[X + 1] + dt * x[VX + 1]);
+            let pz = h[X + 2] - (x[X + 2] + dt * x[VX + 2]);
+            let d = (px * px + py * py + pz * pz).sqrt();
+            let (wx, wy, wz) = (v[0] - x[VX], v[1] - x[VX + 1], v[2] - x[VX + 2]);
+            let w2 = wx * wx + wy * wy + wz * wz;
             d - self.distance_m - w2.sqrt() * dt < w2 / (2.0 * self.braking_mps2)
         })
     }

@@ -252,7 +252,7 @@ impl Owner<'_> {
         let s = self.slot_for(id, k, hint);
         let tr = &mut self.tracks[s];
         let steps = tr.age(k);
-        let zf: [f32; 9] = std::array::from_fn(|c| z[c] as f32);
+        let zf = to_f32(z);
         // The record as f32 (value 0-8, rates 9-14), filtered, then stored once.
         let mut v = [0.0f32; 15];
         if !tr.is(id) || steps > f.timeout_steps {
@@ -346,6 +346,17 @@ fn extrapolate(v: &[f32; 15], h: f32, d: [f32; 3], ha: f32) -> [f32; 9] {
         s[c] = v[c] + h * v[c + 6];
     }
     s
+}
+
+/// A state in f32 (a loop: the generic array constructors did not always inline).
+#[inline]
+pub fn to_f32(x: &State9) -> [f32; 9] {
+    let x = x.as_slice();
+    let mut out = [0.0f32; 9];
+    for a in 0..9 {
+        out[a] = x[a] as f32;
+    }
+    out
 }
 
 /// `a` wrapped into (−π, π] (attitude residuals and differences are small: the test is a

@@ -138,7 +138,11 @@ pub fn update(
     let own_abs = own_measurement(v, i);
     // Positions relative to the reference point R_i(k) = O(k) + A_i, A_i = p_i(0) − O(0).
     let p0 = &v.sc.initial()[i];
-    let r_i = [0, 1, 2].map(|k| v.origin[k] + (p0[k] - v.origin0[k]));
+    let r_i = [
+        v.origin[0] + (p0[0] - v.origin0[0]),
+        v.origin[1] + (p0[1] - v.origin0[1]),
+        v.origin[2] + (p0[2] - v.origin0[2]),
+    ];
     let mut own = own_abs;
     for k in 0..3 {
         own[k] -= r_i[k];
@@ -168,7 +172,11 @@ pub fn update(
             step.model_error[ALPHA + a] = (applied[3 + a] - input[3 + a]) as f32;
         }
     }
-    Update { applied: applied.map(|u| u as f32), step }
+    let mut out = [0.0f32; 6];
+    for a in 0..6 {
+        out[a] = applied[a] as f32;
+    }
+    Update { applied: out, step }
 }
 
 /// Whether an observation survives dropout `p` (draw `n` of the UAV's dropout draws).
@@ -441,7 +449,7 @@ fn decide(
     // its track and X̂_ij − X_hold = F·X_j + W_ij − X_hold (eq. 10), summed with the weights of
     // X̄_i and X̂ᴰ_i.
     let shifts = |k0: i32| v.shift(k0);
-    let xh: [f32; 9] = std::array::from_fn(|a| x_hold[a] as f32);
+    let xh = super::tracks::to_f32(&x_hold);
     let mut e = Sums::new();
     let mut fed = 0;
     let coast = |tracks: &Owner<'_>, t: usize| {
@@ -466,8 +474,11 @@ fn decide(
         };
         let Some(slot_j) = formation.slot(UavId(id)) else { continue };
         if c.separation > 0.0 {
-            let xj = [0, 1, 2].map(|a| f64::from(f_x_j[a]));
-            let p = [0, 1, 2].map(|a| x_hold[X + a] - xj[a]);
+            let p = [
+                x_hold[X] - f64::from(f_x_j[0]),
+                x_hold[X + 1] - f64::from(f_x_j[1]),
+                x_hold[X + 2] - f64::from(f_x_j[2]),
+            ];
             push_apart(p, c.separation, || Some((slot_j.offset_m - slot_i.offset_m).norm()), &mut e.push);
         }
         let x_hat = implied(c.course_frame, &slot_i, slot_j, &f_x_j, &xh);
