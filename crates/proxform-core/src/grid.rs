@@ -131,6 +131,48 @@ impl NeighbourGrid {
         }
     }
 
+    /// Calls `f(a, b, squared distance)` once for every unordered pair of points within
+    /// `radius` of each other (`radius` at most the one given to [`Self::rebuild`]), in a fixed
+    /// order: each point with the later members of its column and the columns ahead of it (the
+    /// rest of its row within reach, then the rows above), half the columns a query per point
+    /// visits. Each of those is one contiguous run of the cell-sorted arrays.
+    pub fn for_each_pair_within(&self, radius: f64, mut f: impl FnMut(u32, u32, f64)) {
+        if self.ids.is_empty() {
+            return;
+        }
+        let r2 = radius * radius;
+        let (nx, ny) = (self.nx, self.ny);
+        let mut scan = |k: usize, run: std::ops::Range<usize>| {
+            let p = self.pos[k];
+            for m in run {
+                let q = &self.pos[m];
+                let (dx, dy, dz) = (q[0] - p[0], q[1] - p[1], q[2] - p[2]);
+                let d2 = dx * dx + dy * dy + dz * dz;
+                if d2 <= r2 {
+                    f(self.ids[k], self.ids[m], d2);
+                }
+            }
+        };
+        for cy in 0..ny {
+            let y_hi = (cy + REACH).min(ny - 1);
+            for cx in 0..nx {
+                let c = cy * nx + cx;
+                let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+                if a == b {
+                    continue;
+                }
+                let row_end = self.start[cy * nx + (cx + REACH).min(nx - 1) + 1] as usize;
+                let (x0, x1) = (cx.saturating_sub(REACH), (cx + REACH).min(nx - 1));
+                for k in a..b {
+                    scan(k, k + 1..row_end);
+                    for y in cy + 1..=y_hi {
+                        scan(k, self.start[y * nx + x0] as usize..self.start[y * nx + x1 + 1] as usize);
+                    }
+                }
+            }
+        }
+    }
+
     /// Bytes held by the grid's buffers.
     pub fn heap_bytes(&self) -> usize {
         self.start.capacity() * 4 + self.ids.capacity() * 4 + self.pos.capacity() * 24
@@ -169,6 +211,41 @@ mod tests {
                 assert_eq!(found, want);
             }
             assert!(g.start.len() <= (4 * n).max(16) + 1);
+        }
+    }
+
+    #[test]
+    fn every_close_pair_is_found_once() {
+        let mut s = 11u64;
+        // Clustered (many in one column), spread, and a line along x (one row of columns).
+        for &(n, spread, flat) in &[(400usize, 60.0, 1.0), (300, 3000.0, 1.0), (200, 500.0, 0.0), (1, 10.0, 1.0)] {
+            let pts: Vec<[f64; 3]> =
+                (0..n).map(|_| [lcg(&mut s) * spread, lcg(&mut s) * spread * flat, lcg(&mut s) * 30.0]).collect();
+            for r in [5.0, 40.0, 250.0] {
+                let mut g = NeighbourGrid::new();
+                g.rebuild(pts.iter().copied(), r);
+                let mut found: Vec<(u32, u32)> = Vec::new();
+                g.for_each_pair_within(r, |a, b, d2| {
+                    let (p, q) = (pts[a as usize], pts[b as usize]);
+                    let want = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+                    assert_eq!(d2, want);
+                    found.push((a.min(b), a.max(b)));
+                });
+                let count = found.len();
+                found.sort_unstable();
+                found.dedup();
+                assert_eq!(found.len(), count, "a pair reported twice");
+                let mut want = Vec::new();
+                for a in 0..n {
+                    for b in a + 1..n {
+                        let (p, q) = (pts[a], pts[b]);
+                        if (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2) <= r * r {
+                            want.push((a as u32, b as u32));
+                        }
+                    }
+                }
+                assert_eq!(found, want, "n {n}, spread {spread}, radius {r}");
+            }
         }
     }
 }

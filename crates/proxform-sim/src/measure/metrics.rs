@@ -374,17 +374,13 @@ impl RunMetrics {
             }
             x
         }
-        for (i, s) in states.iter().enumerate() {
-            if !active[i] {
-                continue;
+        // Each pair within range once (the grid holds the active UAVs only).
+        grid.for_each_pair_within(self.range, |i, j, _| {
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            if a != b {
+                parent[a.max(b) as usize] = a.min(b);
             }
-            grid.for_each_within([s[0], s[1], s[2]], self.range, |j, _, _| {
-                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j));
-                if a != b {
-                    parent[a.max(b) as usize] = a.min(b);
-                }
-            });
-        }
+        });
         let mut size = vec![0u32; n];
         let mut total = 0u32;
         for i in 0..n {

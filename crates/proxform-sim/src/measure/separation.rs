@@ -45,43 +45,41 @@ impl Separation {
     pub fn observe(&mut self, states: &[State9], active: &[bool]) {
         let flying =
             || states.iter().enumerate().filter(|(i, _)| active[*i]).map(|(i, s)| (i as u32, [s[0], s[1], s[2]]));
-        let count = flying().count();
-        if count < 2 {
+        if flying().nth(1).is_none() {
             return;
         }
         let mut radius = self.min_m.max(self.safety_m);
         if !radius.is_finite() {
             radius = self.safety_m;
         }
-        // No pair is farther apart than the box around the flying UAVs.
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for (_, p) in flying() {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
+        // No pair is farther apart than the box around the flying UAVs (needed only while no
+        // pair has been measured).
+        let extent = || {
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for (_, p) in flying() {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
             }
-        }
-        let extent = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+            (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt()
+        };
         loop {
             self.grid.rebuild_ids(flying(), radius);
             let mut found = f64::INFINITY;
-            let (r2, s2) = (radius * radius, self.safety_m * self.safety_m);
-            for (i, p) in flying() {
-                let close = &mut self.close;
-                self.grid.for_each_within(p, radius, |j, _, d2| {
-                    if j > i && d2 <= r2 {
-                        found = found.min(d2);
-                        if d2 < s2 {
-                            close.insert((i, j));
-                        }
-                    }
-                });
-            }
+            let s2 = self.safety_m * self.safety_m;
+            let close = &mut self.close;
+            self.grid.for_each_pair_within(radius, |a, b, d2| {
+                found = found.min(d2);
+                if d2 < s2 {
+                    close.insert((a.min(b), a.max(b)));
+                }
+            });
             if found.is_finite() {
                 self.min_m = self.min_m.min(found.sqrt());
                 return;
             }
-            if self.min_m.is_finite() || radius > extent || !radius.is_finite() {
+            if self.min_m.is_finite() || !radius.is_finite() || radius > extent() {
                 // Nothing closer than the smallest so far (or nothing measurable at all).
                 return;
             }
