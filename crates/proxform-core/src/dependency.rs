@@ -12,7 +12,7 @@ use crate::observation::UavId;
 /// The table is immutable and shared: cloning it (one copy for the scenario, one for the
 /// controller) costs a reference count, not the entries. The tables of a whole formation built
 /// with [`TableBuilder`] share one allocation: each is a span of it (24 bytes a UAV besides its
-/// entries, where a table of its own took 56 with its allocation's header).
+/// entries; a table of its own also carries its allocation's header and the allocator's).
 #[derive(Clone)]
 pub struct DependencySet {
     entries: Arc<[(UavId, f64)]>,
