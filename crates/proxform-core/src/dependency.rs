@@ -110,6 +110,13 @@ impl DependencySet {
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
+
+    /// Whether the two tables are spans of one allocation (built together by a
+    /// [`TableBuilder`], or clones of one table): a formation's tables take one allocation,
+    /// not one per UAV.
+    pub fn shares_entries_with(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.entries, &other.entries)
+    }
 }
 
 /// The tables of a formation, UAV after UAV, into one shared allocation.
@@ -188,6 +195,8 @@ mod tests {
         assert_eq!(together[1].refs(), &[(UavId(0), 0.8), (UavId(3), 0.2)], "sorted by id");
         assert_eq!(together[3].degree(UavId(1)), Some(0.25));
         assert!(together[0].is_empty() && together[0].refs().is_empty());
+        assert!(together[1].shares_entries_with(&together[3]));
+        assert!(!alone[1].shares_entries_with(&alone[3]));
         // The same serialised form either way.
         let json = |d: &DependencySet| serde_json::to_string(d).expect("serialisable");
         assert_eq!(json(&together[3]), json(&alone[3]));

@@ -91,6 +91,8 @@ mod tests {
         let nav = UavId(2); // front row, centre
         let deps = derive(&slots, nav, 3, 80.0, 0.0).expect("valid");
         assert!(deps[2].is_empty());
+        // One allocation for the whole formation, not one per UAV.
+        assert!(deps.iter().all(|d| d.shares_entries_with(&deps[0])));
         for (i, d) in deps.iter().enumerate() {
             if i == 2 {
                 continue;
