@@ -3,9 +3,11 @@
 //! Positions are binned into square columns (cells in x-y, all heights together) at least half
 //! as wide as the search radius, over the bounding box of the current positions; a query visits
 //! the 5 × 5 columns around a point, whose members lie in five contiguous runs of the
-//! cell-sorted arrays (half-width cells scan 30 % fewer candidates than 3 × 3 full-width ones). Binning is a counting sort: O(N) per rebuild, no allocation after the
-//! first. When the UAVs are scattered so widely that the box would need more than 4 columns
-//! per UAV, the columns are widened: memory stays O(N) and results stay exact.
+//! cell-sorted arrays (half-width cells scan 30 % fewer candidates than 3 × 3 full-width ones).
+//! Binning is a counting sort in place: O(N) per rebuild, no allocation after the first. When the UAVs are scattered so widely that the box would need more than 4 columns
+//! per UAV, the columns are widened: memory stays O(N) and results stay exact. Every pair within
+//! the radius can be visited once ([`NeighbourGrid::for_each_pair_within`]): each column with
+//! the columns ahead of it, half the columns of a query per point.
 
 /// Cells on each side of the query's cell: cells are `radius / REACH` wide.
 const REACH: usize = 2;

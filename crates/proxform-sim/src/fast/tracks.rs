@@ -39,7 +39,8 @@ const ANGLE_QUANTUM: f32 = std::f32::consts::PI / 32768.0;
 
 const _: () = assert!(std::mem::size_of::<Track>() == 46);
 
-/// One neighbour's filtered state: 46 bytes, packed (unaligned loads cost nothing here).
+/// One neighbour's filtered state: 46 bytes, packed (measured: as many instructions per update
+/// as the 48-byte aligned layout).
 #[derive(Debug, Clone, Copy)]
 #[repr(C, packed(2))]
 pub struct Track {
