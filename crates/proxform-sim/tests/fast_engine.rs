@@ -107,6 +107,33 @@ fn the_engines_agree_on_a_lossy_single_level_lattice() {
 }
 
 #[test]
+fn the_engines_agree_in_wind_with_a_biased_position_fix() {
+    // A crosswind, turbulence, a gust and a position fix wandering by 0.3 m: each UAV has its
+    // own turbulence and bias (the same streams in both engines), so the formation is shaken
+    // apart from the noise alone. Severe turbulence changes the wind by some 9 m/s² (1σ) from
+    // one period to the next: the tracks' rates must hold it (`wind_acceleration`).
+    let calm = figures(&[fast(&swarm(300, |s| s.duration_s = Some(30.0)), RunOptions::default(), 0)]);
+    for severity in ["light", "severe"] {
+        let sc = swarm(300, |s| {
+            s.duration_s = Some(30.0);
+            s.wind.steady_kmh = Some([5.0, 8.0, 0.0]);
+            s.wind.turbulence = Some(severity.into());
+            s.wind.gust_at_s = Some(10.0);
+            s.wind.gust_duration_s = Some(4.0);
+            s.wind.gust_peak_kmh = Some([0.0, 12.0, 3.0]);
+            s.noise.gnss_bias_m = Some(0.3);
+            s.noise.gnss_tau_s = Some(20.0);
+        });
+        let (a, b) = agree(&sc, RunOptions::default(), 3);
+        // Not vacuous: the wind and the bias are felt, in both engines alike.
+        for k in 0..3 {
+            assert!(b.rms[k] > 1.5 * calm.rms[k], "{severity}, axis {k}: windy {b:?} vs calm {calm:?}");
+        }
+        assert!(a.adjusted > calm.adjusted + 0.05, "{severity}: {a:?} vs {calm:?}");
+    }
+}
+
+#[test]
 fn the_engines_agree_where_collision_avoidance_binds() {
     // A tight lattice (16 m), a slow vehicle (9 km/h/s) and large actuation errors: the
     // avoidance rule binds (it keeps pairs from 10.8 m to 12.8 m and costs metres of x error),
@@ -135,7 +162,12 @@ fn the_engines_agree_where_collision_avoidance_binds() {
 
 #[test]
 fn the_fast_engine_is_deterministic_whatever_the_threads() {
-    let sc = swarm(3000, |s| s.duration_s = Some(2.0));
+    // With turbulence and a position-fix bias: the environment's pass runs in parallel too.
+    let sc = swarm(3000, |s| {
+        s.duration_s = Some(2.0);
+        s.wind.turbulence = Some("moderate".into());
+        s.noise.gnss_bias_m = Some(0.2);
+    });
     let run = |threads: usize, parallel: bool| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
         pool.install(|| {
@@ -165,15 +197,21 @@ fn the_engine_is_chosen_by_the_scenario() {
     });
     assert_eq!(engine_for(&kept), Ok(EngineKind::Reference));
     // What the fast engine does not run: refused when asked for, the reference under auto.
-    let windy = |engine: &str| {
+    let delayed = |engine: &str| {
         swarm(100, |s| {
             s.engine = Some(engine.into());
-            s.wind.steady_kmh = Some([20.0, 0.0, 0.0]);
+            s.radio.delay_s = Some(0.2);
         })
     };
-    let e = engine_for(&windy("fast")).expect_err("wind is not supported");
-    assert!(e.to_string().contains("wind"), "{e}");
-    assert_eq!(engine_for(&windy("auto")), Ok(EngineKind::Reference));
+    let e = engine_for(&delayed("fast")).expect_err("radio delay is not supported");
+    assert!(e.to_string().contains("radio delay"), "{e}");
+    assert_eq!(engine_for(&delayed("auto")), Ok(EngineKind::Reference));
+    let windy = swarm(100, |s| {
+        s.engine = Some("fast".into());
+        s.wind.steady_kmh = Some([20.0, 0.0, 0.0]);
+        s.noise.gnss_bias_m = Some(0.5);
+    });
+    assert_eq!(engine_for(&windy), Ok(EngineKind::Fast), "wind and a position-fix bias are run");
     let paper = proxform_scenario::builtin::paper();
     assert_eq!(engine_for(&paper), Ok(EngineKind::Reference));
 }

@@ -447,9 +447,11 @@ fn envelope_centre(params: &ControllerParams, est: &Estimates, stopping: Option<
 }
 
 /// Step 4 from the averages: `O_i − X_hold` from `X̄_i − X_hold` and, when main references are
-/// perceived, `X̂ᴰ_i − X_hold`, with the separation push and the closing velocity as
-/// [`envelope_centre`] says; and where the centre's position is. Shared with engines that keep
-/// their sums in their own form.
+/// perceived, `X̂ᴰ_i − X_hold`: `O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i`, moved by the separation `push`,
+/// with the velocity part closing the remaining position gap over τ, never faster than
+/// braking at `stopping` (m/s²) can stop within it; and where the centre's position is. The
+/// controller's step 4 on its own sums; shared with engines that keep their sums in their own
+/// form.
 pub fn centre_from(
     params: &ControllerParams,
     x_bar: &State9,

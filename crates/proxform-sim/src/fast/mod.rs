@@ -2,21 +2,24 @@
 //!
 //! The reference engine ([`crate::world`]) steps one [`proxform_core::Agent`] object per UAV,
 //! each with its own tracks and controller, through every phase. This engine runs the same
-//! method ([`update`]: the reference controller's steps, its α-β tracks, its collision
+//! method (`update`: the reference controller's steps, its α-β tracks, its collision
 //! avoidance) over flat arrays: the true states, one array of every UAV's tracks in f32
-//! ([`tracks`]), the inputs and the per-UAV records, with per-thread scratch allocated once.
+//! (`tracks`), the inputs and the per-UAV records, with per-thread scratch allocated once.
 //! A step is:
+//! 0. **environment** (with wind or a position-fix bias): every UAV's wind and bias over the
+//!    step, by the reference engine's own pass ([`crate::world::environment`]);
 //! 1. **index**: the neighbour grid over the positions;
 //! 2. **radio**: the broadcasters' messages (their own measurements), composed once;
 //! 3. per block of [`BLOCK`] UAVs, in parallel: **perceive** (areas, references, radio,
 //!    close-range detections from the true geometry), **measure** (noise drawn in bulk, only
 //!    for what was observed), **decide** (the controller on the tracks), **actuate** (the
 //!    actuation error);
-//! 4. **propagate**: every UAV through the kinematic vehicle, in place;
+//! 4. **propagate**: every UAV through the kinematic vehicle in the air, carried by the wind,
+//!    in place;
 //! 5. **measure**: the observers see the new states.
 //!
 //! Positions inside the controller are relative to each UAV's reference point, which moves
-//! with the navigator's path ([`update::View::shift`]), so f32 tracks keep their resolution
+//! with the navigator's path (`update::View::shift`), so f32 tracks keep their resolution
 //! however far the swarm flies; the true states stay in f64.
 //!
 //! Random numbers come from the counter-based streams of [`crate::random::bulk`], keyed by
@@ -38,6 +41,7 @@ use rayon::prelude::*;
 
 use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::RunKey;
+use crate::world::environment::{self, EnvStep, UavEnv};
 use crate::world::options::RunOptions;
 use setup::Consts;
 pub use setup::{supports, Unsupported};
@@ -78,6 +82,9 @@ pub struct FastSimulation<'s> {
     /// UAVs of a large swarm ever have one).
     avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
     grid: NeighbourGrid,
+    /// Each UAV's wind and position-fix bias (the reference engine's, from the same streams),
+    /// empty when the scenario has neither.
+    env: Vec<UavEnv>,
     messages: Vec<Message>,
     /// Origins of the reference points of the last steps.
     ring: Vec<[f64; 3]>,
@@ -117,6 +124,7 @@ impl<'s> FastSimulation<'s> {
             used: vec![0; n],
             avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
+            env: environment::initial(sc),
             messages: Vec::with_capacity(c.broadcasters.len()),
             ring: vec![[p0[X], p0[X + 1], p0[X + 2]]; ring_len],
             start,
@@ -147,6 +155,7 @@ impl<'s> FastSimulation<'s> {
             + self.avoid.iter().flatten().map(|a| a.1.heap_bytes()).sum::<usize>()
             + self.avoid.len() * std::mem::size_of::<Vec<(u32, Box<Avoidance>)>>()
             + self.grid.heap_bytes()
+            + self.env.len() * std::mem::size_of::<UavEnv>()
     }
 
     /// The origin of the reference points at step `k` (the navigator's path position).
@@ -189,7 +198,8 @@ impl<'s> FastSimulation<'s> {
         );
         let spread = relative_speed_bound(self.states.iter().map(|s| [s[VX], s[VX + 1], s[VX + 2]]));
         self.c.watch = self.c.watch.for_speeds(spread);
-        let Self { sc, c, run, states, uavs, applied, tracks, used, avoid, grid, messages, ring, origin0, .. } = self;
+        let Self { sc, c, run, states, uavs, applied, tracks, used, avoid, grid, env, messages, ring, origin0, .. } =
+            self;
         let view = View {
             c,
             sc,
@@ -202,6 +212,7 @@ impl<'s> FastSimulation<'s> {
             origin0: *origin0,
             ring,
             messages: &[],
+            env,
             warm,
         };
         // Radio: the broadcasters' own measurements.
@@ -261,20 +272,41 @@ impl<'s> FastSimulation<'s> {
     /// Advances one update period.
     pub fn step(&mut self) {
         let k = self.k;
-        self.decide_all(k as i64, k, false);
-        // Propagate: the navigator along its path, the followers through the kinematic vehicle.
         let dt = self.c.dt;
+        // Environment: every UAV's wind and position-fix bias over the step (the reference
+        // engine's own pass, from the same streams).
+        if !self.env.is_empty() {
+            let step = EnvStep::new(self.sc, &self.run, k, k as f64 * dt);
+            let states = &self.states;
+            crate::parallel::for_each_mut(&mut self.env, self.parallel, |i, e| step.advance(i, &states[i], e));
+        }
+        self.decide_all(k as i64, k, false);
+        // Propagate: the navigator along its path, the followers through the kinematic vehicle
+        // in the air, carried by the wind from its value now to its value at the step's end
+        // (as the reference engine does).
         let nav = self.c.nav;
         let nav_next = self.sc.path().state_at((k + 1) as f64 * dt, self.start);
+        let env = &self.env;
         let propagate = |(i, (s, u)): (usize, (&mut State9, &[f32; 6]))| {
             if i == nav {
                 *s = nav_next;
                 return;
             }
+            let Some(e) = env.get(i) else {
+                for a in 0..3 {
+                    let (ua, ur) = (f64::from(u[a]), f64::from(u[3 + a]));
+                    s[X + a] += dt * (s[VX + a] + 0.5 * ua);
+                    s[VX + a] += ua;
+                    s[ALPHA + a] += ur;
+                }
+                return;
+            };
             for a in 0..3 {
                 let (ua, ur) = (f64::from(u[a]), f64::from(u[3 + a]));
-                s[X + a] += dt * (s[VX + a] + 0.5 * ua);
-                s[VX + a] += ua;
+                let (w_now, w_next) = (e.wind_now[a], e.wind_next[a]);
+                let air = s[VX + a] - w_now;
+                s[X + a] = s[X + a] + dt * (air + 0.5 * ua) + 0.5 * dt * (w_now + w_next);
+                s[VX + a] = air + ua + w_next;
                 s[ALPHA + a] += ur;
             }
         };

@@ -4,6 +4,7 @@
 use proxform_core::azimuth::AreaClassifier;
 use proxform_core::state::{ALPHA, VX};
 use proxform_core::{Method, PredictorKind, VehicleModel};
+use proxform_scenario::wind::Wind;
 use proxform_scenario::Scenario;
 
 use super::tracks::{Filter, MAX_AGE_STEPS, MAX_ID};
@@ -16,13 +17,14 @@ pub struct Unsupported(pub &'static str);
 /// Checks that the fast engine runs every feature `sc` uses: the proximity method on the
 /// kinematic vehicle with α-β tracks and the one-step input; measurement noise, actuation
 /// error, onboard dropout, beacons and i.i.d. radio loss, separation keeping, the stopping
-/// limit and collision avoidance. Wind, position-fix bias, faults, formation changes, scattered
-/// starts, radio delay, bursts and relays, the robust fusion, the own-state filter and check,
-/// the horizon and the fixed wing stay with the reference engine.
+/// limit and collision avoidance, wind (steady, gusts, turbulence) and the position fix's bias.
+/// Faults, formation changes, scattered starts, radio delay, bursts and relays, the robust
+/// fusion, the own-state filter and check, the horizon and the fixed wing stay with the
+/// reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 19] = [
+    let checks: [(bool, &'static str); 17] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (matches!(sc.vehicle(), VehicleModel::Kinematic(_)), "the fixed-wing vehicle"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
@@ -30,8 +32,6 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (p.isolation_gate.is_none(), "the robust fusion"),
         (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
         (!p.bank_turn_feedforward, "the bank-turn feed-forward"),
-        (sc.wind().is_calm(), "wind"),
-        (sc.gnss_bias().is_none(), "a position-fix bias"),
         (sc.faults().is_empty(), "faults"),
         (sc.schedule().is_empty(), "formation changes"),
         (sc.placement().in_slots(), "scattered starts"),
@@ -55,6 +55,21 @@ pub const MAX_TRACKS: usize = 16;
 /// The most main references any UAV has.
 fn max_refs(sc: &Scenario) -> usize {
     sc.dependencies().iter().map(|d| d.refs().len()).max().unwrap_or(0)
+}
+
+/// The largest acceleration the wind may give a UAV along an axis (m/s²), which its
+/// neighbours' tracks must be able to hold: the gust's steepest rise, `π·|peak|/duration`, plus
+/// eight standard deviations of the turbulence's change over one period `Δt` (a filter's jump,
+/// `σ·√(1.5·(1 − e^(−2Δt·V/L)))`, at the fastest speed `V`), over `Δt`. Zero in calm air.
+pub fn wind_acceleration(wind: &Wind, fastest_mps: f64, dt: f64) -> f64 {
+    let gust = wind.gust.map_or(0.0, |g| std::f64::consts::PI * g.peak_mps.norm() / g.duration_s.max(dt));
+    let turbulence = wind.turbulence.map_or(0.0, |t| {
+        let (l, sigma) = t.scales();
+        (0..3)
+            .map(|k| sigma[k] * (1.5 * (1.0 - (-2.0 * dt * fastest_mps.max(1.0) / l[k]).exp())).sqrt())
+            .fold(0.0, f64::max)
+    });
+    gust + 8.0 * turbulence / dt
 }
 
 /// The constants of every UAV's update.
@@ -135,6 +150,8 @@ impl Consts {
         let l = &kin.limits;
         let am = l.attitude_max_rad;
         let sigma = sc.noise().sigma();
+        let fastest = (l.vx_max_mps.powi(2) + l.vy_max_mps.powi(2) + l.vz_max_mps.powi(2)).sqrt();
+        let wind = wind_acceleration(sc.wind(), fastest, dt);
         let radio = sc.radio();
         let beacons: Vec<usize> = sc.beacons().iter().map(|b| b.index()).filter(|&j| j < n).collect();
         let all = if radio.broadcast_all { n } else { 0 };
@@ -154,7 +171,11 @@ impl Consts {
                 dt,
                 timeout_steps,
                 p.coast_accel_s,
-                Filter::rate_span(std::array::from_fn(|c| sigma[VX + c]), std::array::from_fn(|c| scale_v[c] / dt), dt),
+                Filter::rate_span(
+                    std::array::from_fn(|c| sigma[VX + c]),
+                    std::array::from_fn(|c| scale_v[c] / dt + if c < 3 { wind } else { 0.0 }),
+                    dt,
+                ),
             ),
             coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
@@ -178,5 +199,45 @@ impl Consts {
             radio_range2: radio.range_m * radio.range_m,
             broadcasters,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+    use proxform_scenario::wind::{Gust, Severity, Turbulence};
+
+    #[test]
+    fn the_tracks_hold_what_the_wind_does() {
+        let dt = 0.1;
+        assert_eq!(wind_acceleration(&Wind::default(), 80.0, dt), 0.0, "calm air adds nothing");
+        let steady = Wind { steady_mps: Vector3::new(10.0, 0.0, 0.0), ..Wind::default() };
+        assert_eq!(wind_acceleration(&steady, 80.0, dt), 0.0, "nor does a steady wind");
+        // A gust of 10 m/s over 4 s rises at most π·10/4 m/s².
+        let gust = Wind {
+            gust: Some(Gust { at_s: 1.0, duration_s: 4.0, peak_mps: Vector3::new(6.0, 8.0, 0.0) }),
+            ..Wind::default()
+        };
+        assert!((wind_acceleration(&gust, 80.0, dt) - std::f64::consts::PI * 2.5).abs() < 1e-12);
+        // Severe turbulence at 300 m, 80 m/s: the wind's change over one period, sampled from the
+        // engine's own filters, stays within the bound (which is some eight of its σ).
+        let turb = Turbulence { severity: Severity::Severe, altitude_m: 300.0 };
+        let bound = wind_acceleration(&Wind { turbulence: Some(turb), ..Wind::default() }, 80.0, dt);
+        let mut st = crate::world::wind::TurbulenceState::default();
+        let key = crate::random::stream_key(5, 0, 0, crate::random::Source::Wind);
+        let mut last = Vector3::zeros();
+        let (mut sum2, mut worst, n) = (0.0, 0.0f64, 100_000u64);
+        for k in 0..n {
+            let g = st.step(&turb, 80.0, dt, &mut crate::random::StepRng::new(key, k));
+            let rate = (g - last).amax() / dt;
+            if k > 100 {
+                sum2 += rate * rate;
+                worst = worst.max(rate);
+            }
+            last = g;
+        }
+        let sd = (sum2 / n as f64).sqrt();
+        assert!(worst < bound && bound < 12.0 * sd, "bound {bound}, largest {worst}, σ {sd}");
     }
 }

@@ -5,7 +5,8 @@
 //! A record holds position and velocity in f32, attitude as 16-bit binary angles (2π/65 536
 //! rad a unit: they wrap as angles do, and the filter's residuals are wrapped anyway) and the
 //! six rates in 16 bits over a span set per scenario ([`Filter::rate_span`]): wide enough for
-//! the vehicle's limits and for the noise of a two-point start, so the quantum lies far below
+//! the vehicle's limits (with what the wind adds, [`super::setup::wind_acceleration`]) and for
+//! the noise of a two-point start, so the quantum lies far below
 //! the noise the filter smooths. Twelve tracks of a UAV take 552 bytes instead of 768 (a
 //! 10^6-UAV swarm: 526 MiB instead of 732).
 //!

@@ -53,6 +53,8 @@ pub struct View<'a> {
     /// The origins of the last steps, O(k0) at `k0 mod len`.
     pub ring: &'a [[f64; 3]],
     pub messages: &'a [Message],
+    /// Each UAV's environment (the position-fix bias), empty when the scenario has none.
+    pub env: &'a [crate::world::environment::UavEnv],
     /// The warm-up: an ideal link (no dropout but the references' own, no loss).
     pub warm: bool,
 }
@@ -108,13 +110,18 @@ impl Scratch {
 }
 
 /// UAV `i`'s own measurement at this step (absolute): the truth plus noise from its own-state
-/// stream. Its broadcasts carry the same measurement.
+/// stream, and in flight its position fix's bias. Its broadcasts carry the same measurement.
 pub fn own_measurement(v: &View<'_>, i: usize) -> State9 {
     let mut z = [0.0f32; 9];
     bulk::normals(bulk::key(&v.run, i as u64, Source::OwnState, v.draw_step), 0, &mut z);
     let mut s = v.states[i];
     for k in 0..9 {
         s[k] += f64::from(v.c.sigma[k] * z[k]);
+    }
+    if let Some(e) = v.env.get(i).filter(|_| !v.warm) {
+        for k in 0..3 {
+            s[X + k] += e.gnss_bias[k];
+        }
     }
     s
 }

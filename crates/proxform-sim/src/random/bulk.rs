@@ -74,7 +74,7 @@ fn sin_cos_turn(x: f32) -> (f32, f32) {
 const LANES: usize = 8;
 
 /// Fills `out` with standard normal deviates: draws `first/2 …` of the stream of `key`, two
-/// deviates per draw (Box-Muller), [`LANES`] draws at a time.
+/// deviates per draw (Box-Muller), `LANES` draws at a time.
 pub fn normals(key: u64, first: u64, out: &mut [f32]) {
     let pairs = out.len().div_ceil(2);
     let mut c = 0;
