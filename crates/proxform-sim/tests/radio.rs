@@ -63,3 +63,32 @@ fn delayed_radio_reports_beside_onboard_detections_keep_the_formation() {
         assert!(sum.p99_abs_error.alpha_deg < 1.0, "{predictor}: {:?}", sum.p99_abs_error);
     }
 }
+
+#[test]
+fn a_large_broadcasting_swarm_hears_through_the_index_what_it_would_hear_without() {
+    // 300 UAVs all broadcasting with losses (above the 64 messages from which they are indexed
+    // by sender position): with a range that reaches everyone, the index visits every message
+    // in the order heard, so the flight is the one with an unlimited radio, bit for bit; with
+    // a short range it hears only its neighbourhood.
+    let lattice = |range: Option<f64>| {
+        let spec = proxform_scenario::builtin::swarm_spec(300).with(|s| {
+            s.duration_s = Some(5.0);
+            s.radio.broadcast_all = Some(true);
+            s.radio.loss = Some(0.3);
+            s.sensing.dropout = Some(0.3);
+            s.radio.range_m = range;
+        });
+        Scenario::try_from(spec).expect("valid")
+    };
+    let everywhere = batch(&lattice(None), 5, 2);
+    let far = batch(&lattice(Some(1.0e6)), 5, 2);
+    assert_eq!(everywhere, far);
+    assert!(everywhere.swarm.radio_used_per_uav_s > 10.0, "{}", everywhere.swarm.radio_used_per_uav_s);
+    let near = batch(&lattice(Some(120.0)), 5, 2);
+    assert!(
+        near.swarm.radio_used_per_uav_s < 0.5 * everywhere.swarm.radio_used_per_uav_s,
+        "{} vs {}",
+        near.swarm.radio_used_per_uav_s,
+        everywhere.swarm.radio_used_per_uav_s
+    );
+}

@@ -6,8 +6,9 @@
 //! avoidance) over flat arrays: the true states, one array of every UAV's tracks in f32
 //! (`tracks`), the inputs and the per-UAV records, with per-thread scratch allocated once.
 //! A step is:
-//! 0. **environment** (with wind or a position-fix bias): every UAV's wind and bias over the
-//!    step, by the reference engine's own pass ([`crate::world::environment`]);
+//! 0. **environment** (with wind, a position-fix bias or bursty radio losses): every UAV's
+//!    wind, bias and radio channel over the step, by the reference engine's own pass
+//!    ([`crate::world::environment`]);
 //! 1. **index**: the neighbour grid over the positions;
 //! 2. **radio**: the broadcasters' messages (their own measurements), composed once;
 //! 3. per block of [`BLOCK`] UAVs, in parallel: **perceive** (areas, references, radio,
@@ -43,6 +44,7 @@ use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::RunKey;
 use crate::world::environment::{self, EnvStep, UavEnv};
 use crate::world::options::RunOptions;
+use crate::world::reach::Reach;
 use setup::Consts;
 pub use setup::{supports, Unsupported};
 use tracks::{Owner, Track};
@@ -86,6 +88,8 @@ pub struct FastSimulation<'s> {
     /// empty when the scenario has neither.
     env: Vec<UavEnv>,
     messages: Vec<Message>,
+    /// The messages' index by sender position.
+    reach: Reach,
     /// Origins of the reference points of the last steps.
     ring: Vec<[f64; 3]>,
     start: [f64; 3],
@@ -126,6 +130,7 @@ impl<'s> FastSimulation<'s> {
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
             messages: Vec::with_capacity(c.broadcasters.len()),
+            reach: Reach::new(),
             ring: vec![[p0[X], p0[X + 1], p0[X + 2]]; ring_len],
             start,
             origin0: [p0[X], p0[X + 1], p0[X + 2]],
@@ -156,6 +161,7 @@ impl<'s> FastSimulation<'s> {
             + self.avoid.len() * std::mem::size_of::<Vec<(u32, Box<Avoidance>)>>()
             + self.grid.heap_bytes()
             + self.env.len() * std::mem::size_of::<UavEnv>()
+            + self.reach.heap_bytes()
     }
 
     /// The origin of the reference points at step `k` (the navigator's path position).
@@ -198,8 +204,24 @@ impl<'s> FastSimulation<'s> {
         );
         let spread = relative_speed_bound(self.states.iter().map(|s| [s[VX], s[VX + 1], s[VX + 2]]));
         self.c.watch = self.c.watch.for_speeds(spread);
-        let Self { sc, c, run, states, uavs, applied, tracks, used, avoid, grid, env, messages, ring, origin0, .. } =
-            self;
+        let Self {
+            sc,
+            c,
+            run,
+            states,
+            uavs,
+            applied,
+            tracks,
+            used,
+            avoid,
+            grid,
+            env,
+            messages,
+            reach,
+            ring,
+            origin0,
+            ..
+        } = self;
         let view = View {
             c,
             sc,
@@ -212,6 +234,7 @@ impl<'s> FastSimulation<'s> {
             origin0: *origin0,
             ring,
             messages: &[],
+            reach: &Reach::new(),
             env,
             warm,
         };
@@ -225,7 +248,8 @@ impl<'s> FastSimulation<'s> {
                 at: [s[X], s[X + 1], s[X + 2]],
             });
         }
-        let view = View { messages, ..view };
+        reach.rebuild(messages.iter().map(|m| m.at), sc.radio().range_m);
+        let view = View { messages, reach, ..view };
         let cap = c.capacity;
         let nav = c.nav;
         let adjust = self.options.adjustment_enabled;

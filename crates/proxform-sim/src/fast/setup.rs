@@ -16,15 +16,15 @@ pub struct Unsupported(pub &'static str);
 
 /// Checks that the fast engine runs every feature `sc` uses: the proximity method on the
 /// kinematic vehicle with α-β tracks and the one-step input; measurement noise, actuation
-/// error, onboard dropout, beacons and i.i.d. radio loss, separation keeping, the stopping
-/// limit and collision avoidance, wind (steady, gusts, turbulence) and the position fix's bias.
-/// Faults, formation changes, scattered starts, radio delay, bursts and relays, the robust
+/// error, onboard dropout, beacons and radio loss (i.i.d. and bursty), separation keeping, the
+/// stopping limit and collision avoidance, wind (steady, gusts, turbulence) and the position
+/// fix's bias. Faults, formation changes, scattered starts, radio delay and relays, the robust
 /// fusion, the own-state filter and check, the horizon and the fixed wing stay with the
 /// reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 17] = [
+    let checks: [(bool, &'static str); 16] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (matches!(sc.vehicle(), VehicleModel::Kinematic(_)), "the fixed-wing vehicle"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
@@ -37,7 +37,6 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (sc.placement().in_slots(), "scattered starts"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (radio.delay_steps == 0, "radio delay"),
-        (radio.burst.is_none(), "bursty radio loss"),
         (!radio.relay_navigator, "relays of the navigator"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (p.areas.areas + max_refs(sc) <= MAX_TRACKS, "more than 16 areas and references"),
@@ -115,6 +114,8 @@ pub struct Consts {
     pub reference_dropout: f64,
     pub actuation_error: f64,
     pub radio_loss: f64,
+    /// The loss in a receiver's bad channel state (bursty losses), when the radio has one.
+    pub burst_loss: Option<f64>,
     pub radio_range2: f64,
     /// The UAVs that broadcast, in the order their messages are heard.
     pub broadcasters: Vec<usize>,
@@ -196,6 +197,7 @@ impl Consts {
             reference_dropout: sc.reference_dropout(),
             actuation_error: sc.actuation_error(),
             radio_loss: radio.loss,
+            burst_loss: radio.burst.map(|b| b.loss_bad),
             radio_range2: radio.range_m * radio.range_m,
             broadcasters,
         }

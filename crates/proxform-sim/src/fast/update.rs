@@ -27,6 +27,8 @@ const EMPTY: u32 = u32::MAX;
 const TRACK: u32 = 1 << 31;
 /// Counter offset of the dropout draws in a UAV's sensing stream (the noise uses the low ones).
 const DROPOUT_DRAWS: u64 = 1 << 40;
+/// Counter offset of the bad channel's loss draws in a UAV's radio stream.
+const BURST_DRAWS: u64 = 1 << 40;
 
 /// A radio message: its sender, the state it reports and where the sender was.
 #[derive(Debug, Clone, Copy)]
@@ -53,6 +55,8 @@ pub struct View<'a> {
     /// The origins of the last steps, O(k0) at `k0 mod len`.
     pub ring: &'a [[f64; 3]],
     pub messages: &'a [Message],
+    /// Their index by sender position.
+    pub reach: &'a crate::world::reach::Reach,
     /// Each UAV's environment (the position-fix bias), empty when the scenario has none.
     pub env: &'a [crate::world::environment::UavEnv],
     /// The warm-up: an ideal link (no dropout but the references' own, no loss).
@@ -83,6 +87,8 @@ pub struct Scratch {
     /// Observed onboard (areas, references), then close-range detections.
     picked: Vec<u32>,
     heard: Vec<usize>,
+    /// Messages within radio range (`Reach::for_each`).
+    in_range: Vec<u32>,
     /// How many of `picked` were reported onboard (the rest are close-range detections).
     onboard: usize,
     normals: Vec<f32>,
@@ -100,6 +106,7 @@ impl Scratch {
             close: Vec::with_capacity(8),
             picked: Vec::with_capacity(c.capacity + 8),
             heard: Vec::with_capacity(8),
+            in_range: Vec::new(),
             onboard: 0,
             normals: Vec::with_capacity(9 * (c.capacity + 8)),
             obs: Vec::with_capacity(c.capacity + 8),
@@ -263,17 +270,28 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
     // Radio: a message from a UAV perceived onboard adds nothing (α-β tracks do not fuse).
     let radio_key = bulk::key(&v.run, i as u64, Source::Radio, v.draw_step);
     let loss_p = if v.warm { 0.0 } else { c.radio_loss };
-    for (m_idx, m) in v.messages.iter().enumerate() {
+    // A receiver whose channel is in its bad state (bursty losses) loses each message with
+    // `loss_bad` besides.
+    let bad_p = match c.burst_loss {
+        Some(p) if !v.warm && v.env.get(i).is_some_and(|e| e.channel_bad) => p,
+        _ => 0.0,
+    };
+    let (picked, heard) = (&s.picked, &mut s.heard);
+    v.reach.for_each(v.messages.len(), p, v.sc.radio().range_m, &mut s.in_range, |m_idx| {
+        let m = &v.messages[m_idx];
         let j = m.sender;
-        if j as usize == i || s.picked[..onboard].contains(&j) {
-            continue;
+        if j as usize == i || picked[..onboard].contains(&j) {
+            return;
         }
         let d2 = (m.at[0] - p[0]).powi(2) + (m.at[1] - p[1]).powi(2) + (m.at[2] - p[2]).powi(2);
-        if d2 > c.radio_range2 || (loss_p > 0.0 && bulk::uniform(radio_key, m_idx as u64) < loss_p) {
-            continue;
+        if d2 > c.radio_range2
+            || (loss_p > 0.0 && bulk::uniform(radio_key, m_idx as u64) < loss_p)
+            || (bad_p > 0.0 && bulk::uniform(radio_key, BURST_DRAWS + m_idx as u64) < bad_p)
+        {
+            return;
         }
-        s.heard.push(m_idx);
-    }
+        heard.push(m_idx);
+    });
     if !s.close.is_empty() {
         s.close.sort_unstable();
         for k in 0..s.close.len() {

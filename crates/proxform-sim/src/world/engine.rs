@@ -31,6 +31,7 @@ use super::faults::{self, FaultStep};
 use super::measurement::{self, Message, OwnSensors};
 use super::options::{NeighbourSearch, RunOptions};
 use super::phases::{for_each_block, for_each_block_in_order, Mode, StepContext};
+use super::reach::Reach;
 use super::remote::{holding, Agents, Phase, Sensed, StepRequest};
 use super::sensing::{noisy, ProximitySensor, Scene};
 use crate::measure::observer::{Observer, StepFrame, UavStep};
@@ -90,8 +91,10 @@ struct World<'s> {
     grid: NeighbourGrid,
     /// Per-UAV environment (wind, position-fix bias, radio channel), empty when not needed.
     env: Vec<UavEnv>,
-    /// The radio messages arriving this step, composed once for all receivers.
+    /// The radio messages arriving this step, composed once for all receivers, and their
+    /// index by sender position.
     arriving: Vec<Message>,
+    reach: Reach,
     /// Messages sent in the last `delay + 1` steps, oldest first (radio with delay only).
     history: VecDeque<Vec<Message>>,
     /// Messages sent this step.
@@ -175,6 +178,7 @@ impl<'s> Simulation<'s> {
             env: super::environment::initial(scenario),
             grid: NeighbourGrid::new(),
             arriving: Vec::new(),
+            reach: Reach::new(),
             history: VecDeque::new(),
             sent_now: 0,
             active: initially_flying(scenario),
@@ -269,7 +273,10 @@ impl<'s> Simulation<'s> {
     pub fn heap_bytes(&self) -> usize {
         let n = self.next.len();
         let agents: usize = self.agents.iter().flatten().map(|a| a.heap_bytes() + std::mem::size_of::<Agent>()).sum();
-        n * (2 * std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>()) + self.world.grid.heap_bytes() + agents
+        n * (2 * std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>())
+            + self.world.grid.heap_bytes()
+            + self.world.reach.heap_bytes()
+            + agents
     }
 
     fn frame(&self) -> StepFrame<'_> {
@@ -602,15 +609,16 @@ impl<'s> World<'s> {
             std::mem::swap(&mut self.arriving, &mut now);
             self.history.push_back(now);
             self.history.truncate(1);
-            return;
-        }
-        self.history.push_back(now);
-        self.arriving.clear();
-        if self.history.len() == delay + 1 {
-            if let Some(front) = self.history.front() {
-                self.arriving.extend_from_slice(front);
+        } else {
+            self.history.push_back(now);
+            self.arriving.clear();
+            if self.history.len() == delay + 1 {
+                if let Some(front) = self.history.front() {
+                    self.arriving.extend_from_slice(front);
+                }
             }
         }
+        self.reach.rebuild(self.arriving.iter().map(|m| m.at), self.scenario.radio().range_m);
     }
 
     /// The read-only view of this step that the block phases share.
@@ -631,6 +639,7 @@ impl<'s> World<'s> {
             active: &self.active,
             faults: &self.faults,
             messages: &self.arriving,
+            reach: &self.reach,
             env: &self.env,
             mode,
         }

@@ -9,6 +9,7 @@ pub mod options;
 pub mod phases;
 pub mod placement;
 pub mod radio;
+pub mod reach;
 pub mod remote;
 pub mod sensing;
 pub mod wind;

@@ -123,8 +123,9 @@ pub(super) struct StepContext<'a> {
     pub sensor: &'a ProximitySensor,
     pub active: &'a [bool],
     pub faults: &'a FaultStep,
-    /// The radio messages arriving now.
+    /// The radio messages arriving now, and their index by sender position.
     pub messages: &'a [Message],
+    pub reach: &'a super::reach::Reach,
     /// Per-UAV environment (empty when the scenario needs none).
     pub env: &'a [UavEnv],
     /// Flight or warm-up.
@@ -155,6 +156,7 @@ impl StepContext<'_> {
             radio_up,
             radio,
             messages: self.messages,
+            reach: self.reach,
             delay_s,
             channel_bad,
             onboard: sc.method().uses_onboard_sensing(),

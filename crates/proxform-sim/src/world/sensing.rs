@@ -15,6 +15,7 @@ use proxform_scenario::radio::RadioModel;
 
 use super::measurement::Message;
 use super::options::NeighbourSearch;
+use super::reach::Reach;
 use crate::random::{StepRng, Ziggurat};
 
 /// What every UAV's sensors look at in one step: the true states, the neighbour index over
@@ -50,6 +51,8 @@ pub struct SensorScratch {
     refs: Vec<u32>,
     /// UAVs within the watch radius (collision avoidance's close-range detections).
     close: Vec<u32>,
+    /// Messages within radio range ([`Reach::for_each`]).
+    heard: Vec<u32>,
 }
 
 impl SensorScratch {
@@ -60,6 +63,7 @@ impl SensorScratch {
             best_id: vec![0; m],
             refs: Vec::with_capacity(8),
             close: Vec::with_capacity(8),
+            heard: Vec::new(),
         }
     }
 }
@@ -194,23 +198,25 @@ impl ProximitySensor {
             let r2 = radio.range_m * radio.range_m;
             let n = states.len();
             let mut relayed: Option<&Message> = None;
-            for m in link.messages {
+            let messages = link.messages;
+            link.reach.for_each(messages.len(), p, radio.range_m, &mut scratch.heard, |k| {
+                let m = &messages[k];
                 let j = m.sender as usize;
                 let about = m.about as usize;
                 let seen = !link.fuse && out[start..].iter().any(|o| o.id.index() == about);
                 if j == i || about == i || j >= n || about >= n || !link.active[j] || seen {
-                    continue;
+                    return;
                 }
                 let q = &m.at;
                 let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
                 if d2 > r2 || !super::radio::delivered(radio, link.channel_bad, &mut draws.radio) {
-                    continue;
+                    return;
                 }
                 if m.is_relay() {
                     if relayed.is_none_or(|r| m.age_s < r.age_s) {
                         relayed = Some(m);
                     }
-                    continue;
+                    return;
                 }
                 out.push(Observation {
                     id: UavId(j as u32),
@@ -218,7 +224,7 @@ impl ProximitySensor {
                     age_s: link.delay_s,
                     source: ObservationSource::Radio,
                 });
-            }
+            });
             if let Some(m) = relayed {
                 let age_s = link.delay_s + m.age_s;
                 let fresher = out[start..].iter().any(|o| o.id.0 == m.about && o.age_s <= age_s);
@@ -277,6 +283,8 @@ pub struct Link<'a> {
 
     /// The messages arriving now, in the order they are heard.
     pub messages: &'a [Message],
+    /// Their index by sender position ([`super::reach`]).
+    pub reach: &'a Reach,
     /// Age of a radio message on arrival (s).
     pub delay_s: f64,
     /// The receiver's Gilbert-Elliott channel is in its bad state.
@@ -368,6 +376,7 @@ mod tests {
             radio_up: true,
             radio: &radio,
             messages,
+            reach: &Reach::new(),
             delay_s: 0.0,
             channel_bad: false,
             onboard: true,
