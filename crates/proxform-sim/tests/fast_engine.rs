@@ -84,21 +84,26 @@ fn the_engines_agree_on_the_swarm_lattice() {
     assert!(drift.max_abs_error[1] > 10.0 * a.max[1], "{:?} vs {a:?}", drift.max_abs_error);
 }
 
+/// One level of UAVs 40 m apart, sensing 70 m, every UAV broadcasting over 120 m.
+fn one_broadcasting_level(s: &mut ScenarioSpec) {
+    let shape = s.formation.shape.as_mut().expect("a shape");
+    shape.spacing_m = Some(40.0);
+    shape.levels = Some(1);
+    s.controller.sensing_range_m = Some(70.0);
+    s.formation.dependencies.as_mut().expect("derived").max_distance_m = Some(70.0);
+    s.radio.broadcast_all = Some(true);
+    s.radio.range_m = Some(120.0);
+}
+
 #[test]
 fn the_engines_agree_on_a_lossy_single_level_lattice() {
     // Another lattice: one level, 40 m apart, onboard dropout, a lossy radio on which every UAV
     // broadcasts, and separation keeping from 36 m.
     let sc = swarm(200, |s| {
+        one_broadcasting_level(s);
         s.duration_s = Some(30.0);
-        let shape = s.formation.shape.as_mut().expect("a shape");
-        shape.spacing_m = Some(40.0);
-        shape.levels = Some(1);
-        s.controller.sensing_range_m = Some(70.0);
-        s.formation.dependencies.as_mut().expect("derived").max_distance_m = Some(70.0);
         s.sensing.dropout = Some(0.1);
         s.radio.loss = Some(0.2);
-        s.radio.broadcast_all = Some(true);
-        s.radio.range_m = Some(120.0);
         s.controller.separation_m = Some(36.0);
     });
     // Twelve runs: with losses the figures of one run of 200 UAVs vary by ±15 % between runs
@@ -140,15 +145,9 @@ fn the_engines_agree_under_bursty_radio_loss() {
     // detections lost onboard, as far as the bursts let it.
     let lattice = |burst: bool| {
         swarm(200, |s| {
+            one_broadcasting_level(s);
             s.duration_s = Some(20.0);
-            let shape = s.formation.shape.as_mut().expect("a shape");
-            shape.spacing_m = Some(40.0);
-            shape.levels = Some(1);
-            s.controller.sensing_range_m = Some(70.0);
-            s.formation.dependencies.as_mut().expect("derived").max_distance_m = Some(70.0);
             s.sensing.dropout = Some(0.3);
-            s.radio.broadcast_all = Some(true);
-            s.radio.range_m = Some(120.0);
             if burst {
                 s.radio.burst_p_good_to_bad = Some(0.1);
                 s.radio.burst_p_bad_to_good = Some(0.3);

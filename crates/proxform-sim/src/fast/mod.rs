@@ -316,21 +316,13 @@ impl<'s> FastSimulation<'s> {
                 *s = nav_next;
                 return;
             }
-            let Some(e) = env.get(i) else {
-                for a in 0..3 {
-                    let (ua, ur) = (f64::from(u[a]), f64::from(u[3 + a]));
-                    s[X + a] += dt * (s[VX + a] + 0.5 * ua);
-                    s[VX + a] += ua;
-                    s[ALPHA + a] += ur;
-                }
-                return;
-            };
+            // Calm air: both winds are zero, and each sum below is the vehicle's alone.
+            let wind = |a: usize| env.get(i).map_or((0.0, 0.0), |e| (e.wind_now[a], e.wind_next[a]));
             for a in 0..3 {
                 let (ua, ur) = (f64::from(u[a]), f64::from(u[3 + a]));
-                let (w_now, w_next) = (e.wind_now[a], e.wind_next[a]);
-                let air = s[VX + a] - w_now;
-                s[X + a] = s[X + a] + dt * (air + 0.5 * ua) + 0.5 * dt * (w_now + w_next);
-                s[VX + a] = air + ua + w_next;
+                let (w_now, w_next) = wind(a);
+                s[X + a] += dt * (s[VX + a] - w_now + 0.5 * ua) + 0.5 * dt * (w_now + w_next);
+                s[VX + a] += ua + (w_next - w_now);
                 s[ALPHA + a] += ur;
             }
         };
