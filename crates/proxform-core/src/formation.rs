@@ -37,15 +37,24 @@ pub enum FormationFrame {
     /// `R_f` is the yaw rotation by the formation's course, taken as the horizontal direction
     /// of travel of the reference UAV, so the formation turns with its course.
     Course,
+    /// `R_f` is the yaw rotation by the reference UAV's heading (its nose, β): the formation
+    /// turns with the noses, which stay parallel, and keeps its shape while hovering (a
+    /// multirotor's frame: its nose need not follow its course).
+    Heading,
 }
 
 impl FormationFrame {
-    /// Cosine and sine of the frame's yaw, from the reference's horizontal velocity (no
-    /// trigonometric call). A reference with no horizontal speed keeps the world frame.
+    /// Cosine and sine of the frame's yaw: from the reference's horizontal velocity (no
+    /// trigonometric call; a reference with no horizontal speed keeps the world frame) or from
+    /// its heading.
     #[inline]
     pub fn course_cos_sin(self, reference: &State9) -> (f64, f64) {
         match self {
             FormationFrame::World => (1.0, 0.0),
+            FormationFrame::Heading => {
+                let (s, c) = reference[state::BETA].sin_cos();
+                (c, s)
+            }
             FormationFrame::Course => {
                 let (vx, vy) = (reference[state::VX], reference[state::VY]);
                 let h = vx.hypot(vy);
@@ -107,25 +116,42 @@ impl Formation {
         add_w_rotated(i, j, c, s, x);
     }
 
-    /// `W_ij` in a formation that turns as one rigid body about the vertical, for vehicles
-    /// whose velocity follows their attitude (the fixed wing): adds to `x` the position,
-    /// velocity and attitude parts. The turn rate ω is the reference's coordinated-turn rate
-    /// `−g·tan γ / V` (its bank is measured far more finely than its yaw rate could be
-    /// estimated). In such a turn j does not fly along the formation's course: its velocity is
+    /// `W_ij` in a formation that turns as one rigid body about the vertical at `omega` (rad/s,
+    /// counter-clockwise positive; the reference's turn rate, [`crate::VehicleModel::turn_rate`]):
+    /// adds to `x` the position, velocity and attitude parts. Relative to j, i's slot is at
+    /// `R_f(d_i − d_j)` and moves at `ω × R_f(d_i − d_j)`.
+    ///
+    /// In a [`FormationFrame::Course`] frame (vehicles whose velocity follows their attitude,
+    /// the fixed wing) j does not fly along the formation's course in the turn: its velocity is
     /// the course velocity plus `ω × d_j` (d_j from the formation's origin), so the course is
-    /// j's heading turned back by the angle that adds. Relative to j, i's slot is at
-    /// `R_f(d_i − d_j)` and moves at `ω × R_f(d_i − d_j)`; i heads along its own velocity and
-    /// banks for the same ω at its own speed. In a [`FormationFrame::World`] frame, or behind
-    /// a reference slower than 1 m/s, this is [`Self::add_w`].
+    /// j's heading turned back by the angle that adds; i heads along its own velocity and banks
+    /// for the same ω at its own speed. In a [`FormationFrame::Heading`] frame the noses stay
+    /// parallel (the attitude part is `a_i − a_j`). In a [`FormationFrame::World`] frame, or in
+    /// a course frame behind a reference slower than 1 m/s, this is [`Self::add_w`].
     #[inline]
-    pub fn add_w_turning(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
+    pub fn add_w_turning(&self, i: &FormationSlot, j: &FormationSlot, reference: &State9, omega: f64, x: &mut State9) {
         let (vx, vy) = (reference[state::VX], reference[state::VY]);
         let v = vx.hypot(vy);
-        if self.frame == FormationFrame::World || v < 1.0 {
-            self.add_w(i, j, reference, x);
-            return;
+        match self.frame {
+            FormationFrame::World => {
+                self.add_w(i, j, reference, x);
+                return;
+            }
+            FormationFrame::Heading => {
+                let (c, s) = self.frame.course_cos_sin(reference);
+                add_w_rotated(i, j, c, s, x);
+                let d = i.offset_m - j.offset_m;
+                let (rx, ry) = (c * d.x - s * d.y, s * d.x + c * d.y);
+                x[state::VX] -= omega * ry;
+                x[state::VY] += omega * rx;
+                return;
+            }
+            FormationFrame::Course if v < 1.0 => {
+                self.add_w(i, j, reference, x);
+                return;
+            }
+            FormationFrame::Course => {}
         }
-        let omega = -G * reference[state::GAMMA].tan() / v;
         // j's velocity in the formation frame is (√(v² − a²), a), a = ω·d_j,forward.
         let a = omega * j.offset_m.x;
         let (cphi, sphi) = if a.abs() < v { ((v * v - a * a).sqrt() / v, a / v) } else { (1.0, 0.0) };
@@ -146,15 +172,21 @@ impl Formation {
         }
     }
 
-    /// Adds `W_ij` to `x`: [`Self::add_w_turning`] when `turning` (the controllers'
-    /// `bank_turn_feedforward`), else [`Self::add_w`]. The controllers and the error metric
-    /// choose here, so they use the same W.
+    /// Adds `W_ij` to `x`: [`Self::add_w_turning`] at the turn rate `turn` when there is one
+    /// (the controllers' `turn_feedforward`), else [`Self::add_w`]. The controllers and the
+    /// error metric choose here, so they use the same W.
     #[inline]
-    pub fn add_w_with(&self, turning: bool, i: &FormationSlot, j: &FormationSlot, reference: &State9, x: &mut State9) {
-        if turning {
-            self.add_w_turning(i, j, reference, x);
-        } else {
-            self.add_w(i, j, reference, x);
+    pub fn add_w_with(
+        &self,
+        turn: Option<f64>,
+        i: &FormationSlot,
+        j: &FormationSlot,
+        reference: &State9,
+        x: &mut State9,
+    ) {
+        match turn {
+            Some(omega) => self.add_w_turning(i, j, reference, omega, x),
+            None => self.add_w(i, j, reference, x),
         }
     }
 
@@ -247,7 +279,7 @@ mod tests {
                     // From j's true state, W gives i's true state: position, velocity, heading
                     // and bank, although j itself does not fly along the course.
                     let mut x = truth[j];
-                    f.add_w_turning(si, sj, &truth[j], &mut x);
+                    f.add_w_turning(si, sj, &truth[j], omega, &mut x);
                     for k in 0..9 {
                         assert_relative_eq!(x[k], truth[i][k], epsilon = 1e-9);
                     }
@@ -258,9 +290,30 @@ mod tests {
         let fixed = Formation::new(f.slots.clone(), FormationFrame::World).expect("finite");
         let reference = in_turn(right.offset_m, psi, 0.1, v_f);
         let (mut x, mut y) = (State9::zeros(), State9::zeros());
-        fixed.add_w_turning(&left, &right, &reference, &mut x);
+        fixed.add_w_turning(&left, &right, &reference, 0.1, &mut x);
         fixed.add_w(&left, &right, &reference, &mut y);
         assert_eq!(x, y);
+    }
+
+    #[test]
+    fn a_heading_frame_turns_with_parallel_noses_and_holds_its_shape_in_a_hover() {
+        let lead = FormationSlot::at(0.0, 0.0, 0.0);
+        let wing = FormationSlot::at(-10.0, 8.0, 0.0);
+        let f = Formation::new(vec![lead, wing], FormationFrame::Heading).expect("finite");
+        // The lead hovers with its nose at 90°: the wing's slot is 10 m along −y, 8 m along −x.
+        let mut hover = State9::zeros();
+        hover[state::BETA] = deg(90.0);
+        let w = f.w(&wing, &lead, &hover);
+        assert_relative_eq!(w[0], -8.0, epsilon = 1e-9);
+        assert_relative_eq!(w[1], -10.0, epsilon = 1e-9);
+        // Turning at ω about the lead, the wing's slot moves at ω × r; its nose stays parallel.
+        let (omega, mut x) = (0.2, hover);
+        x[state::VX] = -5.0;
+        f.add_w_turning(&wing, &lead, &hover, omega, &mut x);
+        assert_relative_eq!(x[state::VX], -5.0 - omega * -10.0, epsilon = 1e-9);
+        assert_relative_eq!(x[state::VY], omega * -8.0, epsilon = 1e-9);
+        assert_eq!(x[state::BETA], hover[state::BETA]);
+        assert_eq!(x[state::GAMMA], 0.0);
     }
 
     #[test]

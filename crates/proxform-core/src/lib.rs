@@ -39,4 +39,4 @@ pub use observation::{Observation, ObservationSource, UavId};
 pub use predictor::PredictorKind;
 pub use schedule::{FormationSchedule, FormationStage};
 pub use state::{Input, State9};
-pub use vehicle::{FixedWingModel, KinematicLimits, KinematicModel, VehicleModel};
+pub use vehicle::{FixedWingModel, KinematicLimits, KinematicModel, MultirotorModel, VehicleModel};

@@ -6,7 +6,8 @@
 //! §9). The controller's and the vehicles' own defaults are their parameter structs' `Default`
 //! impls in `proxform-core` ([`proxform_core::ControllerParams`],
 //! [`proxform_core::KinematicLimits`], [`proxform_core::FixedWingModel`]); the scenario only
-//! chooses between them (the fixed wing's permissible errors, its turn feed-forward) here.
+//! chooses between them (the vehicles' permissible errors, the turn feed-forward, the frame)
+//! in the converters, and here gives the multirotor's allowable errors.
 
 /// Update period Δt (s).
 pub const DT_S: f64 = 0.1;
@@ -16,6 +17,8 @@ pub const DURATION_S: f64 = 100.0;
 pub const NAVIGATOR: u32 = 1;
 /// Pairs closer than this are unsafe (m).
 pub const SAFETY_DISTANCE_M: f64 = 50.0;
+/// A multirotor formation's safety distance (m): small vehicles fly metres apart.
+pub const MULTIROTOR_SAFETY_DISTANCE_M: f64 = 3.0;
 /// How long the formation has flown before t = 0 (s).
 pub const WARMUP_S: f64 = 1.0;
 /// Separation keeping distance, in safety distances (when `controller.separation_m` is unset).
@@ -47,6 +50,16 @@ pub const GNSS_TAU_S: f64 = 60.0;
 pub const ALLOWABLE_POSITION_M: [f64; 3] = [0.5, 0.6, 0.2];
 /// Allowable errors α, β, γ (deg).
 pub const ALLOWABLE_ATTITUDE_DEG: [f64; 3] = [0.4, 0.3, 1.0];
+
+/// A multirotor's allowable errors x, y, z (m).
+pub const MULTIROTOR_ALLOWABLE_POSITION_M: [f64; 3] = [1.0, 1.0, 1.0];
+/// A multirotor's allowable errors α, β, γ (deg): yaw 3°; pitch and roll are its inner loop's
+/// (they follow each UAV's own accelerations and drag: a wing tip flying faster in a turn tilts
+/// more), judged only against 45°.
+pub const MULTIROTOR_ALLOWABLE_ATTITUDE_DEG: [f64; 3] = [45.0, 3.0, 45.0];
+
+/// A multirotor formation's `navigator_degree` in derived dependency tables.
+pub const MULTIROTOR_NAVIGATOR_DEGREE: f64 = 0.8;
 
 /// Main references per UAV in derived dependency tables.
 pub const REFERENCES_PER_UAV: u32 = 2;

@@ -61,6 +61,7 @@ fn formation(sc: &Scenario) -> FormationSpec {
     let frame = match f.frame {
         FormationFrame::World => "world",
         FormationFrame::Course => "course",
+        FormationFrame::Heading => "heading",
     };
     let change = sc
         .schedule()
@@ -162,7 +163,7 @@ fn controller(sc: &Scenario) -> ControllerSpec {
         coast_s: Some(p.coast_s),
         coast_accel_s: Some(p.coast_accel_s),
         coast_decay_s: Some(p.coast_decay_s),
-        bank_turn_feedforward: Some(p.bank_turn_feedforward),
+        turn_feedforward: Some(p.turn_feedforward),
         stop_closing: Some(p.stop_closing),
         own_filter_gain: Some(p.own_filter_gain),
         separation_m: p.separation_m,
@@ -214,6 +215,23 @@ fn vehicle(v: &VehicleModel) -> VehicleSpec {
             pitch_rate_max_deg_s: Some(m.pitch_rate_max_radps.to_degrees()),
             yaw_rate_max_deg_s: Some(m.yaw_rate_max_radps.to_degrees()),
             throttle_accel_kmh_s: Some(kmh(m.accel_max_mps2)),
+            ..VehicleSpec::default()
+        },
+        VehicleModel::Multirotor(m) => VehicleSpec {
+            model: Some("multirotor".into()),
+            max_speed_kmh: Some(kmh(m.max_speed_mps)),
+            climb_max_kmh: Some(kmh(m.climb_max_mps)),
+            descent_max_kmh: Some(kmh(m.descent_max_mps)),
+            accel_max_mps2: Some(m.accel_max_mps2),
+            vertical_accel_max_mps2: Some(m.vertical_accel_max_mps2),
+            tilt_max_deg: Some(m.tilt_max_rad.to_degrees()),
+            thrust_to_weight: Some(m.thrust_to_weight),
+            yaw_rate_max_deg_s: Some(m.yaw_rate_max_radps.to_degrees()),
+            velocity_time_constant_s: Some(m.velocity_time_constant_s),
+            attitude_time_constant_s: Some(m.attitude_time_constant_s),
+            yaw_time_constant_s: Some(m.yaw_time_constant_s),
+            drag_linear_per_s: Some(m.drag_linear_per_s),
+            drag_quadratic_per_m: Some(m.drag_quadratic_per_m),
             ..VehicleSpec::default()
         },
     }

@@ -210,6 +210,14 @@ impl Scenario {
         &self.path
     }
 
+    /// True when the navigator flies its path through its vehicle and the wind, its autopilot
+    /// tracking the path ([`proxform_core::ControllerSetup::input_along_path`]), so that the
+    /// wind moves it as it moves every other UAV: the multirotor. The kinematic vehicle's
+    /// navigator is set on its path (the paper's), as is the fixed wing's (METHOD §5).
+    pub fn navigator_flies(&self) -> bool {
+        matches!(self.vehicle(), VehicleModel::Multirotor(_))
+    }
+
     /// Initial state of every UAV.
     pub fn initial(&self) -> &[State9] {
         &self.initial

@@ -281,9 +281,11 @@ pub struct ControllerSpec {
     pub coast_accel_s: Option<f64>,
     /// Fading time of a coasting neighbour's weight (s, > 0). Default 0.1.
     pub coast_decay_s: Option<f64>,
-    /// Course frame: add the slots' turn velocity from the reference's bank. Default: on for
-    /// the fixed wing, off for the kinematic vehicle.
-    pub bank_turn_feedforward: Option<bool>,
+    /// Course or heading frame: the formation turns as one rigid body at the reference's turn
+    /// rate (W's velocity part carries ω × r). Default: on for the fixed wing and the
+    /// multirotor, off for the kinematic vehicle. `bank_turn_feedforward` is its older name.
+    #[serde(alias = "bank_turn_feedforward")]
+    pub turn_feedforward: Option<bool>,
     /// Limit the closing velocity to what braking stops within the gap. Default: on for the
     /// kinematic vehicle, off for the fixed wing.
     pub stop_closing: Option<bool>,
@@ -331,7 +333,7 @@ pub struct ThresholdsSpec {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VehicleSpec {
-    /// "kinematic" (default).
+    /// "kinematic" (default), "fixed_wing" or "multirotor".
     pub model: Option<String>,
     /// Forward speed limits (km/h). Default 180, 360.
     pub vx_min_kmh: Option<f64>,
@@ -349,7 +351,8 @@ pub struct VehicleSpec {
     pub attitude_rate_deg_s: Option<[f64; 3]>,
     /// Fixed wing: stall speed (km/h). Default 90.
     pub stall_speed_kmh: Option<f64>,
-    /// Fixed wing: maximum airspeed (km/h). Default 300.
+    /// Fixed wing: maximum airspeed (km/h), default 300; multirotor: maximum horizontal speed
+    /// over the ground (km/h), default 54.
     pub max_speed_kmh: Option<f64>,
     /// Fixed wing: bank limit (deg). Default 45.
     pub bank_max_deg: Option<f64>,
@@ -361,10 +364,33 @@ pub struct VehicleSpec {
     pub roll_rate_max_deg_s: Option<f64>,
     /// Fixed wing: pitch rate at full elevator (deg/s). Default 15.
     pub pitch_rate_max_deg_s: Option<f64>,
-    /// Fixed wing: yaw rate at full rudder (deg/s). Default 10.
+    /// Fixed wing: yaw rate at full rudder (deg/s), default 10; multirotor: yaw-rate limit
+    /// (deg/s), default 60.
     pub yaw_rate_max_deg_s: Option<f64>,
     /// Fixed wing: airspeed change at full throttle (km/h per second). Default 10.8.
     pub throttle_accel_kmh_s: Option<f64>,
+    /// Multirotor: climb-rate limit (km/h). Default 10.8 (3 m/s).
+    pub climb_max_kmh: Option<f64>,
+    /// Multirotor: descent-rate limit (km/h). Default 7.2 (2 m/s).
+    pub descent_max_kmh: Option<f64>,
+    /// Multirotor: horizontal acceleration limit (m/s²). Default 5.
+    pub accel_max_mps2: Option<f64>,
+    /// Multirotor: vertical acceleration limit (m/s²). Default 3.
+    pub vertical_accel_max_mps2: Option<f64>,
+    /// Multirotor: tilt limit (deg). Default 35.
+    pub tilt_max_deg: Option<f64>,
+    /// Multirotor: thrust-to-weight ratio (> 1). Default 2.
+    pub thrust_to_weight: Option<f64>,
+    /// Multirotor: velocity-loop time constant (s). Default 0.5.
+    pub velocity_time_constant_s: Option<f64>,
+    /// Multirotor: attitude lag (s). Default 0.1.
+    pub attitude_time_constant_s: Option<f64>,
+    /// Multirotor: yaw lag (s). Default 0.2.
+    pub yaw_time_constant_s: Option<f64>,
+    /// Multirotor: linear drag per unit mass (1/s). Default 0.1.
+    pub drag_linear_per_s: Option<f64>,
+    /// Multirotor: quadratic drag per unit mass (1/m). Default 0.015.
+    pub drag_quadratic_per_m: Option<f64>,
 }
 
 /// `[wind]`.

@@ -74,7 +74,7 @@ fn a_v_written_without_thresholds_gets_the_fixed_wing_defaults_and_keeps_its_dis
     "#;
     let s = parse(text, "minimal.toml").expect("valid");
     assert_eq!(s.controller().envelope.thresholds, proxform_core::ControllerParams::fixed_wing_thresholds());
-    assert!(s.controller().bank_turn_feedforward, "on by default for the fixed wing");
+    assert!(s.controller().turn_feedforward, "on by default for the fixed wing");
     let r = run_batch(&s, 3, 20);
     assert!(r.summary.min_separation_m >= 15.0, "{}", r.summary.min_separation_m);
     assert!(r.summary.rms_error.x_m < 5.0 && r.summary.rms_error.y_m < 5.0, "{:?}", r.summary.rms_error);

@@ -63,6 +63,41 @@ pub struct ProximityController {
     navigator: Option<UavId>,
     /// Collision avoidance's working memory (only with `avoid_m` > 0): allocated once.
     avoidance: Option<Box<Avoidance>>,
+    /// The formation's turn as this UAV sees it, for the setpoint lead (only for a vehicle that
+    /// lags its setpoints, in a formation that turns as one body).
+    trend: Option<Box<TurnTrend>>,
+}
+
+/// The formation's turn rate as one UAV sees it (the mean of its neighbours' turn rates) and
+/// that rate's rate of change, low-passed over [`ControllerParams::turn_trend_s`]: a slot at
+/// `r` from its reference moves with the tangential acceleration `ω̇ × r` as a turn begins or
+/// ends, which a vehicle that lags its setpoints must be asked for ahead.
+#[derive(Debug, Clone, Copy, Default)]
+struct TurnTrend {
+    /// When the mean was last taken (s).
+    t: f64,
+    /// The mean turn rate then (rad/s).
+    omega: f64,
+    /// Its rate of change, low-passed (rad/s²).
+    omega_dot: f64,
+    /// A mean was taken.
+    seen: bool,
+}
+
+impl TurnTrend {
+    /// Takes this step's mean turn rate `omega` at `now` (None: no neighbour gave one).
+    fn update(&mut self, now: f64, omega: Option<f64>, smoothing_s: f64) {
+        let Some(omega) = omega else {
+            *self = Self::default();
+            return;
+        };
+        let h = now - self.t;
+        if self.seen && h > 0.0 {
+            let k = 1.0 - (-h / smoothing_s).exp();
+            self.omega_dot += k * ((omega - self.omega) / h - self.omega_dot);
+        }
+        *self = Self { t: now, omega, omega_dot: self.omega_dot, seen: true };
+    }
 }
 
 /// Steps 1-3 accumulated over the perceived neighbours, each estimate as `X̂_ij − X_hold`.
@@ -156,6 +191,7 @@ impl ProximityController {
             .isolation_gate
             .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
         let avoidance = p.avoid_m.filter(|&d| d > 0.0).map(|d| Box::new(Avoidance::new(d, setup.braking_mps2)));
+        let trend = (p.turn_feedforward && setup.vehicle.setpoint_lag_s() > 0.0).then(Box::default);
         Ok(Self {
             id,
             setup,
@@ -166,6 +202,7 @@ impl ProximityController {
             fusion,
             navigator: None,
             avoidance,
+            trend,
         })
     }
 
@@ -341,7 +378,7 @@ impl ProximityController {
         x_hold: &State9,
         observations: &[Observation],
     ) -> Estimates {
-        let Self { setup, formation, dependency, tracks, nearest, fusion, navigator, .. } = self;
+        let Self { setup, formation, dependency, tracks, nearest, fusion, navigator, trend, .. } = self;
         let (params, formation) = (&setup.params, &**formation);
         let navigator = *navigator;
         // The robust fusion's view of a neighbour: whether it may be left out, and whether it
@@ -364,7 +401,17 @@ impl ProximityController {
         let dt = params.dt_s;
         let r2 = params.areas.sensing_range_m.powi(2);
         let separation = params.separation_m.unwrap_or(0.0);
-        let turning = params.bank_turn_feedforward;
+        // The formation's rigid-body turn and the vehicle's setpoint lead need each neighbour's
+        // state now beside its prediction.
+        let motion = Motion {
+            turn: params.turn_feedforward.then_some(&setup.vehicle),
+            lead_s: setup.vehicle.setpoint_lag_s(),
+            omega_dot: trend.as_ref().map_or(0.0, |t| t.omega_dot),
+            dt,
+        };
+        // Σ f·ω and Σ f over the neighbours, for the turn's trend.
+        let mut turn_sum = (0.0, 0.0);
+        let needs_now = motion.needs_now();
         let mut est = Estimates::new();
         // Steps 1-2 (and 3 for main references in their areas).
         for a in 0..nearest.len() {
@@ -372,55 +419,79 @@ impl ProximityController {
             if k == EMPTY {
                 continue;
             }
-            let (id, f_x_j, f) = if k & TRACK != 0 {
+            let (id, f_x_j, f, x_j) = if k & TRACK != 0 {
                 let s = (k & !TRACK) as usize;
                 match tracks.coasting(s, now_s, params.coast_s) {
-                    Some(id) => (id, tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s))),
+                    Some(id) => {
+                        let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
+                        (id, tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)), (x_j, dt))
+                    }
                     None => continue,
                 }
             } else {
                 let o = &observations[k as usize];
-                (o.id, tracks.predict(o, now_s, dt), 1.0)
+                let f_x_j = tracks.predict(o, now_s, dt);
+                (o.id, f_x_j, 1.0, seen_now(tracks, o, now_s, dt, needs_now))
             };
             if separation > 0.0 {
                 keep_apart(formation, id, &f_x_j, slot_i, x_hold, separation, &mut est.push);
             }
-            let Some(x_hat) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
+            let Some((x_hat, omega)) =
+                implied_deviation(formation, &motion, id, (&x_j.0, x_j.1), &f_x_j, slot_i, x_hold)
+            else {
+                continue;
+            };
+            if let Some(w) = omega {
+                turn_sum = (turn_sum.0 + f * w, turn_sum.1 + f);
+            }
             let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
             est.take(fusion, Implied { x_hat, f, c: dependency.degree(id), in_area: true, suspect, upstream });
         }
         // Step 3: main references perceived but not the nearest in their area.
         for r in 0..dependency.refs().len() {
             let (id, c) = dependency.refs()[r];
-            let (f_x_j, f) = match observations.iter().position(|o| o.id == id && o.source != ObservationSource::Close)
-            {
-                Some(k) => {
-                    if nearest.iter().any(|a| a.0 == k as u32) {
-                        continue; // already counted with its area
+            let (f_x_j, f, x_j) =
+                match observations.iter().position(|o| o.id == id && o.source != ObservationSource::Close) {
+                    Some(k) => {
+                        if nearest.iter().any(|a| a.0 == k as u32) {
+                            continue; // already counted with its area
+                        }
+                        let o = &observations[k];
+                        if o.source == ObservationSource::Onboard
+                            && (state::position(&o.state) - state::position(own)).norm_squared() > r2
+                        {
+                            continue;
+                        }
+                        let f_x_j = tracks.predict(o, now_s, dt);
+                        (f_x_j, 1.0, seen_now(tracks, o, now_s, dt, needs_now))
                     }
-                    let o = &observations[k];
-                    if o.source == ObservationSource::Onboard
-                        && (state::position(&o.state) - state::position(own)).norm_squared() > r2
-                    {
-                        continue;
+                    None => {
+                        // Not observed now: coast on its track, unless its area already did.
+                        let Some(s) =
+                            (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s, params.coast_s) == Some(id))
+                        else {
+                            continue;
+                        };
+                        if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
+                            continue;
+                        }
+                        let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
+                        (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)), (x_j, dt))
                     }
-                    (tracks.predict(o, now_s, dt), 1.0)
-                }
-                None => {
-                    // Not observed now: coast on its track, unless its area already did.
-                    let Some(s) = (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s, params.coast_s) == Some(id))
-                    else {
-                        continue;
-                    };
-                    if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
-                        continue;
-                    }
-                    (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)))
-                }
+                };
+            let Some((x_hat, omega)) =
+                implied_deviation(formation, &motion, id, (&x_j.0, x_j.1), &f_x_j, slot_i, x_hold)
+            else {
+                continue;
             };
-            let Some(x_hat) = implied_deviation(formation, turning, id, &f_x_j, slot_i, x_hold) else { continue };
+            if let Some(w) = omega {
+                turn_sum = (turn_sum.0 + f * w, turn_sum.1 + f);
+            }
             let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
             est.take(fusion, Implied { x_hat, f, c: Some(c), in_area: false, suspect, upstream });
+        }
+        if let Some(t) = trend {
+            t.update(now_s, (turn_sum.1 > 0.0).then(|| turn_sum.0 / turn_sum.1), params.turn_trend_s);
         }
         // Robust fusion: weigh each estimate by its distance from the others' median, then sum.
         if let (Some(fu), Some(gate)) = (fusion, params.isolation_gate) {
@@ -487,25 +558,80 @@ pub fn centre_from(
     (o_i, goal)
 }
 
-/// `X̂_ij − X_hold` for neighbour `id` predicted at `f_x_j` (eq. 10, attitudes wrapped); None
-/// when the neighbour is not in the formation.
+/// Neighbour `o`'s state as its track has it at its last measurement (the one just fed, when
+/// the predictor keeps tracks; the raw observation otherwise) and the time from then to its
+/// prediction one period ahead; only when `needed` (a zero state otherwise).
+#[inline]
+fn seen_now(tracks: &NeighbourTracks, o: &Observation, now_s: f64, dt: f64, needed: bool) -> (State9, f64) {
+    if !needed {
+        return (State9::zeros(), dt);
+    }
+    match tracks.report(o.id, now_s) {
+        Some((x, age)) => (x, dt + age),
+        None => (o.state, dt + o.age_s),
+    }
+}
+
+/// How the formation and the vehicle move, for [`implied_deviation`].
+struct Motion<'a> {
+    /// The vehicle whose turn rate ([`VehicleModel::turn_rate`]) turns the formation as one
+    /// rigid body (`turn_feedforward`); None: no turn feed-forward.
+    turn: Option<&'a VehicleModel>,
+    /// The vehicle's setpoint lead (s, [`VehicleModel::setpoint_lag_s`]).
+    lead_s: f64,
+    /// The formation's turn acceleration ω̇ (rad/s², [`TurnTrend`]).
+    omega_dot: f64,
+    /// Δt (s).
+    dt: f64,
+}
+
+impl Motion<'_> {
+    /// True when a neighbour's state now is needed beside its prediction.
+    fn needs_now(&self) -> bool {
+        self.turn.is_some() || self.lead_s > 0.0
+    }
+}
+
+/// `X̂_ij − X_hold` for neighbour `id` predicted at `f_x_j` (eq. 10, attitudes wrapped) and
+/// seen at `seen.0` a time `seen.1` before that prediction, and the turn rate W turned at;
+/// None when the neighbour is not in the formation. In a formation that turns as one body, W
+/// turns at the reference's turn rate (from the two states). For a vehicle whose velocity lags
+/// its setpoint by τ ([`VehicleModel::setpoint_lag_s`], the multirotor's velocity loop), the
+/// velocity part is that of the slot τ later: the slot's acceleration (j's, from its two
+/// velocities, plus the centripetal `ω × (ω × r)` and tangential `ω̇ × r` of the turn) times
+/// τ, so that a ramp of velocity is followed without the loop's lag (METHOD §5, the
+/// multirotor).
 #[inline]
 fn implied_deviation(
     formation: &Formation,
-    turning: bool,
+    motion: &Motion<'_>,
     id: UavId,
+    seen: (&State9, f64),
     f_x_j: &State9,
     slot_i: &FormationSlot,
     x_hold: &State9,
-) -> Option<State9> {
+) -> Option<(State9, Option<f64>)> {
     let slot_j = formation.slot(id)?;
+    let (x_j, span) = (seen.0, seen.1.max(motion.dt));
     // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
     let mut delta = f_x_j - x_hold;
-    formation.add_w_with(turning, slot_i, slot_j, f_x_j, &mut delta);
+    let omega = motion.turn.map(|v| v.turn_rate(x_j, f_x_j, span));
+    formation.add_w_with(omega, slot_i, slot_j, f_x_j, &mut delta);
+    if motion.lead_s > 0.0 {
+        let (tau, dt, w, w_dot) = (motion.lead_s, span, omega.unwrap_or(0.0), motion.omega_dot);
+        // r = R_f(d_i − d_j), W's horizontal position part.
+        let r = [delta[X] - (f_x_j[X] - x_hold[X]), delta[X + 1] - (f_x_j[X + 1] - x_hold[X + 1])];
+        // The turn's centripetal −ω²·r and tangential ω̇ × r.
+        let turn = [-w * w * r[0] - w_dot * r[1], -w * w * r[1] + w_dot * r[0], 0.0];
+        for k in 0..3 {
+            let a_j = (f_x_j[VX + k] - x_j[VX + k]) / dt;
+            delta[VX + k] += tau * (a_j + turn[k]);
+        }
+    }
     for k in state::ALPHA..=state::GAMMA {
         delta[k] = crate::angle::wrap_pi(delta[k]);
     }
-    Some(delta)
+    Some((delta, omega))
 }
 
 /// Adds to `push` how far the UAV, at `x_hold` next step, must move away from neighbour `id`

@@ -47,10 +47,15 @@ pub struct ControllerParams {
     /// and a UAV that has really gone fades out instead of being followed as a ghost (s, > 0).
     /// Default 0.1 s.
     pub coast_decay_s: f64,
-    /// In a course-following formation frame, add the slots' velocity in the turn (ω × r),
-    /// with ω the reference's coordinated-turn rate from its bank. Only meaningful for vehicles
-    /// that turn by banking (the fixed wing); scenario files switch it on for them. Default off.
-    pub bank_turn_feedforward: bool,
+    /// In a formation frame that turns (course or heading), the formation turns as one rigid
+    /// body: W carries the slots' velocity in the turn (ω × r), ω the reference's turn rate
+    /// ([`crate::VehicleModel::turn_rate`]: from its bank for the fixed wing, from its heading
+    /// otherwise). Scenario files switch it on for the fixed wing and the multirotor. Default off.
+    pub turn_feedforward: bool,
+    /// Smoothing time (s, > 0) of the formation's turn acceleration ω̇ that a vehicle lagging
+    /// its setpoints leads its slot's tangential acceleration by (METHOD §5, the multirotor).
+    /// Default 0.3 s.
+    pub turn_trend_s: f64,
     /// Gain in (0, 1] of the UAV's filter of its own state: the estimate is the model's
     /// prediction from the last estimate and the input the UAV applied, corrected toward the
     /// measurement by this fraction. 1 uses the raw measurement (METHOD). Default 1.
@@ -111,6 +116,15 @@ impl ControllerParams {
         State9::from_column_slice(&[2.0, 2.0, 2.0, kmh(7.2), kmh(7.2), kmh(7.2), deg(5.0), deg(10.0), deg(10.0)])
     }
 
+    /// Permissible errors Δ for a multirotor (SI units): 0.4 m on each axis, 0.5 m/s (1.8 km/h)
+    /// on each velocity component, 1.5° of yaw, and 30° of pitch and roll. Its pitch and roll are
+    /// its inner loop's (they follow its accelerations and lean it into the wind; the controller
+    /// does not steer them), so they should not ask for corrections.
+    pub fn multirotor_thresholds() -> State9 {
+        use crate::angle::{deg, kmh};
+        State9::from_column_slice(&[0.4, 0.4, 0.4, kmh(1.8), kmh(1.8), kmh(1.8), deg(30.0), deg(1.5), deg(30.0)])
+    }
+
     /// Checks every parameter, naming the first one out of its domain.
     pub fn validate(&self) -> Result<(), ConfigError> {
         positive("dt_s", self.dt_s)?;
@@ -129,6 +143,7 @@ impl ControllerParams {
         }
         self.predictor.validate()?;
         positive("track_timeout_s", self.track_timeout_s)?;
+        positive("turn_trend_s", self.turn_trend_s)?;
         if !(self.coast_s.is_finite() && self.coast_s >= 0.0) {
             return Err(ConfigError::OutOfRange {
                 field: "coast_s",
@@ -227,7 +242,8 @@ impl Default for ControllerParams {
             coast_s: 0.5,
             coast_accel_s: 0.2,
             coast_decay_s: 0.1,
-            bank_turn_feedforward: false,
+            turn_feedforward: false,
+            turn_trend_s: 0.3,
             own_filter_gain: 1.0,
             separation_m: None,
             avoid_m: None,

@@ -76,6 +76,27 @@ impl ControllerSetup {
         &self.input_weights
     }
 
+    /// The navigator's autopilot on its path (METHOD §5): the input that brings the UAV at
+    /// `own` toward the path's state one period ahead, within the vehicle's limits
+    /// ([`Self::input_toward`] with `r = F·X − target`); `path(s)` is the path's state `s`
+    /// seconds from now. A vehicle that lags its setpoints ([`VehicleModel::setpoint_lag_s`])
+    /// is asked for the path's velocity that much later. A navigator that flies its path this
+    /// way is moved by the wind like every other UAV, and its followers keep station on where
+    /// it is, not on where its path says it should be.
+    pub fn input_along_path(&self, own: &State9, path: impl Fn(f64) -> State9) -> Input {
+        let dt = self.params.dt_s;
+        let mut target = path(dt);
+        let lag = self.vehicle.setpoint_lag_s();
+        if lag > 0.0 {
+            let ahead = path(dt + lag);
+            for k in crate::state::VX..crate::state::ALPHA {
+                target[k] = ahead[k];
+            }
+        }
+        let r = crate::state::difference(&self.vehicle.hold(own, dt), &target);
+        self.input_toward(own, &r)
+    }
+
     /// METHOD §6 step 7: the input that brings the UAV at `own` toward the target whose
     /// course-keeping deviation is `r = F·X − target`, within the vehicle's limits: the
     /// closed-form step for H = 1, the horizon QP for H > 1 (falling back to the one-step

@@ -6,9 +6,11 @@
 
 mod fixed_wing;
 mod kinematic;
+mod multirotor;
 
 pub use fixed_wing::FixedWingModel;
 pub use kinematic::{KinematicLimits, KinematicModel};
+pub use multirotor::MultirotorModel;
 
 use crate::control::ControlMatrix;
 use crate::error::ConfigError;
@@ -26,6 +28,8 @@ pub enum VehicleModel {
     Kinematic(KinematicModel),
     /// Aileron, rudder, elevator and throttle (METHOD §5, model 2).
     FixedWing(FixedWingModel),
+    /// Velocity and yaw setpoints to an autopilot's inner loop (METHOD §5, model 3).
+    Multirotor(MultirotorModel),
 }
 
 impl VehicleModel {
@@ -34,6 +38,7 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(m) => m.limits.validate(),
             VehicleModel::FixedWing(m) => m.validate(),
+            VehicleModel::Multirotor(m) => m.validate(),
         }
     }
 
@@ -42,17 +47,20 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(m) => (m.limits.vx_min_mps, m.limits.vx_max_mps),
             VehicleModel::FixedWing(m) => (m.stall_speed_mps, m.max_speed_mps),
+            VehicleModel::Multirotor(m) => (0.0, m.max_speed_mps),
         }
     }
 
     /// The speed of state `x` that [`Self::forward_speed_range`] bounds (m/s): the world-frame
-    /// vx for the kinematic vehicle (its limits are per axis), the airspeed for the fixed wing.
+    /// vx for the kinematic vehicle (its limits are per axis), the airspeed for the fixed wing,
+    /// the horizontal speed over the ground for the multirotor.
     pub fn forward_speed(&self, x: &State9) -> f64 {
         match self {
             VehicleModel::Kinematic(_) => x[crate::state::VX],
             VehicleModel::FixedWing(_) => {
                 (x[crate::state::VX].powi(2) + x[crate::state::VY].powi(2) + x[crate::state::VZ].powi(2)).sqrt()
             }
+            VehicleModel::Multirotor(_) => MultirotorModel::horizontal_speed(x),
         }
     }
 
@@ -62,13 +70,15 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::N_INPUTS,
             VehicleModel::FixedWing(_) => FixedWingModel::N_INPUTS,
+            VehicleModel::Multirotor(_) => MultirotorModel::N_INPUTS,
         }
     }
 
     /// The deceleration (m/s²) the collision avoidance counts on to stop closing on a
     /// neighbour: the kinematic vehicle's smallest adjusting rate of vx, vy, vz; for the fixed
     /// wing, half the lateral acceleration of its steepest allowed bank (it avoids by turning,
-    /// and must roll into the turn first).
+    /// and must roll into the turn first); for the multirotor, the smaller of its horizontal and
+    /// vertical acceleration limits.
     pub fn braking_mps2(&self) -> f64 {
         match self {
             VehicleModel::Kinematic(m) => m.limits.accel_max_mps2.min(),
@@ -76,11 +86,13 @@ impl VehicleModel {
                 let bank = m.bank_max_rad.min((1.0 / m.load_factor_max).acos());
                 0.5 * G * bank.tan()
             }
+            VehicleModel::Multirotor(m) => m.accel_max_mps2.min(m.vertical_accel_max_mps2),
         }
     }
 
     /// The velocity nearest `v` (m/s, world frame) that the vehicle can fly: the kinematic
-    /// vehicle's vx, |vy|, |vz| limits; for the fixed wing, `v` scaled into its speed range.
+    /// vehicle's vx, |vy|, |vz| limits; for the fixed wing, `v` scaled into its speed range;
+    /// for the multirotor, its horizontal speed, climb and descent limits.
     pub fn clamp_velocity(&self, v: [f64; 3]) -> [f64; 3] {
         match self {
             VehicleModel::Kinematic(m) => {
@@ -99,6 +111,7 @@ impl VehicleModel {
                 let k = speed.clamp(m.stall_speed_mps, m.max_speed_mps) / speed;
                 [v[0] * k, v[1] * k, v[2] * k]
             }
+            VehicleModel::Multirotor(m) => m.clamp_velocity(v),
         }
     }
 
@@ -108,6 +121,7 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::hold(x, dt),
             VehicleModel::FixedWing(m) => m.hold(x, dt),
+            VehicleModel::Multirotor(_) => MultirotorModel::hold(x, dt),
         }
     }
 
@@ -117,6 +131,7 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::control_matrix(x, dt),
             VehicleModel::FixedWing(m) => m.control_matrix(x, dt),
+            VehicleModel::Multirotor(m) => m.control_matrix(dt),
         }
     }
 
@@ -124,7 +139,7 @@ impl VehicleModel {
     #[inline]
     pub fn control_matrix_is_constant(&self) -> bool {
         match self {
-            VehicleModel::Kinematic(_) => true,
+            VehicleModel::Kinematic(_) | VehicleModel::Multirotor(_) => true,
             VehicleModel::FixedWing(_) => false,
         }
     }
@@ -135,6 +150,7 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(m) => m.input_bounds(x, dt),
             VehicleModel::FixedWing(m) => m.input_bounds(x, dt),
+            VehicleModel::Multirotor(m) => m.input_bounds(x),
         }
     }
 
@@ -145,16 +161,78 @@ impl VehicleModel {
     pub fn cumulative_input_bounds(&self, x: &State9) -> Option<(Input, Input)> {
         match self {
             VehicleModel::Kinematic(m) => Some(m.cumulative_bounds(x)),
-            VehicleModel::FixedWing(_) => None,
+            VehicleModel::FixedWing(_) | VehicleModel::Multirotor(_) => None,
         }
     }
 
-    /// The plant: the true state after `dt` under the (already perturbed) input `u`.
+    /// The plant in calm air: the true state after `dt` under the (already perturbed) input `u`.
     #[inline]
     pub fn propagate(&self, x: &State9, u: &Input, dt: f64) -> State9 {
         match self {
             VehicleModel::Kinematic(_) => KinematicModel::propagate(x, u, dt),
             VehicleModel::FixedWing(m) => m.propagate(x, u, dt),
+            VehicleModel::Multirotor(m) => m.propagate(x, u, dt),
+        }
+    }
+
+    /// The plant in wind: the true state (velocity over the ground) after `dt` under input
+    /// `u`, with the wind `w0` at the start of the period and `w1` at its end (world frame,
+    /// m/s). The multirotor flies through the air (drag on its air-relative velocity, its
+    /// inner loop holding its ground velocity against it). The kinematic vehicle and the fixed
+    /// wing move through the air at their state's velocity less the wind and are carried by
+    /// it: the fixed wing's airspeed is what it holds, so a steady wind drifts it; the
+    /// kinematic vehicle's velocity is over the ground, so only a change of the wind moves it
+    /// (METHOD §5; a steady wind does nothing to it, and a scenario that sets one says so).
+    #[inline]
+    pub fn propagate_in_wind(&self, x: &State9, u: &Input, dt: f64, w0: [f64; 3], w1: [f64; 3]) -> State9 {
+        if let VehicleModel::Multirotor(m) = self {
+            return m.propagate_in_wind(x, u, dt, w0, w1);
+        }
+        let mut air = *x;
+        for k in 0..3 {
+            air[crate::state::VX + k] -= w0[k];
+        }
+        let mut next = self.propagate(&air, u, dt);
+        for k in 0..3 {
+            next[crate::state::VX + k] += w1[k];
+            next[crate::state::X + k] += 0.5 * dt * (w0[k] + w1[k]);
+        }
+        next
+    }
+
+    /// The turn rate (rad/s, counter-clockwise positive) of a UAV seen at `now` and predicted
+    /// `dt` later at `next`, for the rigid-body turn of a formation
+    /// ([`crate::Formation::add_w_turning`]): for the fixed wing, the coordinated-turn rate of
+    /// its bank at `next`, `−g·tan γ / V` (measured far more finely than a rate could be
+    /// estimated); for the others, the rate of its heading (a multirotor's bank also holds it
+    /// against the wind, so it says nothing of its turn).
+    #[inline]
+    pub fn turn_rate(&self, now: &State9, next: &State9, dt: f64) -> f64 {
+        use crate::state::{BETA, GAMMA, VX, VY};
+        match self {
+            VehicleModel::FixedWing(_) => {
+                let v = next[VX].hypot(next[VY]);
+                if v < 1.0 {
+                    0.0
+                } else {
+                    -G * next[GAMMA].tan() / v
+                }
+            }
+            VehicleModel::Kinematic(_) | VehicleModel::Multirotor(_) => {
+                crate::angle::wrap_pi(next[BETA] - now[BETA]) / dt
+            }
+        }
+    }
+
+    /// How long the vehicle's velocity lags the setpoint it is given (s): the multirotor's
+    /// velocity loop τ_v, whose steady lag behind a ramp of setpoints is τ_v times its slope; 0
+    /// for the kinematic vehicle and the fixed wing, whose inputs act within the period. Its
+    /// controller asks for the velocity its slot will have this much later.
+    #[inline]
+    pub fn setpoint_lag_s(&self) -> f64 {
+        match self {
+            VehicleModel::Multirotor(m) => m.velocity_time_constant_s,
+            VehicleModel::Kinematic(_) | VehicleModel::FixedWing(_) => 0.0,
         }
     }
 
@@ -164,6 +242,7 @@ impl VehicleModel {
         match self {
             VehicleModel::Kinematic(m) => m.input_scale(dt),
             VehicleModel::FixedWing(m) => m.input_scale(),
+            VehicleModel::Multirotor(m) => m.input_scale(),
         }
     }
 }

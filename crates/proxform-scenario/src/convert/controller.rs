@@ -3,7 +3,7 @@
 use proxform_core::angle::{deg, kmh};
 use proxform_core::controller::MAX_HORIZON;
 use proxform_core::state;
-use proxform_core::{ControllerParams, Envelope, Method, PredictorKind};
+use proxform_core::{ControllerParams, Envelope, Method, PredictorKind, VehicleModel};
 
 use super::values::{distance, err, finite, non_negative, or_default, positive, probability, SpecError};
 use crate::spec::ControllerSpec;
@@ -21,11 +21,15 @@ const DEFAULT_ALPHA: f64 = match PredictorKind::DEFAULT {
 };
 
 /// The controller's parameters; unset permissible errors take the vehicle's defaults, and the
-/// turn feed-forward is on for the fixed wing. The separation distance is resolved by the caller.
-pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<ControllerParams, SpecError> {
+/// turn feed-forward is on for the fixed wing and the multirotor. The separation distance is
+/// resolved by the caller.
+pub fn params(c: &ControllerSpec, dt_s: f64, vehicle: &VehicleModel) -> Result<ControllerParams, SpecError> {
     let mut p = ControllerParams { dt_s, ..ControllerParams::default() };
-    if fixed_wing {
-        p.envelope.thresholds = ControllerParams::fixed_wing_thresholds();
+    let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
+    match vehicle {
+        VehicleModel::Kinematic(_) => {}
+        VehicleModel::FixedWing(_) => p.envelope.thresholds = ControllerParams::fixed_wing_thresholds(),
+        VehicleModel::Multirotor(_) => p.envelope.thresholds = ControllerParams::multirotor_thresholds(),
     }
     if let Some(m) = c.areas {
         if !(1..=MAX_AREAS).contains(&m) {
@@ -155,7 +159,7 @@ pub fn params(c: &ControllerSpec, dt_s: f64, fixed_wing: bool) -> Result<Control
             ))
         }
     };
-    p.bank_turn_feedforward = c.bank_turn_feedforward.unwrap_or(fixed_wing);
+    p.turn_feedforward = c.turn_feedforward.unwrap_or(!matches!(vehicle, VehicleModel::Kinematic(_)));
     // The fixed wing's braking is a rough figure (it avoids by turning): off unless asked.
     p.stop_closing = c.stop_closing.unwrap_or(!fixed_wing);
     if let Some(t) = &c.thresholds {

@@ -4,6 +4,7 @@
 use proxform_core::angle::{kmh, wrap_pi};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
+use proxform_core::vehicle::G;
 use proxform_core::{Formation, FormationSlot, UavId, VehicleModel};
 
 use super::values::{err, positive, SpecError};
@@ -65,7 +66,11 @@ pub fn initial_states(
                 (false, false, false, true) => "vehicle.stall_speed_kmh",
                 (false, false, false, false) => "vehicle.max_speed_kmh",
             };
-            let what = if kinematic { "vx" } else { "airspeed" };
+            let what = match vehicle {
+                VehicleModel::Kinematic(_) => "vx",
+                VehicleModel::FixedWing(_) => "airspeed",
+                VehicleModel::Multirotor(_) => "horizontal speed",
+            };
             let along_x = x[state::VY].abs() <= 1e-9 * x[state::VX].abs().max(1.0);
             let hint = if kinematic && !along_x {
                 " (the kinematic vehicle's limits are on vx, the world x component of its velocity: \
@@ -224,7 +229,144 @@ fn limits(vehicle: &VehicleModel) -> Vec<Limit> {
                 Box::new(|a, b, h| ((airspeed(b) - airspeed(a)) / h).abs()),
             ),
         ],
+        VehicleModel::Multirotor(m) => vec![
+            limit(
+                "max_speed_kmh",
+                "horizontal speed",
+                m.max_speed_mps,
+                false,
+                false,
+                kmh,
+                Box::new(|_, x, _| ground(x)),
+            ),
+            limit("climb_max_kmh", "climb rate", m.climb_max_mps, false, false, kmh, Box::new(of(state::VZ))),
+            limit(
+                "descent_max_kmh",
+                "descent rate",
+                m.descent_max_mps,
+                false,
+                false,
+                kmh,
+                Box::new(|_, x: &State9, _| -x[state::VZ]),
+            ),
+            limit(
+                "accel_max_mps2",
+                "horizontal acceleration",
+                m.accel_max_mps2,
+                false,
+                true,
+                (1.0, " m/s²"),
+                Box::new(|a, b, h| (b[state::VX] - a[state::VX]).hypot(b[state::VY] - a[state::VY]) / h),
+            ),
+            limit(
+                "vertical_accel_max_mps2",
+                "vertical acceleration",
+                m.vertical_accel_max_mps2,
+                false,
+                true,
+                (1.0, " m/s²"),
+                Box::new(accel(state::VZ)),
+            ),
+            limit(
+                "yaw_rate_max_deg_s",
+                "yaw rate",
+                m.yaw_rate_max_radps,
+                false,
+                true,
+                deg_s,
+                Box::new(rate(state::BETA)),
+            ),
+        ],
     }
+}
+
+fn ground(x: &State9) -> f64 {
+    x[state::VX].hypot(x[state::VY])
+}
+
+/// Refuses a formation whose slots the vehicle cannot fly where the path turns, when the
+/// formation turns as one rigid body (`turn_feedforward` in a course or heading frame): at
+/// every update period (at most 20 000 instants, fewer for a large formation: 2·10^7
+/// slot-instants at most) each slot flies at the navigator's velocity
+/// plus `ω × R_f(d_i − d_nav)`, ω the path's rate of heading, and must keep within the
+/// vehicle's speed range, and turn at ω at that speed within its bank (fixed wing) or
+/// acceleration limit (multirotor). Names the slot, the time, the turn rate and the figure.
+pub fn slots_within_vehicle(
+    path: &NavigatorPath,
+    formation: &Formation,
+    navigator: UavId,
+    vehicle: &VehicleModel,
+    duration_s: f64,
+) -> Result<(), SpecError> {
+    if formation.frame == proxform_core::FormationFrame::World {
+        return Ok(());
+    }
+    // At most 2·10^7 slot-instants (a second or so), and at least 50 instants.
+    let most = (2e7 / formation.len().max(1) as f64).max(50.0);
+    let samples = (duration_s / 0.1).ceil().clamp(1.0, most.min(20_000.0)) as u64;
+    let h = duration_s / samples as f64;
+    let (vmin, vmax) = vehicle.forward_speed_range();
+    let nav = &formation.slots[navigator.index()];
+    // The worst excess over a limit (relative), with the slot, time, turn rate and figure.
+    let mut worst: Option<(f64, usize, f64, f64, String)> = None;
+    let mut prev = path.state_at(0.0, [0.0; 3]);
+    for k in 1..=samples {
+        let t = h * k as f64;
+        let x = path.state_at(t, [0.0; 3]);
+        let omega = wrap_pi(x[state::BETA] - prev[state::BETA]) / h;
+        prev = x;
+        for (i, slot) in formation.slots.iter().enumerate() {
+            let mut s = x;
+            formation.add_w_turning(slot, nav, &x, omega, &mut s);
+            let v = vehicle.forward_speed(&s);
+            let lateral = omega.abs() * s[state::VX].hypot(s[state::VY]);
+            let mut excess = vec![
+                ((v - vmax) / vmax, format!("{:.1} km/h, beyond the vehicle's {:.1} km/h", v * 3.6, vmax * 3.6)),
+                (
+                    (vmin - v) / vmin.max(1e-9),
+                    format!("{:.1} km/h, below the vehicle's {:.1} km/h", v * 3.6, vmin * 3.6),
+                ),
+            ];
+            match vehicle {
+                VehicleModel::FixedWing(m) => {
+                    let bank = (lateral / G).atan();
+                    excess.push((
+                        (bank - m.bank_limit()) / m.bank_limit(),
+                        format!(
+                            "a bank of {:.1}°, beyond the vehicle's {:.1}°",
+                            bank.to_degrees(),
+                            m.bank_limit().to_degrees()
+                        ),
+                    ));
+                }
+                VehicleModel::Multirotor(m) => excess.push((
+                    (lateral - m.accel_max_mps2) / m.accel_max_mps2,
+                    format!(
+                        "{lateral:.2} m/s² toward the turn's centre, beyond vehicle.accel_max_mps2 = {:.2} m/s²",
+                        m.accel_max_mps2
+                    ),
+                )),
+                VehicleModel::Kinematic(_) => {}
+            }
+            for (e, what) in excess {
+                if e > 1e-6 && worst.as_ref().is_none_or(|w| e > w.0) {
+                    worst = Some((e, i, t, omega, what));
+                }
+            }
+        }
+    }
+    if let Some((_, i, t, omega, what)) = worst {
+        return Err(err(
+            "formation",
+            format!(
+                "UAV {}'s slot would need {what} while the formation turns as one body (at {:.1}°/s, t = {t:.1} s): \
+                 fly a wider turn (path.turn_radius_m) or slower, or bring the slot nearer the navigator",
+                i + 1,
+                omega.to_degrees()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Refuses a navigator path that the followers' vehicle cannot fly: at some instant its

@@ -36,8 +36,12 @@ pub fn slots(f: &FormationSpec) -> Result<Slots, SpecError> {
     let frame = match f.frame.as_deref() {
         None | Some("world") => FormationFrame::World,
         Some("course") => FormationFrame::Course,
+        Some("heading") => FormationFrame::Heading,
         Some(other) => {
-            return Err(err("formation.frame", format!("unknown frame \"{other}\" (expected \"world\" or \"course\")")))
+            return Err(err(
+                "formation.frame",
+                format!("unknown frame \"{other}\" (expected \"world\", \"course\" or \"heading\")"),
+            ))
         }
     };
     let (slots, explicit) = slots_of(f)?;

@@ -74,8 +74,12 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ),
             ));
         }
-        let safety_distance_m =
-            or_default("safety_distance_m", spec.safety_distance_m, defaults::SAFETY_DISTANCE_M, positive)?;
+        let vehicle = vehicle::vehicle(&spec.vehicle)?;
+        let safety_default = match vehicle {
+            VehicleModel::Multirotor(_) => defaults::MULTIROTOR_SAFETY_DISTANCE_M,
+            _ => defaults::SAFETY_DISTANCE_M,
+        };
+        let safety_distance_m = or_default("safety_distance_m", spec.safety_distance_m, safety_default, positive)?;
         values::distance("safety_distance_m", safety_distance_m)?;
         let warmup_s = or_default("warmup_s", spec.warmup_s, defaults::WARMUP_S, non_negative)?;
         if warmup_s > MAX_WARMUP_S {
@@ -98,20 +102,36 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ))
             }
         };
-        let vehicle = vehicle::vehicle(&spec.vehicle)?;
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
-        let mut params = controller::params(&spec.controller, dt_s, fixed_wing)?;
+        let mut params = controller::params(&spec.controller, dt_s, &vehicle)?;
 
-        let formation::Slots { slots, frame, explicit } = formation::slots(&spec.formation)?;
+        // The vehicle's defaults of the formation's keys: a multirotor formation's derived tables
+        // lean on the navigator (its errors would otherwise grow rank by rank through its
+        // turns, README "Robust formation keeping").
+        let mut formation_spec = spec.formation.clone();
+        if let VehicleModel::Multirotor(_) = vehicle {
+            let d = formation_spec.dependencies.get_or_insert_with(Default::default);
+            d.navigator_degree = d.navigator_degree.or(Some(defaults::MULTIROTOR_NAVIGATOR_DEGREE));
+        }
+        let formation::Slots { slots, mut frame, explicit } = formation::slots(&formation_spec)?;
+        if spec.formation.frame.is_none() {
+            // A formation of vehicles that turn turns with them: the fixed wing's with its course,
+            // the multirotor's with its nose (which need not follow its course).
+            frame = match vehicle {
+                VehicleModel::Kinematic(_) => frame,
+                VehicleModel::FixedWing(_) => proxform_core::FormationFrame::Course,
+                VehicleModel::Multirotor(_) => proxform_core::FormationFrame::Heading,
+            };
+        }
         let n = slots.len();
         let navigator = uav("navigator", spec.navigator.unwrap_or(defaults::NAVIGATOR), n)?;
         feasibility::separated(&slots, safety_distance_m)?;
         let dependencies =
-            formation::dependencies(&spec.formation, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
+            formation::dependencies(&formation_spec, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
         let formation = Arc::new(Formation { slots, frame });
         let mut schedule_warnings = Vec::new();
         let schedule = formation::schedule(
-            &spec.formation,
+            &formation_spec,
             &formation,
             navigator,
             safety_distance_m,
@@ -122,7 +142,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
 
         let path = path::path(&spec.path)?;
         let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
-        let can_hover = matches!(vehicle, VehicleModel::Kinematic(k) if k.limits.vx_min_mps == 0.0);
+        let can_hover = vehicle.forward_speed_range().0 == 0.0;
         let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m, can_hover)?;
         let form_within_s = placement::form_within(&spec.initial, &placement, duration_s)?;
         let reassign_on_loss = spec.formation.reassign_on_loss.unwrap_or(false);
@@ -134,6 +154,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         let reassign_on_loss = reassign_on_loss.then(|| placement::assign_by(&spec.initial)).transpose()?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
+        if params.turn_feedforward {
+            feasibility::slots_within_vehicle(&path, &formation, navigator, &vehicle, duration_s)?;
+        }
 
         let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
         if let proxform_core::PredictorKind::Singer { position_sigma_m, velocity_sigma_mps, .. } = &mut params.predictor
@@ -145,14 +168,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let (dropout, reference_dropout) = world::sensing(&spec.sensing)?;
         let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
         let network = world::network(&spec.network)?;
-        let allowable = world::allowable(&spec.allowable)?;
+        let allowable = world::allowable(&spec.allowable, &vehicle)?;
         let wind = world::wind(&spec.wind)?;
         let faults = world::faults(&spec.fault, n)?;
         let method = controller::method(&spec.controller)?;
         // Derived tables that lean on the navigator hear it over the radio where it is out of
         // sensing range: the navigator broadcasts.
         let navigator_by_radio =
-            spec.formation.dependencies.as_ref().and_then(|d| d.navigator_degree).is_some_and(|v| v > 0.0);
+            formation_spec.dependencies.as_ref().and_then(|d| d.navigator_degree).is_some_and(|v| v > 0.0);
         if navigator_by_radio && !radio.broadcast_all && !beacons.contains(&navigator) {
             beacons.push(navigator);
         }
@@ -219,7 +242,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         // Collision avoidance by default for the kinematic vehicle; the fixed wing's braking is a
         // rough figure (it avoids by turning), so there it is asked for, like the stopping limit.
         let avoid_default = match vehicle {
-            VehicleModel::Kinematic(_) => defaults::AVOID_PER_SAFETY * safety_distance_m,
+            VehicleModel::Kinematic(_) | VehicleModel::Multirotor(_) => defaults::AVOID_PER_SAFETY * safety_distance_m,
             VehicleModel::FixedWing(_) => 0.0,
         };
         params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
@@ -235,7 +258,17 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 radio.relay_navigator,
             ));
         }
-        warnings.extend(formation::drifting_groups(&dependencies, navigator, &spec.formation));
+        warnings.extend(formation::drifting_groups(&dependencies, navigator, &formation_spec));
+        if matches!(setup.vehicle(), VehicleModel::Kinematic(_)) && wind.steady_mps != nalgebra::Vector3::zeros() {
+            // METHOD §5: the kinematic vehicle's velocity is over the ground, so only changes of
+            // the wind (gusts, turbulence) move it.
+            warnings.push(err(
+                "wind.steady_kmh",
+                "does nothing to the kinematic vehicle (its velocity is over the ground; only gusts and \
+                 turbulence move it): fly model = \"multirotor\" or \"fixed_wing\" for a vehicle that flies \
+                 through the air",
+            ));
+        }
         if fixed_wing && !placement.in_slots() {
             // Forming is built and measured for the kinematic vehicle: a fixed wing cannot
             // stop or hover, and turns only by banking (METHOD §8).

@@ -56,9 +56,11 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
             Err(err("path", "amplitudes and lead_in_s apply to the paper path only (kind = \"paper\")"))
         }
         Some("segments") => {
+            // 0 is a hover: only a vehicle that can hover flies it (the path is then checked
+            // against the vehicle's speed range).
             let v0 = kmh(speed_kmh(
                 "path.speed_kmh",
-                positive("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?,
+                non_negative("path.speed_kmh", required("path.speed_kmh", p.speed_kmh)?)?,
             )?);
             let course = deg(finite("path.course_deg", p.course_deg.unwrap_or(0.0))?);
             let mut speed = v0;
@@ -69,7 +71,7 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
                 let w = deg(finite(&format!("{key}.turn_rate_deg_s"), s.turn_rate_deg_s.unwrap_or(0.0))?);
                 let c = kmh(finite(&format!("{key}.climb_kmh"), s.climb_kmh.unwrap_or(0.0))?);
                 if let Some(v) = s.speed_kmh {
-                    speed = kmh(speed_kmh(&format!("{key}.speed_kmh"), positive(&format!("{key}.speed_kmh"), v)?)?);
+                    speed = kmh(speed_kmh(&format!("{key}.speed_kmh"), non_negative(&format!("{key}.speed_kmh"), v)?)?);
                 }
                 segments.push(Segment {
                     duration_s: d,

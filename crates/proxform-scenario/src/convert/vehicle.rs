@@ -1,46 +1,72 @@
-//! `[vehicle]`: the kinematic vehicle (the paper's) or the fixed wing, with their limits.
+//! `[vehicle]`: the kinematic vehicle (the paper's), the fixed wing or the multirotor, with
+//! their limits.
 
 use proxform_core::angle::{deg, kmh};
-use proxform_core::{FixedWingModel, KinematicLimits, KinematicModel, VehicleModel};
+use proxform_core::{FixedWingModel, KinematicLimits, KinematicModel, MultirotorModel, VehicleModel};
 
-use super::values::{err, positive, positive3, speed_kmh, SpecError};
+use super::values::{err, non_negative, positive, positive3, show, speed_kmh, SpecError};
 use crate::spec::VehicleSpec;
+use proxform_core::vehicle::G;
 
-/// The vehicle model; keys of the other model are refused.
+/// The vehicle model; keys of the other models are refused.
 pub fn vehicle(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
-    let kinematic_keys = [
-        ("vx_min_kmh", v.vx_min_kmh.is_some()),
-        ("vx_max_kmh", v.vx_max_kmh.is_some()),
-        ("vy_max_kmh", v.vy_max_kmh.is_some()),
-        ("vz_max_kmh", v.vz_max_kmh.is_some()),
-        ("attitude_max_deg", v.attitude_max_deg.is_some()),
-        ("accel_kmh_s", v.accel_kmh_s.is_some()),
-        ("attitude_rate_deg_s", v.attitude_rate_deg_s.is_some()),
-    ];
-    let fixed_keys = [
-        ("stall_speed_kmh", v.stall_speed_kmh.is_some()),
-        ("max_speed_kmh", v.max_speed_kmh.is_some()),
-        ("bank_max_deg", v.bank_max_deg.is_some()),
-        ("load_factor_max", v.load_factor_max.is_some()),
-        ("pitch_max_deg", v.pitch_max_deg.is_some()),
-        ("roll_rate_max_deg_s", v.roll_rate_max_deg_s.is_some()),
-        ("pitch_rate_max_deg_s", v.pitch_rate_max_deg_s.is_some()),
-        ("yaw_rate_max_deg_s", v.yaw_rate_max_deg_s.is_some()),
-        ("throttle_accel_kmh_s", v.throttle_accel_kmh_s.is_some()),
+    const K: u8 = 1; // kinematic
+    const F: u8 = 2; // fixed wing
+    const M: u8 = 4; // multirotor
+    let keys: [(&str, bool, u8); 27] = [
+        ("vx_min_kmh", v.vx_min_kmh.is_some(), K),
+        ("vx_max_kmh", v.vx_max_kmh.is_some(), K),
+        ("vy_max_kmh", v.vy_max_kmh.is_some(), K),
+        ("vz_max_kmh", v.vz_max_kmh.is_some(), K),
+        ("attitude_max_deg", v.attitude_max_deg.is_some(), K),
+        ("accel_kmh_s", v.accel_kmh_s.is_some(), K),
+        ("attitude_rate_deg_s", v.attitude_rate_deg_s.is_some(), K),
+        ("stall_speed_kmh", v.stall_speed_kmh.is_some(), F),
+        ("max_speed_kmh", v.max_speed_kmh.is_some(), F | M),
+        ("bank_max_deg", v.bank_max_deg.is_some(), F),
+        ("load_factor_max", v.load_factor_max.is_some(), F),
+        ("pitch_max_deg", v.pitch_max_deg.is_some(), F),
+        ("roll_rate_max_deg_s", v.roll_rate_max_deg_s.is_some(), F),
+        ("pitch_rate_max_deg_s", v.pitch_rate_max_deg_s.is_some(), F),
+        ("yaw_rate_max_deg_s", v.yaw_rate_max_deg_s.is_some(), F | M),
+        ("throttle_accel_kmh_s", v.throttle_accel_kmh_s.is_some(), F),
+        ("climb_max_kmh", v.climb_max_kmh.is_some(), M),
+        ("descent_max_kmh", v.descent_max_kmh.is_some(), M),
+        ("accel_max_mps2", v.accel_max_mps2.is_some(), M),
+        ("vertical_accel_max_mps2", v.vertical_accel_max_mps2.is_some(), M),
+        ("tilt_max_deg", v.tilt_max_deg.is_some(), M),
+        ("thrust_to_weight", v.thrust_to_weight.is_some(), M),
+        ("velocity_time_constant_s", v.velocity_time_constant_s.is_some(), M),
+        ("attitude_time_constant_s", v.attitude_time_constant_s.is_some(), M),
+        ("yaw_time_constant_s", v.yaw_time_constant_s.is_some(), M),
+        ("drag_linear_per_s", v.drag_linear_per_s.is_some(), M),
+        ("drag_quadratic_per_m", v.drag_quadratic_per_m.is_some(), M),
     ];
     let model = v.model.as_deref().unwrap_or("kinematic");
-    let foreign = match model {
-        "kinematic" => fixed_keys.iter().find(|k| k.1).map(|k| (k.0, "fixed_wing")),
-        "fixed_wing" => kinematic_keys.iter().find(|k| k.1).map(|k| (k.0, "kinematic")),
+    let this = match model {
+        "kinematic" => K,
+        "fixed_wing" => F,
+        "multirotor" => M,
         o => {
             return Err(err(
                 "vehicle.model",
-                format!("unknown model \"{o}\" (expected \"kinematic\" or \"fixed_wing\")"),
+                format!("unknown model \"{o}\" (expected \"kinematic\", \"fixed_wing\" or \"multirotor\")"),
             ))
         }
     };
-    if let Some((key, owner)) = foreign {
-        return Err(err(format!("vehicle.{key}"), format!("applies to model = \"{owner}\", not \"{model}\"")));
+    if let Some((key, _, owners)) = keys.iter().find(|k| k.1 && k.2 & this == 0) {
+        let names: Vec<&str> = [(K, "\"kinematic\""), (F, "\"fixed_wing\""), (M, "\"multirotor\"")]
+            .iter()
+            .filter(|(b, _)| owners & b != 0)
+            .map(|(_, n)| *n)
+            .collect();
+        return Err(err(
+            format!("vehicle.{key}"),
+            format!("applies to model = {}, not \"{model}\"", names.join(" or ")),
+        ));
+    }
+    if model == "multirotor" {
+        return multirotor(v);
     }
     if model == "fixed_wing" {
         let mut m = FixedWingModel::default();
@@ -97,4 +123,61 @@ pub fn vehicle(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
         l.attitude_rate_max_radps = positive3("vehicle.attitude_rate_deg_s", a)?.map(deg);
     }
     Ok(VehicleModel::Kinematic(KinematicModel { limits: l }))
+}
+
+/// The multirotor: every key in its unit, checked, over [`MultirotorModel::default`].
+fn multirotor(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
+    let mut m = MultirotorModel::default();
+    let set = |key: &str, v: Option<f64>, scale: fn(f64) -> f64, dst: &mut f64| -> Result<(), SpecError> {
+        if let Some(x) = v {
+            *dst = scale(positive(&format!("vehicle.{key}"), x)?);
+        }
+        Ok(())
+    };
+    if let Some(x) = v.max_speed_kmh {
+        speed_kmh("vehicle.max_speed_kmh", x)?;
+    }
+    set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
+    set("climb_max_kmh", v.climb_max_kmh, kmh, &mut m.climb_max_mps)?;
+    set("descent_max_kmh", v.descent_max_kmh, kmh, &mut m.descent_max_mps)?;
+    set("accel_max_mps2", v.accel_max_mps2, |x| x, &mut m.accel_max_mps2)?;
+    set("vertical_accel_max_mps2", v.vertical_accel_max_mps2, |x| x, &mut m.vertical_accel_max_mps2)?;
+    set("tilt_max_deg", v.tilt_max_deg, deg, &mut m.tilt_max_rad)?;
+    set("thrust_to_weight", v.thrust_to_weight, |x| x, &mut m.thrust_to_weight)?;
+    set("yaw_rate_max_deg_s", v.yaw_rate_max_deg_s, deg, &mut m.yaw_rate_max_radps)?;
+    set("velocity_time_constant_s", v.velocity_time_constant_s, |x| x, &mut m.velocity_time_constant_s)?;
+    set("attitude_time_constant_s", v.attitude_time_constant_s, |x| x, &mut m.attitude_time_constant_s)?;
+    set("yaw_time_constant_s", v.yaw_time_constant_s, |x| x, &mut m.yaw_time_constant_s)?;
+    if let Some(x) = v.drag_linear_per_s {
+        m.drag_linear_per_s = non_negative("vehicle.drag_linear_per_s", x)?;
+    }
+    if let Some(x) = v.drag_quadratic_per_m {
+        m.drag_quadratic_per_m = non_negative("vehicle.drag_quadratic_per_m", x)?;
+    }
+    if m.tilt_max_rad >= deg(90.0) {
+        return Err(err(
+            "vehicle.tilt_max_deg",
+            format!("must be below 90°, found {}", show(m.tilt_max_rad.to_degrees())),
+        ));
+    }
+    if m.thrust_to_weight <= 1.0 {
+        return Err(err(
+            "vehicle.thrust_to_weight",
+            format!("must be above 1 (the vehicle must lift itself), found {}", show(m.thrust_to_weight)),
+        ));
+    }
+    let lift = G * (m.thrust_to_weight - 1.0);
+    if m.vertical_accel_max_mps2 >= lift {
+        return Err(err(
+            "vehicle.vertical_accel_max_mps2",
+            format!(
+                "{} m/s² is more than the thrust can give, g·(thrust_to_weight − 1) = {:.2} m/s²",
+                show(m.vertical_accel_max_mps2),
+                lift
+            ),
+        ));
+    }
+    // Whatever is left unchecked above is checked by the model itself, named as its key.
+    m.validate().map_err(|e| err("vehicle", e.to_string()))?;
+    Ok(VehicleModel::Multirotor(m))
 }

@@ -64,9 +64,13 @@ pub fn sensing(s: &SensingSpec) -> Result<(f64, Option<f64>), SpecError> {
 }
 
 /// The allowable errors (SI).
-pub fn allowable(a: &AllowableSpec) -> Result<AllowableErrors, SpecError> {
-    let [x, y, z] = defaults::ALLOWABLE_POSITION_M;
-    let [al, be, ga] = defaults::ALLOWABLE_ATTITUDE_DEG;
+pub fn allowable(a: &AllowableSpec, vehicle: &proxform_core::VehicleModel) -> Result<AllowableErrors, SpecError> {
+    let ([x, y, z], [al, be, ga]) = match vehicle {
+        proxform_core::VehicleModel::Multirotor(_) => {
+            (defaults::MULTIROTOR_ALLOWABLE_POSITION_M, defaults::MULTIROTOR_ALLOWABLE_ATTITUDE_DEG)
+        }
+        _ => (defaults::ALLOWABLE_POSITION_M, defaults::ALLOWABLE_ATTITUDE_DEG),
+    };
     Ok(AllowableErrors {
         position_m: [
             or_default("allowable.x_m", a.x_m, x, positive)?,

@@ -19,19 +19,21 @@ pub struct Unsupported(pub &'static str);
 /// error, onboard dropout, beacons and radio loss (i.i.d. and bursty), separation keeping, the
 /// stopping limit and collision avoidance, wind (steady, gusts, turbulence) and the position
 /// fix's bias. Faults, formation changes, scattered starts, radio delay and relays, the robust
-/// fusion, the own-state filter and check, the horizon and the fixed wing stay with the
-/// reference engine.
+/// fusion, the own-state filter and check, the horizon, the fixed wing, the multirotor and the
+/// heading frame stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 16] = [
+    let checks: [(bool, &'static str); 18] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
-        (matches!(sc.vehicle(), VehicleModel::Kinematic(_)), "the fixed-wing vehicle"),
+        (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
+        (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
+        (sc.formation().frame != proxform_core::FormationFrame::Heading, "a heading frame (formation.frame)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (p.horizon <= 1, "a prediction horizon"),
         (p.isolation_gate.is_none(), "the robust fusion"),
         (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
-        (!p.bank_turn_feedforward, "the bank-turn feed-forward"),
+        (!p.turn_feedforward, "the turn feed-forward"),
         (sc.faults().is_empty(), "faults"),
         (sc.schedule().is_empty(), "formation changes"),
         (sc.placement().in_slots(), "scattered starts"),

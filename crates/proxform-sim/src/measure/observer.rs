@@ -136,10 +136,12 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 /// Formation errors of UAV `i` in formation `f` (the one in force, indexed by UAV:
 /// [`StepFrame::formation`]) relative to the reference `nav_state` (METHOD §7):
 /// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped). W is the one
-/// the controllers use: for a formation that turns by banking (the controller's
-/// `bank_turn_feedforward`, the fixed wing) the slot's heading and bank in the turn are part of
-/// it, so a wing UAV flying along its own velocity in a coordinated turn is not counted as a
-/// yaw error.
+/// the controllers use: for a formation that turns as a rigid body (the controller's
+/// `turn_feedforward`) in a course frame (the fixed wing) the slot's heading and bank in the
+/// turn are part of it, so a wing UAV flying along its own velocity in a coordinated turn is not
+/// counted as a yaw error. The turn rate is the vehicle's from the reference's state alone
+/// ([`proxform_core::VehicleModel::turn_rate`]: the fixed wing's from its bank; a heading's rate,
+/// zero here, enters only W's velocity part, which the errors do not use).
 #[inline]
 pub fn formation_error_to(
     scenario: &Scenario,
@@ -150,7 +152,11 @@ pub fn formation_error_to(
 ) -> [f64; 6] {
     let nav = scenario.navigator().index();
     let mut slot = *nav_state;
-    f.add_w_with(scenario.controller().bank_turn_feedforward, &f.slots[i], &f.slots[nav], nav_state, &mut slot);
+    let turn = scenario
+        .controller()
+        .turn_feedforward
+        .then(|| scenario.vehicle().turn_rate(nav_state, nav_state, scenario.dt_s()));
+    f.add_w_with(turn, &f.slots[i], &f.slots[nav], nav_state, &mut slot);
     let e = proxform_core::state::difference(&states[i], &slot);
     [e[0], e[1], e[2], e[6], e[7], e[8]]
 }

@@ -261,6 +261,15 @@ impl StepContext<'_> {
                 *aux = UavStep::default();
                 continue;
             }
+            let e = self.env.get(i).copied().unwrap_or_default();
+            if i == nav && sc.navigator_flies() {
+                // Its autopilot tracks the path through the vehicle and the wind.
+                let (t, start) = (self.t, self.start);
+                let u = sc.agents().controller().input_along_path(me, |s| sc.path().state_at(t + s, start));
+                *next = sc.vehicle().propagate_in_wind(me, &u, dt, e.wind_now.into(), e.wind_next.into());
+                *aux = UavStep::default();
+                continue;
+            }
             let Some(decision) = s.decisions[b].filter(|_| i != nav) else {
                 *next = sc.path().state_at(self.t + dt, self.start);
                 aux.outcome = None;
@@ -283,25 +292,13 @@ impl StepContext<'_> {
                     state::difference(next, &vehicle.propagate(me, &commanded, dt))
                 }
             } else {
-                // The vehicle moves through the air; the wind carries it.
-                let e = self.env.get(i).copied().unwrap_or_default();
-                let (w_now, w_next) = (e.wind_now, e.wind_next);
-                let mut air = *me;
-                for k in 0..3 {
-                    air[state::VX + k] -= w_now[k];
-                }
-                let carry = |mut x: State9| {
-                    for k in 0..3 {
-                        x[state::VX + k] += w_next[k];
-                        x[state::X + k] += 0.5 * dt * (w_now[k] + w_next[k]);
-                    }
-                    x
-                };
-                *next = carry(vehicle.propagate(&air, &applied, dt));
+                // The vehicle moves through the air.
+                let (w_now, w_next) = (e.wind_now.into(), e.wind_next.into());
+                *next = vehicle.propagate_in_wind(me, &applied, dt, w_now, w_next);
                 if exact {
                     State9::zeros()
                 } else {
-                    state::difference(next, &carry(vehicle.propagate(&air, &commanded, dt)))
+                    state::difference(next, &vehicle.propagate_in_wind(me, &commanded, dt, w_now, w_next))
                 }
             };
             aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
