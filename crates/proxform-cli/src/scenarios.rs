@@ -110,6 +110,12 @@ pub fn list() -> Result<ExitCode> {
     println!("                also scenarios/fixed-wing-v.toml");
     println!("  aggregate     the paper's six from random starts within 1 km, forming, then the paper's");
     println!("                path; also scenarios/aggregate.toml");
+    println!("  multirotor-v12-circuit  12 multirotors in a V around a square circuit (four 90° turns)");
+    println!("                in a 25 km/h wind; also scenarios/multirotor-v12-circuit.toml");
+    println!("  multirotor-lattice50-eight  50 multirotors take off, hover in a lattice, fly a");
+    println!("                figure-eight; also scenarios/multirotor-lattice50-eight.toml");
+    println!("  fixed-wing-echelon7-crosswind  7 fixed wings in an echelon through two 90° turns in a");
+    println!("                30 km/h crosswind; also scenarios/fixed-wing-echelon7-crosswind.toml");
     println!("\nScenario files in scenarios/ run with `proxform run FILE.toml`; `proxform init` writes an");
     println!("annotated example; docs/scenarios.md lists every key.");
     Ok(ExitCode::SUCCESS)

@@ -2,8 +2,9 @@
 
 use proxform_core::state::State9;
 use proxform_core::{
-    ControllerParams, ControllerSetup, DependencySet, FormationController, KinematicModel, Method, Observation,
-    ObservationSource, PredictorKind, ProximityController, UavId, VehicleModel,
+    ControllerParams, ControllerSetup, DependencySet, FixedWingModel, FormationController, FormationFrame,
+    KinematicModel, Method, MultirotorModel, Observation, ObservationSource, PredictorKind, ProximityController, UavId,
+    VehicleModel,
 };
 
 mod support;
@@ -111,4 +112,62 @@ fn predictor_step(bencher: divan::Bencher, predictor: &str) {
 fn agent_step_variant(bencher: divan::Bencher, variant: &str) {
     let mut flight = support::variants::Flight::new(variant);
     bencher.bench_local(|| divan::black_box(flight.step()));
+}
+
+/// One adjusting step with 8 neighbours for each vehicle at its scenario defaults: the
+/// multirotor's in a heading frame with the turn feed-forward and the setpoint lead, the fixed
+/// wing's in a course frame with the turn feed-forward (its B by central differences).
+#[divan::bench(args = ["kinematic", "multirotor", "fixed_wing"])]
+fn controller_step_vehicle(bencher: divan::Bencher, vehicle: &str) {
+    let (model, frame, thresholds) = match vehicle {
+        "kinematic" => (
+            VehicleModel::Kinematic(KinematicModel::default()),
+            FormationFrame::World,
+            ControllerParams::paper_thresholds(),
+        ),
+        "multirotor" => (
+            VehicleModel::Multirotor(MultirotorModel::default()),
+            FormationFrame::Heading,
+            ControllerParams::multirotor_thresholds(),
+        ),
+        _ => (
+            VehicleModel::FixedWing(FixedWingModel::default()),
+            FormationFrame::Course,
+            ControllerParams::fixed_wing_thresholds(),
+        ),
+    };
+    let mut params = ControllerParams { turn_feedforward: vehicle != "kinematic", ..ControllerParams::default() };
+    params.envelope.thresholds = thresholds.map(|d| d * 0.01); // always adjusting
+    let mut formation = (*support::ring::formation(8)).clone();
+    formation.frame = frame;
+    let deps = DependencySet::new(UavId(0), 9, vec![(UavId(1), 0.7)]).expect("valid");
+    let (obs, own) = support::ring::scene(&formation);
+    let mut ctrl =
+        ProximityController::standalone(UavId(0), params, std::sync::Arc::new(formation), deps, model).expect("valid");
+    let mut t = 0.0;
+    let d = ctrl.step(t, &own, &obs);
+    assert_eq!(d.occupied_areas, 8);
+    bencher.bench_local(|| {
+        t += 0.1;
+        divan::black_box(ctrl.step(t, divan::black_box(&own), divan::black_box(&obs)))
+    });
+}
+
+/// The plant: one update period of each vehicle (the multirotor in 10 sub-steps of its inner
+/// loop, in a wind).
+#[divan::bench(args = ["kinematic", "multirotor", "fixed_wing"])]
+fn plant_period(bencher: divan::Bencher, vehicle: &str) {
+    let model = match vehicle {
+        "kinematic" => VehicleModel::Kinematic(KinematicModel::default()),
+        "multirotor" => VehicleModel::Multirotor(MultirotorModel::default()),
+        _ => VehicleModel::FixedWing(FixedWingModel::default()),
+    };
+    let mut x = State9::zeros();
+    x[3] = 20.0;
+    let mut u = proxform_core::state::Input::zeros();
+    u[0] = 0.1;
+    u[1] = -0.05;
+    bencher.bench_local(|| {
+        divan::black_box(model.propagate_in_wind(divan::black_box(&x), &u, 0.1, [1.0, 2.0, 0.0], [1.1, 2.0, 0.0]))
+    });
 }

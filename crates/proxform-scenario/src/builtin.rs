@@ -19,9 +19,34 @@ pub const AGGREGATE: &str = include_str!("../scenarios/aggregate.toml");
 pub const EXAMPLE: &str = include_str!("../scenarios/example.toml");
 /// `scenarios/compare-paper.toml`: the built-in comparison.
 pub const COMPARE_PAPER: &str = include_str!("../scenarios/compare-paper.toml");
+/// `scenarios/multirotor-v12-circuit.toml`: 12 multirotors in a V around a square circuit in wind.
+pub const MULTIROTOR_V12_CIRCUIT: &str = include_str!("../scenarios/multirotor-v12-circuit.toml");
+/// `scenarios/multirotor-lattice50-eight.toml`: 50 multirotors take off, hover in a lattice and
+/// fly a figure-eight.
+pub const MULTIROTOR_LATTICE50_EIGHT: &str = include_str!("../scenarios/multirotor-lattice50-eight.toml");
+/// `scenarios/fixed-wing-echelon7-crosswind.toml`: 7 fixed wings in an echelon through two 90°
+/// turns in a 30 km/h crosswind.
+pub const FIXED_WING_ECHELON7_CROSSWIND: &str = include_str!("../scenarios/fixed-wing-echelon7-crosswind.toml");
+
+/// The built-in scenarios that are files of this crate: name and text.
+pub const FILES: [(&str, &str); 5] = [
+    ("fixed-wing-v", FIXED_WING_V),
+    ("aggregate", AGGREGATE),
+    ("multirotor-v12-circuit", MULTIROTOR_V12_CIRCUIT),
+    ("multirotor-lattice50-eight", MULTIROTOR_LATTICE50_EIGHT),
+    ("fixed-wing-echelon7-crosswind", FIXED_WING_ECHELON7_CROSSWIND),
+];
 
 /// Names of the built-in scenarios.
-pub const NAMES: [&str; 4] = ["paper", "swarm", "fixed-wing-v", "aggregate"];
+pub const NAMES: [&str; 7] = [
+    "paper",
+    "swarm",
+    "fixed-wing-v",
+    "aggregate",
+    "multirotor-v12-circuit",
+    "multirotor-lattice50-eight",
+    "fixed-wing-echelon7-crosswind",
+];
 
 /// Horizontal spacing of the swarm's lattice (m).
 pub const SWARM_SPACING_M: f64 = 50.0;
@@ -91,16 +116,15 @@ pub fn spec_by_name(name: &str, uavs: Option<usize>) -> Result<ScenarioSpec, Str
     match (name, uavs) {
         ("paper", None) => Ok(paper_spec()),
         ("swarm", n) => Ok(swarm_spec(n.unwrap_or(SWARM_DEFAULT_UAVS))),
-        ("fixed-wing-v", None) => {
-            Ok(crate::load::parse_spec(FIXED_WING_V, "fixed-wing-v.toml").expect("the built-in file parses"))
-        }
-        ("aggregate", None) => {
-            Ok(crate::load::parse_spec(AGGREGATE, "aggregate.toml").expect("the built-in file parses"))
-        }
-        ("paper" | "fixed-wing-v" | "aggregate", Some(_)) => {
-            Err(format!("--uavs applies to --scenario swarm only, not to {name}"))
-        }
-        (other, _) => Err(format!("unknown scenario '{other}' (built-in: {})", NAMES.join(", "))),
+        (name, uavs) => match FILES.iter().find(|f| f.0 == name) {
+            _ if NAMES.contains(&name) && uavs.is_some() => {
+                Err(format!("--uavs applies to --scenario swarm only, not to {name}"))
+            }
+            Some((name, text)) => {
+                Ok(crate::load::parse_spec(text, &format!("{name}.toml")).expect("the built-in file parses"))
+            }
+            None => Err(format!("unknown scenario '{name}' (built-in: {})", NAMES.join(", "))),
+        },
     }
 }
 

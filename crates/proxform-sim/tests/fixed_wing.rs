@@ -87,11 +87,14 @@ fn a_v_written_without_thresholds_gets_the_fixed_wing_defaults_and_keeps_its_dis
 
 #[test]
 fn separation_keeping_holds_a_wide_v_apart_where_formation_keeping_alone_does_not() {
-    // A V of half-angle 45°: through the turn its inner arm must slow to 42 m/s, and in one run
-    // in a hundred its tail catches up with the UAV ahead (4 of 400 runs of seed 1 come within
-    // 15 m without separation keeping, the closest, run 135, at 8.0 m; with it none comes
-    // closer than 17.4 m; with collision avoidance only, none closer than 15 m either).
-    let text = FIXED_WING_V.replace("angle_deg = 30.0", "angle_deg = 45.0");
+    // A V of half-angle 45° in severe turbulence: through the turn its inner arm must slow to
+    // 42 m/s, and in a few runs in a hundred its tail comes near the UAV ahead (3 of 100 runs of
+    // seed 1 come within 15 m without separation keeping, the closest, run 7, at 12.2 m; with
+    // it none comes closer than 20.4 m; with collision avoidance only, run 7 keeps 19.0 m). In
+    // moderate turbulence formation keeping alone now keeps them apart: since the controller's
+    // view carries each fixed wing across its nose by the wind its state implies (METHOD §5),
+    // none of 400 runs comes closer than 18.7 m, where 4 came within 15 m (8.0 m) before.
+    let text = FIXED_WING_V.replace("angle_deg = 30.0", "angle_deg = 45.0").replace("\"moderate\"", "\"severe\"");
     let wide = parse(&text, "wide-v.toml").expect("valid");
     assert_eq!(wide.controller().separation_m, Some(30.0), "by default twice the safety distance, 30 m");
     let spec = parse_spec(&text, "wide-v.toml").expect("parses");
@@ -107,10 +110,10 @@ fn separation_keeping_holds_a_wide_v_apart_where_formation_keeping_alone_does_no
         s.controller.avoid_m = Some(18.75);
     }))
     .expect("valid");
-    let with = run_one(&wide, 1, 135);
-    let without = run_one(&off, 1, 135);
-    let avoiding = run_one(&avoid_only, 1, 135);
-    assert!(without.min_separation_m < 10.0, "{}", without.min_separation_m);
+    let with = run_one(&wide, 1, 7);
+    let without = run_one(&off, 1, 7);
+    let avoiding = run_one(&avoid_only, 1, 7);
+    assert!(without.min_separation_m < 13.0, "{}", without.min_separation_m);
     assert!(with.min_separation_m > 15.0, "{}", with.min_separation_m);
     assert!(avoiding.min_separation_m > 15.0, "{}", avoiding.min_separation_m);
 }

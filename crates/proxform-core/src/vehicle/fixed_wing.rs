@@ -122,21 +122,45 @@ impl FixedWingModel {
         s
     }
 
-    /// `F·X`: the period with no new input (the turn from the bank and the climb's
-    /// deceleration go on).
-    pub fn hold(&self, x: &State9, dt: f64) -> State9 {
-        self.propagate(x, &Input::zeros(), dt)
+    /// The controller's view of one period from a state over the ground: the UAV flies through
+    /// the air at its nose's airspeed (its velocity's component along its nose), and is carried
+    /// by the rest of its velocity, the wind across its nose that its state implies (zero in
+    /// calm air, up to the noise). So a UAV crabbing in a crosswind is predicted to keep its
+    /// track, not to drift where its nose points.
+    fn predict(&self, x: &State9, u: &Input, dt: f64) -> State9 {
+        let (sa, ca) = x[ALPHA].sin_cos();
+        let (sb, cb) = x[BETA].sin_cos();
+        let nose = [ca * cb, ca * sb, sa];
+        let along = x[VX] * nose[0] + x[VY] * nose[1] + x[VZ] * nose[2];
+        let w = [x[VX] - along * nose[0], x[VY] - along * nose[1], x[VZ] - along * nose[2]];
+        let mut air = *x;
+        for k in 0..3 {
+            air[VX + k] -= w[k];
+        }
+        let mut s = self.propagate(&air, u, dt);
+        for k in 0..3 {
+            s[VX + k] += w[k];
+            s[X + k] += dt * w[k];
+        }
+        s
     }
 
-    /// B: the Jacobian of one period with respect to the inputs at `x`.
+    /// `F·X`: the period with no new input (the turn from the bank and the climb's
+    /// deceleration go on), carried by the wind across the nose that the state implies.
+    pub fn hold(&self, x: &State9, dt: f64) -> State9 {
+        self.predict(x, &Input::zeros(), dt)
+    }
+
+    /// B: the Jacobian of one period with respect to the inputs at `x` (the controller's view,
+    /// as [`Self::hold`]).
     pub fn control_matrix(&self, x: &State9, dt: f64) -> ControlMatrix {
         let mut b = ControlMatrix::zeros();
         let h = 1e-4;
         for j in 0..Self::N_INPUTS {
             let mut up = Input::zeros();
             up[j] = h;
-            let plus = self.propagate(x, &up, dt);
-            let minus = self.propagate(x, &(-up), dt);
+            let plus = self.predict(x, &up, dt);
+            let minus = self.predict(x, &(-up), dt);
             let mut d = plus - minus;
             d[BETA] = wrap_pi(d[BETA]);
             for k in 0..9 {
@@ -225,6 +249,9 @@ mod tests {
         let mut x = level(60.0);
         x[GAMMA] = deg(10.0);
         x[ALPHA] = deg(3.0);
+        // In calm air, its velocity along its nose.
+        x[VX] = 60.0 * deg(3.0).cos();
+        x[VZ] = 60.0 * deg(3.0).sin();
         let b = m.control_matrix(&x, 0.1);
         let mut u = Input::zeros();
         u[0] = 0.01;
@@ -238,6 +265,24 @@ mod tests {
         }
         // The rudder turns the velocity: it has a velocity column, not only an attitude one.
         assert!(b[(VY, 1)].abs() > 0.1);
+    }
+
+    #[test]
+    fn crabbing_in_a_crosswind_it_is_predicted_to_keep_its_track() {
+        let m = FixedWingModel::default();
+        // 25 m/s along x over the ground, nose 18.4° right into an 8.33 m/s wind from the right.
+        let mut x = level(25.0);
+        x[BETA] = -(8.33f64 / 25.0).atan();
+        let held = m.hold(&x, 0.1);
+        assert_relative_eq!(held[VX], 25.0, epsilon = 1e-9);
+        assert_relative_eq!(held[VY], 0.0, epsilon = 1e-9);
+        assert_relative_eq!(held[X + 1], 0.0, epsilon = 1e-9);
+        // The plant, given the air-relative state, agrees once carried by that wind.
+        let mut air = x;
+        air[VY] -= 8.33;
+        let mut flown = m.propagate(&air, &Input::zeros(), 0.1);
+        flown[VY] += 8.33;
+        assert_relative_eq!(flown[VY], held[VY], epsilon = 1e-2);
     }
 
     #[test]

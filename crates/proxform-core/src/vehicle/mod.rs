@@ -224,6 +224,25 @@ impl VehicleModel {
         }
     }
 
+    /// A UAV of this vehicle set on its path at `x` (a scripted navigator) in the wind `w`
+    /// (world frame, m/s): the fixed wing's nose points along its velocity through the air, so
+    /// in a wind it crabs (yaw and pitch of `v − w`); the kinematic vehicle's attitude is its
+    /// own (the paper's); the multirotor flies its path instead (it is not set on it).
+    #[inline]
+    pub fn on_path_in_wind(&self, x: &State9, w: [f64; 3]) -> State9 {
+        use crate::state::{ALPHA, BETA, VX};
+        let mut s = *x;
+        if let VehicleModel::FixedWing(_) = self {
+            let a = [x[VX] - w[0], x[VX + 1] - w[1], x[VX + 2] - w[2]];
+            let h = a[0].hypot(a[1]);
+            if h > 1e-9 {
+                s[BETA] = a[1].atan2(a[0]);
+                s[ALPHA] = a[2].atan2(h);
+            }
+        }
+        s
+    }
+
     /// How long the vehicle's velocity lags the setpoint it is given (s): the multirotor's
     /// velocity loop τ_v, whose steady lag behind a ramp of setpoints is τ_v times its slope; 0
     /// for the kinematic vehicle and the fixed wing, whose inputs act within the period. Its

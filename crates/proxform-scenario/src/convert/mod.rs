@@ -141,7 +141,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
         )?;
 
         let path = path::path(&spec.path)?;
-        let initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
+        let wind = world::wind(&spec.wind)?;
+        let mut initial = feasibility::initial_states(&spec, &formation, navigator, &path, &vehicle)?;
+        if !wind.is_calm() {
+            // In the wind of the start (a fixed wing crabs into it).
+            let w = wind.common(0.0).into();
+            for x in &mut initial {
+                *x = vehicle.on_path_in_wind(x, w);
+            }
+        }
         let can_hover = vehicle.forward_speed_range().0 == 0.0;
         let placement = placement::placement(&spec.initial, &initial, navigator, safety_distance_m, can_hover)?;
         let form_within_s = placement::form_within(&spec.initial, &placement, duration_s)?;
@@ -169,7 +177,6 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
         let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable, &vehicle)?;
-        let wind = world::wind(&spec.wind)?;
         let faults = world::faults(&spec.fault, n)?;
         let method = controller::method(&spec.controller)?;
         // Derived tables that lean on the navigator hear it over the radio where it is out of

@@ -272,6 +272,9 @@ impl StepContext<'_> {
             }
             let Some(decision) = s.decisions[b].filter(|_| i != nav) else {
                 *next = sc.path().state_at(self.t + dt, self.start);
+                if !sc.wind().is_calm() {
+                    *next = sc.vehicle().on_path_in_wind(next, sc.wind().common(self.t + dt).into());
+                }
                 aux.outcome = None;
                 aux.model_error = [0.0; 9];
                 aux.isolated = 0;
