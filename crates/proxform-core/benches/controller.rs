@@ -153,7 +153,7 @@ fn controller_step_vehicle(bencher: divan::Bencher, vehicle: &str) {
     });
 }
 
-/// The plant: one update period of each vehicle (the multirotor in 10 sub-steps of its inner
+/// The plant: one update period of each vehicle (the multirotor in 5 sub-steps of its inner
 /// loop, in a wind).
 #[divan::bench(args = ["kinematic", "multirotor", "fixed_wing"])]
 fn plant_period(bencher: divan::Bencher, vehicle: &str) {

@@ -13,10 +13,10 @@
 //!   the inner loop's velocity integrator is taken as settled, so it asks for the specific force
 //!   `f_d = a_d + g·ẑ − D`, with the horizontal part cut to the tilt limit and to what the
 //!   thrust-to-weight ratio leaves beside the vertical part;
-//! - pitch α and roll γ follow the attitude that points the thrust along `f_d` (nose-up pitch
-//!   brakes, right roll pushes right) with a first-order lag `τ_att`; the thrust settles within
-//!   a sub-step (motors respond in tens of milliseconds) to the vertical force asked for, at
-//!   most `T/W·g`;
+//! - the thrust's direction (in the world frame) follows the direction of `f_d` with a
+//!   first-order lag `τ_att`; pitch α and roll γ are that direction seen from the nose
+//!   (nose-up pitch brakes, right roll pushes right); the thrust settles within a sub-step
+//!   (motors respond in tens of milliseconds) to the vertical force asked for, at most `T/W·g`;
 //! - yaw ψ (β) turns toward its setpoint at `wrap(ψ_sp − ψ)/τ_ψ`, at most the yaw-rate limit;
 //! - the acceleration is the thrust along the attitude, less gravity, plus the drag; velocity
 //!   and position are integrated by the trapezoid rule.
@@ -39,8 +39,9 @@ use crate::state::{Input, State9, ALPHA, BETA, GAMMA, VX, VZ, X, Z};
 
 use super::G;
 
-/// Longest sub-step of the plant's integration (s).
-pub const SUBSTEP_S: f64 = 0.01;
+/// Longest sub-step of the plant's integration (s); never more than a quarter of the velocity
+/// loop's time constant (the attitude lag is integrated exactly).
+pub const SUBSTEP_S: f64 = 0.02;
 
 /// Parameters of the multirotor and its autopilot's inner loop. Defaults: a 1-2 kg quadrotor
 /// with PX4's default velocity-control limits.
@@ -173,12 +174,12 @@ impl MultirotorModel {
     }
 
     /// The specific force the inner loop asks for at velocity `v` with setpoint `sp` and drag
-    /// `d`, within the acceleration, tilt and thrust limits.
+    /// `d`, within the acceleration, tilt (its tangent `tan_tilt`) and thrust limits.
     #[inline]
-    fn force_wanted(&self, v: [f64; 3], sp: [f64; 3], d: [f64; 3]) -> Force {
+    fn force_wanted(&self, v: [f64; 3], sp: [f64; 3], d: [f64; 3], tan_tilt: f64) -> Force {
         let tau = self.velocity_time_constant_s;
         let (mut ax, mut ay) = ((sp[0] - v[0]) / tau, (sp[1] - v[1]) / tau);
-        let ah = ax.hypot(ay);
+        let ah = (ax * ax + ay * ay).sqrt();
         if ah > self.accel_max_mps2 {
             let k = self.accel_max_mps2 / ah;
             ax *= k;
@@ -190,8 +191,8 @@ impl MultirotorModel {
         let (mut east, mut north) = (ax - d[0], ay - d[1]);
         // Vertical first (PX4's priority): the horizontal force within the tilt and what the
         // thrust leaves.
-        let h_max = (up * self.tilt_max_rad.tan()).min((t_max * t_max - up * up).max(0.0).sqrt());
-        let h = east.hypot(north);
+        let h_max = (up * tan_tilt).min((t_max * t_max - up * up).max(0.0).sqrt());
+        let h = (east * east + north * north).sqrt();
         if h > h_max {
             let k = h_max / h;
             east *= k;
@@ -203,47 +204,59 @@ impl MultirotorModel {
     /// The plant: one period under input `u` with the wind `w0` at its start and `w1` at its
     /// end (world frame, m/s; linear in between). The state's velocity is over the ground.
     pub fn propagate_in_wind(&self, x: &State9, u: &Input, dt: f64, w0: [f64; 3], w1: [f64; 3]) -> State9 {
-        let v_max = self.clamp_velocity([x[VX] + u[0], x[VX + 1] + u[1], x[VZ] + u[2]]);
-        let sp = v_max;
+        let sp = self.clamp_velocity([x[VX] + u[0], x[VX + 1] + u[1], x[VZ] + u[2]]);
         let yaw_sp = x[BETA] + u[3];
-        let n = (dt / SUBSTEP_S).ceil().max(1.0);
+        let n = (dt / SUBSTEP_S.min(0.25 * self.velocity_time_constant_s)).ceil().max(1.0);
         let h = dt / n;
         let lag = 1.0 - (-h / self.attitude_time_constant_s).exp();
-        let mut s = *x;
         let t_max = self.thrust_to_weight * G;
+        let tan_tilt = self.tilt_max_rad.tan();
+        // The thrust's direction in the world frame, from the attitude (nose-up pitch tilts it
+        // back, right roll to the right); it lags the direction asked for, and becomes the
+        // attitude again at the end (a yaw turns the nose, not the thrust).
+        let (sa, ca) = x[ALPHA].sin_cos();
+        let (sg, cg) = x[GAMMA].sin_cos();
+        let (sn, cs) = x[BETA].sin_cos();
+        let (bf, bl) = (-cg * sa, -sg);
+        let mut dir = [cs * bf - sn * bl, sn * bf + cs * bl, cg * ca];
+        let mut psi = x[BETA];
+        let mut s = *x;
         for k in 0..n as usize {
             let f = (k as f64 + 0.5) / n;
             let w = [w0[0] + f * (w1[0] - w0[0]), w0[1] + f * (w1[1] - w0[1]), w0[2] + f * (w1[2] - w0[2])];
             let v = [s[VX], s[VX + 1], s[VZ]];
             let d = self.drag([v[0] - w[0], v[1] - w[1], v[2] - w[2]]);
-            let want = self.force_wanted(v, sp, d);
+            let want = self.force_wanted(v, sp, d, tan_tilt);
             // Yaw toward its setpoint, rate-limited.
-            let rate = (wrap_pi(yaw_sp - s[BETA]) / self.yaw_time_constant_s)
+            let rate = (wrap_pi(yaw_sp - psi) / self.yaw_time_constant_s)
                 .clamp(-self.yaw_rate_max_radps, self.yaw_rate_max_radps);
-            let psi = wrap_pi(s[BETA] + h * rate);
-            // The attitude that points the thrust along the wanted force, in the nose frame.
-            let (sn, cs) = psi.sin_cos();
-            let fwd = cs * want.east + sn * want.north;
-            let left = -sn * want.east + cs * want.north;
-            let pitch_d = (-fwd).atan2(want.up);
-            let roll_d = (-left).atan2(fwd.hypot(want.up));
-            let pitch = s[ALPHA] + lag * (pitch_d - s[ALPHA]);
-            let roll = s[GAMMA] + lag * (roll_d - s[GAMMA]);
-            // Thrust for the vertical force asked for, at the attitude reached.
-            let (sp_, cp) = pitch.sin_cos();
-            let (sr, cr) = roll.sin_cos();
-            let thrust = (want.up / (cp * cr).max(0.1)).clamp(0.0, t_max);
-            let (f_fwd, f_left, f_up) = (-thrust * cr * sp_, -thrust * sr, thrust * cr * cp);
-            let a = [cs * f_fwd - sn * f_left + d[0], sn * f_fwd + cs * f_left + d[1], f_up - G + d[2]];
+            psi = wrap_pi(psi + h * rate);
+            // The thrust's direction toward the wanted force's (both within the tilt limit).
+            let m = (want.east * want.east + want.north * want.north + want.up * want.up).sqrt();
+            let aim = if m > 1e-9 { [want.east / m, want.north / m, want.up / m] } else { [0.0, 0.0, 1.0] };
+            for c in 0..3 {
+                dir[c] += lag * (aim[c] - dir[c]);
+            }
+            let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+            for c in &mut dir {
+                *c /= norm;
+            }
+            // Thrust for the vertical force asked for, along the direction reached.
+            let thrust = (want.up / dir[2].max(0.1)).clamp(0.0, t_max);
+            let a = [thrust * dir[0] + d[0], thrust * dir[1] + d[1], thrust * dir[2] - G + d[2]];
             for j in 0..3 {
                 let v_new = s[VX + j] + h * a[j];
                 s[X + j] += 0.5 * h * (s[VX + j] + v_new);
                 s[VX + j] = v_new;
             }
-            s[ALPHA] = pitch;
-            s[BETA] = psi;
-            s[GAMMA] = roll;
         }
+        // Back to the attitude, in the frame of the nose reached.
+        let (sn, cs) = psi.sin_cos();
+        let fwd = cs * dir[0] + sn * dir[1];
+        let left = -sn * dir[0] + cs * dir[1];
+        s[ALPHA] = (-fwd).atan2(dir[2]);
+        s[BETA] = psi;
+        s[GAMMA] = (-left).atan2(fwd.hypot(dir[2]));
         debug_assert!(s[Z].is_finite());
         s
     }
