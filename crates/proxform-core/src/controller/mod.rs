@@ -411,6 +411,14 @@ impl ProximityController {
         };
         // Σ f·ω and Σ f over the neighbours, for the turn's trend.
         let mut turn_sum = (0.0, 0.0);
+        // X̂_ij − X_hold of neighbour `id` seen at `x_j` and predicted at `f_x_j`, weighing `f`.
+        let mut implied = |id: UavId, x_j: &(State9, f64), f_x_j: &State9, f: f64| {
+            let (x_hat, omega) = implied_deviation(formation, &motion, id, (&x_j.0, x_j.1), f_x_j, slot_i, x_hold)?;
+            if let Some(w) = omega {
+                turn_sum = (turn_sum.0 + f * w, turn_sum.1 + f);
+            }
+            Some(x_hat)
+        };
         let needs_now = motion.needs_now();
         let mut est = Estimates::new();
         // Steps 1-2 (and 3 for main references in their areas).
@@ -436,14 +444,7 @@ impl ProximityController {
             if separation > 0.0 {
                 keep_apart(formation, id, &f_x_j, slot_i, x_hold, separation, &mut est.push);
             }
-            let Some((x_hat, omega)) =
-                implied_deviation(formation, &motion, id, (&x_j.0, x_j.1), &f_x_j, slot_i, x_hold)
-            else {
-                continue;
-            };
-            if let Some(w) = omega {
-                turn_sum = (turn_sum.0 + f * w, turn_sum.1 + f);
-            }
+            let Some(x_hat) = implied(id, &x_j, &f_x_j, f) else { continue };
             let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
             est.take(fusion, Implied { x_hat, f, c: dependency.degree(id), in_area: true, suspect, upstream });
         }
@@ -479,14 +480,7 @@ impl ProximityController {
                         (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)), (x_j, dt))
                     }
                 };
-            let Some((x_hat, omega)) =
-                implied_deviation(formation, &motion, id, (&x_j.0, x_j.1), &f_x_j, slot_i, x_hold)
-            else {
-                continue;
-            };
-            if let Some(w) = omega {
-                turn_sum = (turn_sum.0 + f * w, turn_sum.1 + f);
-            }
+            let Some(x_hat) = implied(id, &x_j, &f_x_j, f) else { continue };
             let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
             est.take(fusion, Implied { x_hat, f, c: Some(c), in_area: false, suspect, upstream });
         }
