@@ -17,7 +17,8 @@
 //!   first-order lag `τ_att`; pitch α and roll γ are that direction seen from the nose
 //!   (nose-up pitch brakes, right roll pushes right); the thrust settles within a sub-step
 //!   (motors respond in tens of milliseconds) to the vertical force asked for, at most `T/W·g`;
-//! - yaw ψ (β) turns toward its setpoint at `wrap(ψ_sp − ψ)/τ_ψ`, at most the yaw-rate limit;
+//! - yaw ψ (β) follows its setpoint with the first-order lag `τ_ψ`, at most at the yaw-rate
+//!   limit;
 //! - the acceleration is the thrust along the attitude, less gravity, plus the drag; velocity
 //!   and position are integrated by the trapezoid rule.
 //!
@@ -40,8 +41,12 @@ use crate::state::{Input, State9, ALPHA, BETA, GAMMA, VX, VZ, X, Z};
 use super::G;
 
 /// Longest sub-step of the plant's integration (s); never more than a quarter of the velocity
-/// loop's time constant (the attitude lag is integrated exactly).
+/// loop's time constant (the attitude and yaw lags are integrated exactly).
 pub const SUBSTEP_S: f64 = 0.02;
+
+/// Shortest velocity-loop time constant (s): a faster loop is no multirotor's, and the plant's
+/// sub-steps (a quarter of it) stay at most 80 a period of 1 s.
+pub const MIN_VELOCITY_TIME_CONSTANT_S: f64 = 0.05;
 
 /// Parameters of the multirotor and its autopilot's inner loop. Defaults: a 1-2 kg quadrotor
 /// with PX4's default velocity-control limits.
@@ -142,6 +147,13 @@ impl MultirotorModel {
         }
         positive("yaw_rate_max", self.yaw_rate_max_radps)?;
         positive("velocity_time_constant", self.velocity_time_constant_s)?;
+        if self.velocity_time_constant_s < MIN_VELOCITY_TIME_CONSTANT_S {
+            return Err(ConfigError::OutOfRange {
+                field: "velocity_time_constant",
+                value: self.velocity_time_constant_s,
+                expected: "at least 0.05 s",
+            });
+        }
         positive("attitude_time_constant", self.attitude_time_constant_s)?;
         positive("yaw_time_constant", self.yaw_time_constant_s)?;
         for (field, v) in [("drag_linear", self.drag_linear_per_s), ("drag_quadratic", self.drag_quadratic_per_m)] {
@@ -163,14 +175,6 @@ impl MultirotorModel {
         let h = v[0].hypot(v[1]);
         let k = if h > self.max_speed_mps { self.max_speed_mps / h } else { 1.0 };
         [v[0] * k, v[1] * k, v[2].clamp(-self.descent_max_mps, self.climb_max_mps)]
-    }
-
-    /// The drag acceleration (per unit mass) at air-relative velocity `va`.
-    #[inline]
-    fn drag(&self, va: [f64; 3]) -> [f64; 3] {
-        let s = (va[0] * va[0] + va[1] * va[1] + va[2] * va[2]).sqrt();
-        let k = self.drag_linear_per_s + self.drag_quadratic_per_m * s;
-        [-k * va[0], -k * va[1], -k * va[2]]
     }
 
     /// The specific force the inner loop asks for at velocity `v` with setpoint `sp` and drag
@@ -209,6 +213,8 @@ impl MultirotorModel {
         let n = (dt / SUBSTEP_S.min(0.25 * self.velocity_time_constant_s)).ceil().max(1.0);
         let h = dt / n;
         let lag = 1.0 - (-h / self.attitude_time_constant_s).exp();
+        let yaw_lag = 1.0 - (-h / self.yaw_time_constant_s).exp();
+        let yaw_step_max = h * self.yaw_rate_max_radps;
         let t_max = self.thrust_to_weight * G;
         let tan_tilt = self.tilt_max_rad.tan();
         // The thrust's direction in the world frame, from the attitude (nose-up pitch tilts it
@@ -225,12 +231,14 @@ impl MultirotorModel {
             let f = (k as f64 + 0.5) / n;
             let w = [w0[0] + f * (w1[0] - w0[0]), w0[1] + f * (w1[1] - w0[1]), w0[2] + f * (w1[2] - w0[2])];
             let v = [s[VX], s[VX + 1], s[VZ]];
-            let d = self.drag([v[0] - w[0], v[1] - w[1], v[2] - w[2]]);
+            let va = [v[0] - w[0], v[1] - w[1], v[2] - w[2]];
+            // Drag −k·v_a, k = k₁ + k₂·|v_a| (per unit mass).
+            let k_drag = self.drag_linear_per_s
+                + self.drag_quadratic_per_m * (va[0] * va[0] + va[1] * va[1] + va[2] * va[2]).sqrt();
+            let d = [-k_drag * va[0], -k_drag * va[1], -k_drag * va[2]];
             let want = self.force_wanted(v, sp, d, tan_tilt);
-            // Yaw toward its setpoint, rate-limited.
-            let rate = (wrap_pi(yaw_sp - psi) / self.yaw_time_constant_s)
-                .clamp(-self.yaw_rate_max_radps, self.yaw_rate_max_radps);
-            psi = wrap_pi(psi + h * rate);
+            // Yaw toward its setpoint: its lag, at most the rate limit.
+            psi = wrap_pi(psi + (yaw_lag * wrap_pi(yaw_sp - psi)).clamp(-yaw_step_max, yaw_step_max));
             // The thrust's direction toward the wanted force's (both within the tilt limit).
             let m = (want.east * want.east + want.north * want.north + want.up * want.up).sqrt();
             let aim = if m > 1e-9 { [want.east / m, want.north / m, want.up / m] } else { [0.0, 0.0, 1.0] };
@@ -243,9 +251,12 @@ impl MultirotorModel {
             }
             // Thrust for the vertical force asked for, along the direction reached.
             let thrust = (want.up / dir[2].max(0.1)).clamp(0.0, t_max);
-            let a = [thrust * dir[0] + d[0], thrust * dir[1] + d[1], thrust * dir[2] - G + d[2]];
+            // The thrust, gravity, and the drag taken at the sub-step's end (semi-implicit: stable
+            // however strong the drag).
+            let a =
+                [thrust * dir[0] + k_drag * w[0], thrust * dir[1] + k_drag * w[1], thrust * dir[2] - G + k_drag * w[2]];
             for j in 0..3 {
-                let v_new = s[VX + j] + h * a[j];
+                let v_new = (s[VX + j] + h * a[j]) / (1.0 + h * k_drag);
                 s[X + j] += 0.5 * h * (s[VX + j] + v_new);
                 s[VX + j] = v_new;
             }

@@ -284,21 +284,50 @@ fn ground(x: &State9) -> f64 {
     x[state::VX].hypot(x[state::VY])
 }
 
+/// Refuses a course frame over a path that slows below 1 m/s (a hover): the course, the
+/// direction of travel, is then undefined, and the formation would spin with the noise.
+pub fn course_defined(path: &NavigatorPath, formation: &Formation, duration_s: f64) -> Result<(), SpecError> {
+    if formation.frame != proxform_core::FormationFrame::Course {
+        return Ok(());
+    }
+    let samples = (duration_s / 0.1).ceil().clamp(1.0, 20_000.0) as u64;
+    for k in 0..=samples {
+        let t = duration_s * k as f64 / samples as f64;
+        let x = path.state_at(t, [0.0; 3]);
+        if x[state::VX].hypot(x[state::VY]) < 1.0 {
+            return Err(err(
+                "formation.frame",
+                format!(
+                    "\"course\" follows the direction of travel, which the path leaves undefined at t = {t:.1} s \
+                     (slower than 1 m/s): use \"heading\" (the multirotor's default) or \"world\""
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a formation whose slots the vehicle cannot fly where the path turns, when the
-/// formation turns as one rigid body (`turn_feedforward` in a course or heading frame): at
+/// formation turns as one rigid body (`turn_feedforward` in a course or heading frame), and,
+/// for the multirotor, at any time its tilt cannot hold a slot's acceleration against its drag
+/// through the steady wind and gust: at
 /// every update period (at most 20 000 instants, fewer for a large formation: 2·10^7
 /// slot-instants at most) each slot flies at the navigator's velocity
 /// plus `ω × R_f(d_i − d_nav)`, ω the path's rate of heading, and must keep within the
 /// vehicle's speed range, and turn at ω at that speed within its bank (fixed wing) or
-/// acceleration limit (multirotor). Names the slot, the time, the turn rate and the figure.
+/// acceleration and tilt limits (multirotor). Names the slot, the time, the turn rate and the
+/// figure.
 pub fn slots_within_vehicle(
     path: &NavigatorPath,
     formation: &Formation,
     navigator: UavId,
     vehicle: &VehicleModel,
+    turning: bool,
+    wind: &crate::wind::Wind,
     duration_s: f64,
 ) -> Result<(), SpecError> {
-    if formation.frame == proxform_core::FormationFrame::World {
+    let rigid = turning && formation.frame != proxform_core::FormationFrame::World;
+    if !rigid && !matches!(vehicle, VehicleModel::Multirotor(_)) {
         return Ok(());
     }
     // At most 2·10^7 slot-instants (a second or so), and at least 50 instants.
@@ -310,14 +339,24 @@ pub fn slots_within_vehicle(
     // The worst excess over a limit (relative), with the slot, time, turn rate and figure.
     let mut worst: Option<(f64, usize, f64, f64, String)> = None;
     let mut prev = path.state_at(0.0, [0.0; 3]);
+    // Each slot's velocity at the instant before (for its acceleration).
+    let mut before: Vec<[f64; 3]> = Vec::new();
     for k in 1..=samples {
         let t = h * k as f64;
         let x = path.state_at(t, [0.0; 3]);
-        let omega = wrap_pi(x[state::BETA] - prev[state::BETA]) / h;
+        let omega = if rigid { wrap_pi(x[state::BETA] - prev[state::BETA]) / h } else { 0.0 };
         prev = x;
+        let w: [f64; 3] = wind.common(t).into();
         for (i, slot) in formation.slots.iter().enumerate() {
             let mut s = x;
             formation.add_w_turning(slot, nav, &x, omega, &mut s);
+            let vel = [s[state::VX], s[state::VY], s[state::VZ]];
+            let accel = before.get(i).map(|b| [(vel[0] - b[0]) / h, (vel[1] - b[1]) / h, (vel[2] - b[2]) / h]);
+            if before.len() < formation.len() {
+                before.push(vel);
+            } else {
+                before[i] = vel;
+            }
             let v = vehicle.forward_speed(&s);
             let lateral = omega.abs() * s[state::VX].hypot(s[state::VY]);
             let mut excess = vec![
@@ -339,13 +378,34 @@ pub fn slots_within_vehicle(
                         ),
                     ));
                 }
-                VehicleModel::Multirotor(m) => excess.push((
-                    (lateral - m.accel_max_mps2) / m.accel_max_mps2,
-                    format!(
-                        "{lateral:.2} m/s² toward the turn's centre, beyond vehicle.accel_max_mps2 = {:.2} m/s²",
-                        m.accel_max_mps2
-                    ),
-                )),
+                VehicleModel::Multirotor(m) => {
+                    excess.push((
+                        (lateral - m.accel_max_mps2) / m.accel_max_mps2,
+                        format!(
+                            "{lateral:.2} m/s² toward the turn's centre, beyond vehicle.accel_max_mps2 = {:.2} m/s²",
+                            m.accel_max_mps2
+                        ),
+                    ));
+                    // The tilt that holds its acceleration against its drag through the steady
+                    // wind and the gust.
+                    if let Some(a) = accel {
+                        let va = [vel[0] - w[0], vel[1] - w[1], vel[2] - w[2]];
+                        let air = (va[0] * va[0] + va[1] * va[1] + va[2] * va[2]).sqrt();
+                        let k = m.drag_linear_per_s + m.drag_quadratic_per_m * air;
+                        let (fx, fy, fz) = (a[0] + k * va[0], a[1] + k * va[1], G + a[2] + k * va[2]);
+                        let tilt = fx.hypot(fy).atan2(fz);
+                        excess.push((
+                            (tilt - m.tilt_max_rad) / m.tilt_max_rad,
+                            format!(
+                                "a tilt of {:.1}° (its drag at {:.1} km/h through the air, and its acceleration), beyond \
+                                 vehicle.tilt_max_deg = {:.1}°",
+                                tilt.to_degrees(),
+                                air * 3.6,
+                                m.tilt_max_rad.to_degrees()
+                            ),
+                        ));
+                    }
+                }
                 VehicleModel::Kinematic(_) => {}
             }
             for (e, what) in excess {
@@ -356,12 +416,18 @@ pub fn slots_within_vehicle(
         }
     }
     if let Some((_, i, t, omega, what)) = worst {
+        // The navigator's own slot is its path's (and vehicle's) matter; the others' the
+        // formation's.
+        let (key, whose) = if i == navigator.index() {
+            ("path", format!("the navigator (UAV {}) would need", i + 1))
+        } else {
+            ("formation", format!("UAV {}'s slot would need", i + 1))
+        };
         return Err(err(
-            "formation",
+            key,
             format!(
-                "UAV {}'s slot would need {what} while the formation turns as one body (at {:.1}°/s, t = {t:.1} s): \
-                 fly a wider turn (path.turn_radius_m) or slower, or bring the slot nearer the navigator",
-                i + 1,
+                "{whose} {what} (turning at {:.1}°/s, t = {t:.1} s): fly a wider turn (path.turn_radius_m) or \
+                 slower, in less wind, with less drag, or bring the slot nearer the navigator",
                 omega.to_degrees()
             ),
         ));

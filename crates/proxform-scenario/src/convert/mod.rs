@@ -162,9 +162,16 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         let reassign_on_loss = reassign_on_loss.then(|| placement::assign_by(&spec.initial)).transpose()?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
-        if params.turn_feedforward {
-            feasibility::slots_within_vehicle(&path, &formation, navigator, &vehicle, duration_s)?;
-        }
+        feasibility::course_defined(&path, &formation, duration_s)?;
+        feasibility::slots_within_vehicle(
+            &path,
+            &formation,
+            navigator,
+            &vehicle,
+            params.turn_feedforward,
+            &wind,
+            duration_s,
+        )?;
 
         let (noise, gnss_bias, actuation_error) = world::noise(&spec.noise)?;
         if let proxform_core::PredictorKind::Singer { position_sigma_m, velocity_sigma_mps, .. } = &mut params.predictor

@@ -154,6 +154,16 @@ fn multirotor(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
     if let Some(x) = v.drag_quadratic_per_m {
         m.drag_quadratic_per_m = non_negative("vehicle.drag_quadratic_per_m", x)?;
     }
+    if m.velocity_time_constant_s < proxform_core::vehicle::MIN_VELOCITY_TIME_CONSTANT_S {
+        return Err(err(
+            "vehicle.velocity_time_constant_s",
+            format!(
+                "must be at least {} s (no multirotor's velocity loop is faster), found {}",
+                proxform_core::vehicle::MIN_VELOCITY_TIME_CONSTANT_S,
+                show(m.velocity_time_constant_s)
+            ),
+        ));
+    }
     if m.tilt_max_rad >= deg(90.0) {
         return Err(err(
             "vehicle.tilt_max_deg",

@@ -135,7 +135,8 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 
 /// Formation errors of UAV `i` in formation `f` (the one in force, indexed by UAV:
 /// [`StepFrame::formation`]) relative to the reference `nav_state` (METHOD §7):
-/// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped). W is the one
+/// `e_i = X_i − (X_nav + W_i,nav)`, as x, y, z (m) and α, β, γ (rad, wrapped; a component that
+/// is not a number is +∞). W is the one
 /// the controllers use: for a formation that turns as a rigid body (the controller's
 /// `turn_feedforward`) in a course frame (the fixed wing) the slot's heading and bank in the
 /// turn are part of it, so a wing UAV flying along its own velocity in a coordinated turn is not
@@ -158,7 +159,9 @@ pub fn formation_error_to(
         .then(|| scenario.vehicle().turn_rate(nav_state, nav_state, scenario.dt_s()));
     f.add_w_with(turn, &f.slots[i], &f.slots[nav], nav_state, &mut slot);
     let e = proxform_core::state::difference(&states[i], &slot);
-    [e[0], e[1], e[2], e[6], e[7], e[8]]
+    // An error that is not a number (a state gone non-finite) is as large as errors get: it
+    // fails the run, however the statistics over it take their maxima.
+    [e[0], e[1], e[2], e[6], e[7], e[8]].map(|v| if v.is_nan() { f64::INFINITY } else { v })
 }
 
 /// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
@@ -216,5 +219,20 @@ mod tests {
         active[0] = false;
         let r = navigator_reference(&sc, sc.formation(), &states, &active);
         assert!((r[X] - 0.2).abs() < 1e-9 && (r[Y] + 0.4).abs() < 1e-9 && (r[Z] - 300.0).abs() < 1e-9, "{r:?}");
+    }
+
+    #[test]
+    fn an_error_that_is_not_a_number_is_infinite_and_fails() {
+        let sc = paper();
+        let nav = State9::zeros();
+        let mut states: Vec<State9> = (0..6).map(|i| sc.slot_state(i, &nav)).collect();
+        states[3][Y] = f64::NAN;
+        states[3][BETA] = f64::INFINITY;
+        let e = formation_error_to(&sc, sc.formation(), &states, &nav, 3);
+        assert_eq!((e[1], e[4]), (f64::INFINITY, f64::INFINITY));
+        assert_eq!(e[0], 0.0);
+        // A NaN navigator makes every follower's error infinite.
+        let lost = State9::from_element(f64::NAN);
+        assert!(formation_error_to(&sc, sc.formation(), &states, &lost, 2).iter().all(|v| *v == f64::INFINITY));
     }
 }
