@@ -163,3 +163,18 @@ fn the_fast_engine_refuses_the_multirotor_naming_the_key() {
     let e = proxform_sim::fast::supports(&s).expect_err("refused");
     assert!(e.to_string().contains("vehicle.model"), "{e}");
 }
+
+#[test]
+fn a_turn_feed_forward_in_a_world_frame_and_a_crabbing_heading_frame_are_named_in_warnings() {
+    let world = "[formation]\nframe = \"world\"\n[formation.shape]\nkind = \"v\"\nuavs = 5\nspacing_m = 100.0\n\
+                 [controller]\nturn_feedforward = true\n";
+    let w: Vec<String> = parse(world, "w.toml").expect("valid").warnings().iter().map(|w| w.to_string()).collect();
+    assert!(w.iter().any(|w| w.contains("controller.turn_feedforward")), "{w:?}");
+    let heading = FIXED_WING_ECHELON7_CROSSWIND
+        .replace("[formation.shape]", "[formation]\nframe = \"heading\"\n[formation.shape]");
+    let s = parse(&heading, "h.toml").expect("valid");
+    let w: Vec<String> = s.warnings().iter().map(|w| w.to_string()).collect();
+    assert!(w.iter().any(|w| w.contains("formation.frame") && w.contains("crab")), "{w:?}");
+    // The shipped file, in its course frame, has none.
+    assert!(parse(FIXED_WING_ECHELON7_CROSSWIND, "e.toml").expect("valid").warnings().is_empty());
+}

@@ -273,6 +273,19 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &formation_spec));
+        if spec.controller.turn_feedforward == Some(true) && formation.frame == proxform_core::FormationFrame::World {
+            warnings.push(err(
+                "controller.turn_feedforward",
+                "does nothing in a world frame, which does not turn (formation.frame = \"course\" or \"heading\")",
+            ));
+        }
+        if fixed_wing && formation.frame == proxform_core::FormationFrame::Heading && !wind.is_calm() {
+            warnings.push(err(
+                "formation.frame",
+                "\"heading\" turns the formation with the navigator's nose, which a fixed wing crabs into the wind: \
+                 the formation turns with the crab (\"course\", the fixed wing's default, follows its track)",
+            ));
+        }
         if matches!(setup.vehicle(), VehicleModel::Kinematic(_)) && wind.steady_mps != nalgebra::Vector3::zeros() {
             // METHOD §5: the kinematic vehicle's velocity is over the ground, so only changes of
             // the wind (gusts, turbulence) move it.
