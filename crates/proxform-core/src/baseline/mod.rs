@@ -131,11 +131,18 @@ impl Hearing {
         }
     }
 
-    /// Where `h` says this UAV should be, now and one period ahead: `X_j + W_ij`.
+    /// Where `h` says this UAV should be, now and one period ahead: `X_j + W_ij`, with the
+    /// proximity controller's W (the formation's rigid-body turn at j's turn rate when
+    /// `turn_feedforward` is on), so that every method flies the same formation.
     pub fn slot_from(&self, h: &Heard) -> Option<(State9, State9)> {
         let f = &self.formation;
         let (si, sj) = (f.slot(self.id)?, f.slot(h.id)?);
-        Some((h.now + f.w(si, sj, &h.now), h.next + f.w(si, sj, &h.next)))
+        let p = self.setup.params();
+        let turn = p.turn_feedforward.then(|| self.setup.vehicle().turn_rate(&h.now, &h.next, p.dt_s));
+        let (mut now, mut next) = (h.now, h.next);
+        f.add_w_with(turn, si, sj, &h.now, &mut now);
+        f.add_w_with(turn, si, sj, &h.next, &mut next);
+        Some((now, next))
     }
 }
 
