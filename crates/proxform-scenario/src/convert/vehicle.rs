@@ -77,10 +77,10 @@ pub fn vehicle(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
             Ok(())
         };
         set("stall_speed_kmh", v.stall_speed_kmh, kmh, &mut m.stall_speed_mps)?;
+        set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
         if let Some(x) = v.max_speed_kmh {
             speed_kmh("vehicle.max_speed_kmh", x)?;
         }
-        set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
         set("bank_max_deg", v.bank_max_deg, deg, &mut m.bank_max_rad)?;
         set("load_factor_max", v.load_factor_max, |x| x, &mut m.load_factor_max)?;
         set("pitch_max_deg", v.pitch_max_deg, deg, &mut m.pitch_max_rad)?;
@@ -134,16 +134,19 @@ fn multirotor(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
         }
         Ok(())
     };
+    set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
     if let Some(x) = v.max_speed_kmh {
         speed_kmh("vehicle.max_speed_kmh", x)?;
     }
-    set("max_speed_kmh", v.max_speed_kmh, kmh, &mut m.max_speed_mps)?;
     set("climb_max_kmh", v.climb_max_kmh, kmh, &mut m.climb_max_mps)?;
     set("descent_max_kmh", v.descent_max_kmh, kmh, &mut m.descent_max_mps)?;
     set("accel_max_mps2", v.accel_max_mps2, |x| x, &mut m.accel_max_mps2)?;
     set("vertical_accel_max_mps2", v.vertical_accel_max_mps2, |x| x, &mut m.vertical_accel_max_mps2)?;
     set("tilt_max_deg", v.tilt_max_deg, deg, &mut m.tilt_max_rad)?;
-    set("thrust_to_weight", v.thrust_to_weight, |x| x, &mut m.thrust_to_weight)?;
+    if let Some(x) = v.thrust_to_weight {
+        // Its own rule (> 1) below names it better than "> 0".
+        m.thrust_to_weight = super::values::finite("vehicle.thrust_to_weight", x)?;
+    }
     set("yaw_rate_max_deg_s", v.yaw_rate_max_deg_s, deg, &mut m.yaw_rate_max_radps)?;
     set("velocity_time_constant_s", v.velocity_time_constant_s, |x| x, &mut m.velocity_time_constant_s)?;
     set("attitude_time_constant_s", v.attitude_time_constant_s, |x| x, &mut m.attitude_time_constant_s)?;
