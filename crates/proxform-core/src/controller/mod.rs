@@ -403,10 +403,25 @@ impl ProximityController {
         let separation = params.separation_m.unwrap_or(0.0);
         // The formation's rigid-body turn and the vehicle's setpoint lead need each neighbour's
         // state now beside its prediction.
+        // The formation turns as one body at the navigator's rate where the UAV perceives it,
+        // when turn rates are read from headings: the followers steer their headings toward
+        // their references', so theirs lag the navigator's along every chain (a fixed wing's
+        // bank, from which its rate is read, shows its own turn at once).
+        let heading_rate = !matches!(setup.vehicle, VehicleModel::FixedWing(_));
+        let nav_omega = match (params.turn_feedforward && heading_rate, navigator) {
+            (true, Some(n)) => {
+                observations.iter().find(|o| o.id == n && o.source != ObservationSource::Close).and_then(|o| {
+                    let (before, age) = tracks.report(n, now_s)?;
+                    (age > 0.0).then(|| setup.vehicle.turn_rate(&before, &o.state, age))
+                })
+            }
+            _ => None,
+        };
         let motion = Motion {
             turn: params.turn_feedforward.then_some(&setup.vehicle),
             lead_s: setup.vehicle.setpoint_lag_s(),
             omega_dot: trend.as_ref().map_or(0.0, |t| t.omega_dot),
+            omega: nav_omega,
             dt,
         };
         // Σ f·ω and Σ f over the neighbours, for the turn's trend.
@@ -575,6 +590,8 @@ struct Motion<'a> {
     lead_s: f64,
     /// The formation's turn acceleration ω̇ (rad/s², [`TurnTrend`]).
     omega_dot: f64,
+    /// The formation's turn rate when the navigator is perceived (rad/s): every W turns at it.
+    omega: Option<f64>,
     /// Δt (s).
     dt: f64,
 }
@@ -609,7 +626,7 @@ fn implied_deviation(
     let (x_j, span) = (seen.0, seen.1.max(motion.dt));
     // X̂_ij − X_hold = (F·X_j + W_ij) − X_hold, built in place.
     let mut delta = f_x_j - x_hold;
-    let omega = motion.turn.map(|v| v.turn_rate(x_j, f_x_j, span));
+    let omega = motion.turn.map(|v| motion.omega.unwrap_or_else(|| v.turn_rate(x_j, f_x_j, span)));
     formation.add_w_with(omega, slot_i, slot_j, f_x_j, &mut delta);
     if motion.lead_s > 0.0 {
         let (tau, dt, w, w_dot) = (motion.lead_s, span, omega.unwrap_or(0.0), motion.omega_dot);
