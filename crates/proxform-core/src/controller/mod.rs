@@ -401,8 +401,6 @@ impl ProximityController {
         let dt = params.dt_s;
         let r2 = params.areas.sensing_range_m.powi(2);
         let separation = params.separation_m.unwrap_or(0.0);
-        // The formation's rigid-body turn and the vehicle's setpoint lead need each neighbour's
-        // state now beside its prediction.
         // The formation turns as one body at the navigator's rate where the UAV perceives it,
         // when turn rates are read from headings: the followers steer their headings toward
         // their references', so theirs lag the navigator's along every chain (a fixed wing's
@@ -434,6 +432,8 @@ impl ProximityController {
             }
             Some(x_hat)
         };
+        // The formation's rigid-body turn and the vehicle's setpoint lead need each neighbour's
+        // state now beside its prediction.
         let needs_now = motion.needs_now();
         let mut est = Estimates::new();
         // Steps 1-2 (and 3 for main references in their areas).
