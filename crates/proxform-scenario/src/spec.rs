@@ -168,6 +168,8 @@ pub struct PathSpec {
     pub points_m: Option<Vec<[f64; 3]>>,
     /// Waypoints path: radius of the turns at each waypoint (m).
     pub turn_radius_m: Option<f64>,
+    /// Waypoints path: the speed of each leg (km/h), one per leg; default `speed_kmh` for all.
+    pub leg_speeds_kmh: Option<Vec<f64>>,
     /// Segments path: initial speed (km/h).
     pub speed_kmh: Option<f64>,
     /// Segments path: initial course (deg, counter-clockwise from x). Default 0.

@@ -118,6 +118,40 @@ fn a_gust_moves_the_multirotor_navigator_off_its_path_and_the_followers_with_it(
 }
 
 #[test]
+fn a_multirotor_v_flies_waypoints_at_a_speed_per_leg_climbing_and_descending() {
+    let text = r#"
+        duration_s = 110.0
+        [vehicle]
+        model = "multirotor"
+        [formation.shape]
+        kind = "v"
+        uavs = 5
+        spacing_m = 8.0
+        [path]
+        kind = "waypoints"
+        speed_kmh = 18.0
+        points_m = [[150.0, 0.0, 10.0], [150.0, 300.0, 0.0], [0.0, 300.0, -5.0]]
+        leg_speeds_kmh = [18.0, 36.0, 10.0]
+        turn_radius_m = 40.0
+        [wind]
+        steady_kmh = [10.0, 0.0, 0.0]
+    "#;
+    let s = parse(text, "legs.toml").expect("valid");
+    let t = run_one(&s, RunOptions::default(), 1, 0, true).1.expect("recorded");
+    let speed_at = |at: f64| {
+        let r = t.rows.iter().find(|r| r.uav == 0 && (r.t - at).abs() < 1e-6).expect("row");
+        r.state[state::VX].hypot(r.state[state::VY]) * 3.6
+    };
+    // The navigator flies each leg at its own speed over the ground (the wind is the
+    // multirotor's to fly through): 18 km/h on the first, 36 on the second, 10 on the last.
+    assert!((speed_at(15.0) - 18.0).abs() < 1.0, "{}", speed_at(15.0));
+    assert!((speed_at(60.0) - 36.0).abs() < 1.5, "{}", speed_at(60.0));
+    assert!((speed_at(105.0) - 10.0).abs() < 1.0, "{}", speed_at(105.0));
+    let r = batch(&s, 3);
+    assert_eq!(r.summary.pass_fraction, 1.0, "{:?}", r.summary.worst_abs_error);
+}
+
+#[test]
 fn fifty_multirotors_take_off_form_a_hovering_lattice_and_fly_a_figure_eight() {
     let mut spec =
         parse_spec(proxform_scenario::builtin::MULTIROTOR_LATTICE50_EIGHT, "multirotor-lattice50-eight.toml")

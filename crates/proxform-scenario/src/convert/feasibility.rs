@@ -473,8 +473,8 @@ pub fn path_within_vehicle(
     };
     let hint = match (vehicle, l.rate) {
         (_, true) => {
-            " (a longer path.transition_s, a larger path.turn_radius_m or gentler segments ask less of the \
-             followers)"
+            " (a longer path.transition_s, a larger path.turn_radius_m, longer legs or smaller changes of \
+             path.leg_speeds_kmh, or gentler segments ask less of the followers)"
         }
         (VehicleModel::Kinematic(_), false) => {
             " (the kinematic vehicle's limits are on the world axes and on its attitude: a path that turns far \

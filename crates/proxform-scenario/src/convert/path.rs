@@ -4,7 +4,7 @@ use proxform_core::angle::{deg, kmh};
 
 use super::values::{distance, err, finite, non_negative, positive, required, speed_kmh, vec3, SpecError};
 use crate::defaults;
-use crate::path::waypoints::waypoint_segments;
+use crate::path::waypoints::waypoint_segments_at;
 use crate::path::{NavigatorPath, PaperPath, Segment, SegmentsPath};
 use crate::spec::PathSpec;
 
@@ -30,6 +30,7 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
                 || !p.segment.is_empty()
                 || p.points_m.is_some()
                 || p.turn_radius_m.is_some()
+                || p.leg_speeds_kmh.is_some()
             {
                 return Err(err("path", "the paper path takes no speed, course or segments (use kind = \"segments\")"));
             }
@@ -56,6 +57,15 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
             Err(err("path", "amplitudes and lead_in_s apply to the paper path only (kind = \"paper\")"))
         }
         Some("segments") => {
+            for (key, set) in [
+                ("path.points_m", p.points_m.is_some()),
+                ("path.turn_radius_m", p.turn_radius_m.is_some()),
+                ("path.leg_speeds_kmh", p.leg_speeds_kmh.is_some()),
+            ] {
+                if set {
+                    return Err(err(key, "applies to a waypoints path only (kind = \"waypoints\")"));
+                }
+            }
             // 0 is a hover: only a vehicle that can hover flies it (the path is then checked
             // against the vehicle's speed range).
             let v0 = kmh(speed_kmh(
@@ -104,8 +114,24 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
                     distance(&format!("path.points_m[{}]", k + 1), q[a])?;
                 }
             }
-            let segments = waypoint_segments(&points, v, r, transition).map_err(|e| {
-                err(e.point.map_or("path.points_m".into(), |k| format!("path.points_m[{k}]")), e.message)
+            let leg_speeds = match &p.leg_speeds_kmh {
+                Some(speeds) => {
+                    let mut out = Vec::with_capacity(speeds.len());
+                    for (k, &s) in speeds.iter().enumerate() {
+                        let key = format!("path.leg_speeds_kmh[{}]", k + 1);
+                        out.push(kmh(speed_kmh(&key, positive(&key, s)?)?));
+                    }
+                    Some(out)
+                }
+                None => None,
+            };
+            let segments = waypoint_segments_at(&points, v, leg_speeds.as_deref(), r, transition).map_err(|e| {
+                let key = match e.point {
+                    Some(k) => format!("path.points_m[{k}]"),
+                    None if leg_speeds.is_some() => "path.leg_speeds_kmh".into(),
+                    None => "path.points_m".into(),
+                };
+                err(key, e.message)
             })?;
             let course = segments.1;
             Ok(NavigatorPath::Segments(SegmentsPath::new(v, course, segments.0, transition)))

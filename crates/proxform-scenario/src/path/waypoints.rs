@@ -15,7 +15,20 @@ pub struct WaypointError {
 /// Turns waypoints (relative to the start) into straight legs joined by turns of radius `r`
 /// at speed `v`, each blended in and out over `transition_s`;
 /// returns the segments and the initial course. Each leg's height change is flown as a
-/// constant climb over its straight part.
+/// constant climb over its straight part. [`waypoint_segments_at`] gives each leg its speed.
+pub fn waypoint_segments(
+    points: &[[f64; 3]],
+    v: f64,
+    r: f64,
+    transition_s: f64,
+) -> Result<(Vec<Segment>, f64), WaypointError> {
+    waypoint_segments_at(points, v, None, r, transition_s)
+}
+
+/// [`waypoint_segments`] with a speed per leg: the path starts at `v0` and flies leg k at
+/// `leg_speeds[k]` (all at `v0` when None). A leg's change of speed is a cosine ramp over the
+/// straight part of the leg, between the turns at its ends; the turn at the end of a leg is
+/// flown at that leg's speed (its rate `v/r`), so the turns keep their radius.
 ///
 /// A turn is a blend in, an arc of radius `r`, and a blend out, symmetric about the corner's
 /// bisector. It is placed like a railway transition curve: it leaves the incoming leg and joins
@@ -24,9 +37,10 @@ pub struct WaypointError {
 /// integrated from the curve's headings; the curve then starts `|D| / (2·cos(θ/2))` before the
 /// corner, θ the course change. The path cuts the corner by `r·(1/cos(θ/2) − 1)` plus what the
 /// blends add (a blend of W seconds flattens the curve by about `0.024·v²·W²/r`).
-pub fn waypoint_segments(
+pub fn waypoint_segments_at(
     points: &[[f64; 3]],
-    v: f64,
+    v0: f64,
+    leg_speeds: Option<&[f64]>,
     r: f64,
     transition_s: f64,
 ) -> Result<(Vec<Segment>, f64), WaypointError> {
@@ -54,23 +68,34 @@ pub fn waypoint_segments(
             message: "repeats the previous point (legs need a horizontal length)".into(),
         });
     }
-    // Each inner waypoint's turn: course change θ, arc time, blend width, and the distance
-    // from the corner to where its curve starts (and, by symmetry, ends).
-    let omega = v / r;
+    // Each leg's speed, and the speed before it.
+    let speeds: Vec<f64> = match leg_speeds {
+        None => vec![v0; legs.len()],
+        Some(s) if s.len() == legs.len() => s.to_vec(),
+        Some(s) => {
+            return Err(WaypointError {
+                point: None,
+                message: format!("the path has {} legs but {} leg speeds", legs.len(), s.len()),
+            })
+        }
+    };
+    let before_leg = |k: usize| if k == 0 { v0 } else { speeds[k - 1] };
+    // Each inner waypoint's turn, at the speed of the leg it ends: course change θ, arc time,
+    // blend width, and the distance from the corner to where its curve starts (and, by
+    // symmetry, ends).
     let mut turns: Vec<Turn> = legs
         .windows(2)
-        .map(|w| {
+        .zip(&speeds)
+        .map(|(w, &v)| {
             let theta = proxform_core::angle::wrap_pi(w[1].1 - w[0].1);
-            let arc_s = theta.abs() / omega;
-            Turn { theta, arc_s, blend_s: transition_s, reach_m: 0.0 }
+            let arc_s = theta.abs() / (v / r);
+            Turn { theta, arc_s, blend_s: transition_s, reach_m: 0.0, speed_mps: v }
         })
         .collect();
     for t in turns.iter_mut() {
-        t.reach_m = t.reach(v);
+        t.reach_m = t.reach(t.speed_mps);
     }
-    // Time on each leg's segment: its straight part plus the halves of the blends that reach
-    // into it (the curves of two turns never overlap: each fits its side of the leg).
-    let mut straights = vec![0.0f64; legs.len()];
+    let mut segments = Vec::new();
     for (k, leg) in legs.iter().enumerate() {
         let before = if k == 0 { None } else { turns.get(k - 1) };
         let after = turns.get(k);
@@ -84,31 +109,61 @@ pub fn waypoint_segments(
                 ),
             });
         }
-        let halves = 0.5 * (before.map_or(0.0, |t| t.blend_s) + after.map_or(0.0, |t| t.blend_s));
-        straights[k] = (leg.0 - reach).max(0.0) / v + halves;
-    }
-    let mut segments = Vec::new();
-    for (k, leg) in legs.iter().enumerate() {
-        let t = straights[k];
-        let blend_in = if k == 0 { None } else { turns.get(k - 1).map(|x| x.blend_s) };
-        if t > 1e-9 {
-            segments.push(Segment {
-                duration_s: t,
-                turn_rate_radps: 0.0,
-                climb_mps: leg.2 / t,
-                end_speed_mps: v,
-                start_blend_s: blend_in,
-            });
-        } else if leg.2.abs() > 1e-9 {
-            return Err(WaypointError { point: Some(k + 1), message: "has no straight part to climb on".into() });
+        // The leg's segment: its straight part (flown from the speed before it to its own,
+        // at their mean over a cosine ramp) plus the halves of the blends that reach into it
+        // (the curves of two turns never overlap: each fits its side of the leg), flown at
+        // the speeds of their turns.
+        let (v_in, v) = (before_leg(k), speeds[k]);
+        let straight_m = (leg.0 - reach).max(0.0);
+        let half_in = before.map_or(0.0, |t| 0.5 * t.blend_s);
+        let half_out = after.map_or(0.0, |t| 0.5 * t.blend_s);
+        let blend_in = before.map(|x| x.blend_s);
+        if v_in == v {
+            let halves = 0.5 * (before.map_or(0.0, |t| t.blend_s) + after.map_or(0.0, |t| t.blend_s));
+            let t = straight_m / v + halves;
+            if t > 1e-9 {
+                segments.push(Segment {
+                    duration_s: t,
+                    turn_rate_radps: 0.0,
+                    climb_mps: leg.2 / t,
+                    end_speed_mps: v,
+                    start_blend_s: blend_in,
+                });
+            } else if leg.2.abs() > 1e-9 {
+                return Err(WaypointError { point: Some(k + 1), message: "has no straight part to climb on".into() });
+            }
+        } else {
+            if straight_m < 1e-6 {
+                return Err(WaypointError {
+                    point: Some(k + 1),
+                    message: format!("leg {} has no straight part to change its speed on", k + 1),
+                });
+            }
+            // The blend out of the turn before at its speed, the ramp, the blend into the next
+            // turn at the leg's speed; one climb rate over all three (no rate changes between).
+            let ramp_s = 2.0 * straight_m / (v_in + v);
+            let t = half_in + ramp_s + half_out;
+            let climb = leg.2 / t;
+            let pieces = [(half_in, v_in, blend_in), (ramp_s, v, None), (half_out, v, None)];
+            for (d, end, blend) in pieces {
+                if d > 1e-9 {
+                    segments.push(Segment {
+                        duration_s: d,
+                        turn_rate_radps: 0.0,
+                        climb_mps: climb,
+                        end_speed_mps: end,
+                        start_blend_s: blend,
+                    });
+                }
+            }
         }
-        if let Some(turn) = turns.get(k) {
+        if let Some(turn) = after {
             if turn.theta.abs() > 1e-9 {
                 segments.push(Segment {
                     duration_s: turn.arc_s,
-                    turn_rate_radps: turn.theta.signum() * omega,
+                    turn_rate_radps: turn.theta.signum() * turn.speed_mps / r,
                     climb_mps: 0.0,
-                    end_speed_mps: v,
+                    end_speed_mps: turn.speed_mps,
                     start_blend_s: Some(turn.blend_s),
                 });
             }
@@ -128,6 +183,8 @@ struct Turn {
     blend_s: f64,
     /// Distance from the corner to where the curve starts and ends (m).
     reach_m: f64,
+    /// Speed through the turn (m/s).
+    speed_mps: f64,
 }
 
 impl Turn {
@@ -218,11 +275,13 @@ mod tests {
     fn every_waypoint_is_met_and_the_last_course_is_exact_for_any_radius_and_transition() {
         let mut rng = Lcg(0x5EED_F00D);
         let mut flown = 0;
+        let mut with_speeds = 0;
         for case in 0..600 {
             let v = kmh(rng.range(120.0, 330.0));
             let r = rng.range(80.0, 3000.0);
             let transition = rng.range(0.2, 25.0);
-            // 2 to 5 legs of 0.5 to 8 km, turning by up to 170°.
+            // 2 to 5 legs of 0.5 to 8 km, turning by up to 170°; every other case gives each
+            // leg its own speed.
             let mut points = Vec::new();
             let (mut x, mut y, mut course) = (0.0f64, 0.0f64, 0.0f64);
             for _ in 0..(2 + (rng.unit() * 4.0) as usize) {
@@ -232,12 +291,17 @@ mod tests {
                 points.push([x, y, rng.range(-50.0, 50.0)]);
                 course += rng.range(-170.0, 170.0).to_radians();
             }
-            let Ok((segs, c0)) = waypoint_segments(&points, v, r, transition) else { continue };
+            let speeds: Vec<f64> = points.iter().map(|_| kmh(rng.range(60.0, 330.0))).collect();
+            let leg_speeds = (case % 2 == 1).then_some(&speeds[..]);
+            let Ok((segs, c0)) = waypoint_segments_at(&points, v, leg_speeds, r, transition) else { continue };
             flown += 1;
+            with_speeds += usize::from(leg_speeds.is_some());
             let path = SegmentsPath::new(v, c0, segs.clone(), transition);
-            // The widest blend of the path flattens each curve by at most 0.024·v²·W²/r.
+            // The widest blend of the path flattens each curve by at most 0.024·v²·W²/r, v the
+            // fastest turn's speed.
             let w = segs.iter().filter_map(|s| s.start_blend_s).fold(0.0, f64::max);
-            let blend_shift = 0.024 * v * v * w * w / r;
+            let v_turns = leg_speeds.map_or(v, |s| s.iter().copied().fold(0.0, f64::max));
+            let blend_shift = 0.024 * v_turns * v_turns * w * w / r;
             let end_t = path.settled_s();
             let samples: Vec<State9Pos> = (0..=((end_t + 60.0) / 0.05) as usize)
                 .map(|k| {
@@ -270,8 +334,64 @@ mod tests {
             let last_course = (b[1] - a[1]).atan2(b[0] - a[0]);
             let end = path.state_at(end_t + 10.0, [0.0; 3]);
             assert!(wrap_pi(end[state::BETA] - last_course).abs() < 1e-9, "case {case}: ends on the wrong course");
+            // The last leg ends at its own speed, and every turn is flown at its leg's speed
+            // on the radius.
+            let speed = |s: &proxform_core::state::State9| s[state::VX].hypot(s[state::VY]);
+            let v_last = leg_speeds.map_or(v, |s| s[n - 1]);
+            assert!((speed(&end) - v_last).abs() < 1e-9, "case {case}: ends at {} m/s, not {v_last}", speed(&end));
+            for seg in segs.iter().filter(|s| s.turn_rate_radps != 0.0) {
+                let radius = seg.end_speed_mps / seg.turn_rate_radps.abs();
+                assert!((radius - r).abs() < 1e-6 * r, "case {case}: a turn of radius {radius} m, not {r}");
+            }
         }
         assert!(flown > 200, "only {flown} flyable cases");
+        assert!(with_speeds > 80, "only {with_speeds} flyable cases with leg speeds");
+    }
+
+    #[test]
+    fn leg_speeds_ramp_on_each_straight_and_are_counted() {
+        let pts = [[300.0, 0.0, 0.0], [300.0, 300.0, 20.0], [0.0, 300.0, 0.0]];
+        let speeds = [5.0, 10.0, 2.5];
+        let (segs, c) = waypoint_segments_at(&pts, 5.0, Some(&speeds), 40.0, 4.0).expect("flyable");
+        let path = SegmentsPath::new(5.0, c, segs, 4.0);
+        let speed_at = |t: f64| {
+            let s = path.state_at(t, [0.0; 3]);
+            s[state::VX].hypot(s[state::VY])
+        };
+        // Each leg's middle is flown at its speed or on the way to it, never beyond the two.
+        let mut seen = [false; 3];
+        for k in 0..4000 {
+            let v = speed_at(k as f64 * 0.05);
+            assert!((2.5 - 1e-9..=10.0 + 1e-9).contains(&v), "{v} m/s");
+            for (a, s) in speeds.iter().enumerate() {
+                seen[a] |= (v - s).abs() < 1e-9;
+            }
+        }
+        assert_eq!(seen, [true; 3], "every leg's speed is reached");
+        // One speed per leg, or an error that says how many there are.
+        let e = waypoint_segments_at(&pts, 5.0, Some(&[5.0, 10.0]), 40.0, 4.0).expect_err("two of three");
+        assert!(e.message.contains("3 legs but 2 leg speeds"), "{}", e.message);
+        // A leg whose turns leave it no straight part cannot change its speed.
+        let tight_at = |l: f64| [[300.0, 0.0, 0.0], [300.0, l, 0.0], [0.0, l, 0.0]];
+        // The shortest middle leg its two turns fit on, to within a nanometre.
+        let (mut lo, mut hi) = (1.0, 300.0);
+        while hi - lo > 1e-9 {
+            let mid = 0.5 * (lo + hi);
+            if waypoint_segments_at(&tight_at(mid), 5.0, None, 40.0, 4.0).is_ok() {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let tight = tight_at(hi + 2e-7);
+        assert!(waypoint_segments_at(&tight, 5.0, None, 40.0, 4.0).is_ok());
+        let e = waypoint_segments_at(&tight, 5.0, Some(&[5.0, 6.0, 6.0]), 40.0, 4.0).expect_err("no straight");
+        assert_eq!(e.point, Some(2), "{}", e.message);
+        // The same speed everywhere is the path without leg speeds, bit for bit.
+        assert_eq!(
+            waypoint_segments_at(&pts, 5.0, Some(&[5.0; 3]), 40.0, 4.0).expect("flyable"),
+            waypoint_segments(&pts, 5.0, 40.0, 4.0).expect("flyable")
+        );
     }
 
     type State9Pos = [f64; 2];
