@@ -58,6 +58,16 @@ pub const MULTIROTOR_ALLOWABLE_POSITION_M: [f64; 3] = [1.0, 1.0, 1.0];
 /// more), judged only against 45°.
 pub const MULTIROTOR_ALLOWABLE_ATTITUDE_DEG: [f64; 3] = [45.0, 3.0, 45.0];
 
+/// A fixed wing's allowable errors x, y, z (m): five times its controller's 2 m thresholds. A
+/// fixed wing corrects its position only by turning, pitching and banking, and a gust moves it
+/// metres before it can answer (measured: a 4-UAV echelon through a figure-eight in calm air
+/// errs by up to 4 m at the 99th percentile of 50 runs; the V of `fixed-wing-v` in moderate
+/// turbulence by up to 9 m).
+pub const FIXED_WING_ALLOWABLE_POSITION_M: [f64; 3] = [10.0, 10.0, 10.0];
+/// A fixed wing's allowable errors α, β, γ (deg): twice its controller's thresholds (5°, 10°,
+/// 10°), with 20° of roll for a wing tip that banks harder than its neighbour in a turn.
+pub const FIXED_WING_ALLOWABLE_ATTITUDE_DEG: [f64; 3] = [10.0, 15.0, 20.0];
+
 /// A multirotor formation's `navigator_degree` in derived dependency tables.
 pub const MULTIROTOR_NAVIGATOR_DEGREE: f64 = 0.8;
 

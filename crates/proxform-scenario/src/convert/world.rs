@@ -69,7 +69,10 @@ pub fn allowable(a: &AllowableSpec, vehicle: &proxform_core::VehicleModel) -> Re
         proxform_core::VehicleModel::Multirotor(_) => {
             (defaults::MULTIROTOR_ALLOWABLE_POSITION_M, defaults::MULTIROTOR_ALLOWABLE_ATTITUDE_DEG)
         }
-        _ => (defaults::ALLOWABLE_POSITION_M, defaults::ALLOWABLE_ATTITUDE_DEG),
+        proxform_core::VehicleModel::FixedWing(_) => {
+            (defaults::FIXED_WING_ALLOWABLE_POSITION_M, defaults::FIXED_WING_ALLOWABLE_ATTITUDE_DEG)
+        }
+        proxform_core::VehicleModel::Kinematic(_) => (defaults::ALLOWABLE_POSITION_M, defaults::ALLOWABLE_ATTITUDE_DEG),
     };
     Ok(AllowableErrors {
         position_m: [
