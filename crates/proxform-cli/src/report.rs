@@ -33,7 +33,7 @@ pub fn print(
     for a in AXES {
         write!(out, "{a:>10}")?;
     }
-    writeln!(out, "{:>14}{:>8}", "adjust/run", "result")?;
+    writeln!(out, "{:>14}{:>10}", "adjust/run", "result")?;
     write!(out, "{:<8}", "allowed")?;
     for a in allow {
         write!(out, "{:>10}", number(a))?;
@@ -41,18 +41,24 @@ pub fn print(
     writeln!(out)?;
     let shown = s.per_uav.len().min(MAX_ROWS);
     for f in 0..shown {
+        let verdict = match (s.per_uav_runs_flown[f], s.per_uav_runs_passed[f]) {
+            (0, _) => "not flown",
+            (flown, passed) if passed == flown => "PASS",
+            _ => "FAIL",
+        };
         uav_row(
             out,
             &format!("UAV{}", s.per_uav[f]),
             &s.per_uav_worst[f].as_array(),
             s.per_uav_adjustments[f],
-            &allow,
+            verdict,
         )?;
     }
     if s.uavs as usize - 1 > shown {
         writeln!(out, "… {} more followers", s.uavs as usize - 1 - shown)?;
         let per_run = s.adjustments_per_uav_minute * scenario.duration_s() / 60.0;
-        uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, &allow)?;
+        let verdict = if s.pass_fraction == 1.0 { "PASS" } else { "FAIL" };
+        uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, verdict)?;
     }
     writeln!(out)?;
     row(out, "p99 over runs", &s.p99_abs_error.as_array())?;
@@ -67,6 +73,13 @@ pub fn print(
             out,
             "nothing to judge         in {} run(s) no follower flew: those runs do not pass",
             s.unjudged_runs
+        )?;
+    }
+    if s.unsafe_runs > 0 {
+        writeln!(
+            out,
+            "unsafe                   in {} run(s) a pair came closer than the safety distance: those runs do not pass",
+            s.unsafe_runs
         )?;
     }
     writeln!(
@@ -164,14 +177,15 @@ pub fn print(
 /// Most follower rows printed; larger swarms get a summary row.
 const MAX_ROWS: usize = 10;
 
-fn uav_row(out: &mut impl Write, label: &str, worst: &[f64; 6], adjustments: f64, allow: &[f64; 6]) -> io::Result<()> {
-    let ok = worst.iter().zip(allow).all(|(e, a)| e <= a);
+/// One row of the per-follower table: its largest errors, adjustments per run, and its verdict
+/// by the run's criterion (`PASS` in every run it flew, `FAIL`, `not flown`).
+fn uav_row(out: &mut impl Write, label: &str, worst: &[f64; 6], adjustments: f64, verdict: &str) -> io::Result<()> {
     write!(out, "{label:<8}")?;
     for e in worst {
         write!(out, "{:>10}", number(*e))?;
     }
     let adjust = if adjustments.abs() < 1e9 { format!("{adjustments:.1}") } else { number(adjustments) };
-    writeln!(out, "{adjust:>14}{:>8}", if ok { "PASS" } else { "FAIL" })?;
+    writeln!(out, "{adjust:>14}{verdict:>10}")?;
     Ok(())
 }
 

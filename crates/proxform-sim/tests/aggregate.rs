@@ -25,6 +25,12 @@ fn scattered_uavs_form_in_time_and_keep_apart_on_the_way_in() {
     assert!(f.time_to_form_s_max <= 120.0, "{f:?}");
     // The pass criterion of a scattered start: formed by form_within_s and formed to the end.
     assert_eq!(s.pass_fraction, 1.0);
+    // Each follower is judged by the same criterion: every one passed in every run, although
+    // each was far outside its allowable errors on its way in.
+    assert_eq!(s.per_uav_runs_passed, s.per_uav_runs_flown);
+    assert!(s.per_uav_runs_flown.iter().all(|&n| n == 24));
+    let allow = s.allowable_error.as_array();
+    assert!(s.per_uav_worst.iter().all(|w| w.as_array()[0] > allow[0]), "{:?}", s.per_uav_worst);
 }
 
 #[test]
@@ -33,6 +39,8 @@ fn without_collision_avoidance_pairs_come_too_close() {
     // on their way to their slots come within the safety distance.
     let s = batch(&aggregate(|s| s.controller.avoid_m = Some(0.0)), 24);
     assert!(s.unsafe_runs >= 3, "unsafe runs {} of 24, min {}", s.unsafe_runs, s.min_separation_m);
+    // A run with a pair inside the safety distance does not pass, whatever its errors.
+    assert!(s.pass_fraction <= 1.0 - s.unsafe_runs as f64 / 24.0, "{} with {} unsafe", s.pass_fraction, s.unsafe_runs);
 }
 
 #[test]

@@ -34,6 +34,17 @@ fn removing_uav2_keeps_the_rest_safe_and_in_formation() {
 }
 
 #[test]
+fn a_uav_removed_before_it_flies_has_no_verdict_and_the_others_have_theirs() {
+    let s = paper(|s| s.fault = vec![FaultSpec::remove(6, 0.0)]);
+    let r = batch(&s, 3, 4);
+    // Followers 2-6 in order: UAV6 never flew as a follower; the others passed in every run.
+    assert_eq!(r.per_uav, [2, 3, 4, 5, 6]);
+    assert_eq!(r.per_uav_runs_flown, [4, 4, 4, 4, 0]);
+    assert_eq!(r.per_uav_runs_passed, [4, 4, 4, 4, 0]);
+    assert_eq!(r.pass_fraction, 1.0);
+}
+
+#[test]
 fn losing_the_navigator_leaves_a_formation_that_holds_together() {
     let s = paper(|s| s.fault = vec![FaultSpec::remove(1, 50.0)]);
     let r = one(&s, 5);

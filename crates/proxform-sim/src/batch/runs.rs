@@ -86,7 +86,7 @@ pub struct Summary {
     pub min_separation_m: f64,
     /// The scenario's safety distance (m).
     pub safety_distance_m: f64,
-    /// Runs in which some pair came closer than the safety distance.
+    /// Runs in which some pair came closer than the safety distance (they do not pass).
     pub unsafe_runs: u64,
     /// Adjustments per follower per minute of flight, mean over runs.
     pub adjustments_per_uav_minute: f64,
@@ -98,6 +98,11 @@ pub struct Summary {
     pub per_uav_worst: Vec<AxisErrors>,
     /// Per follower: mean adjustments per run.
     pub per_uav_adjustments: Vec<f64>,
+    /// Per follower: the runs in which it flew as a follower, and those in which it met the
+    /// run's criterion over its own errors (`measure::verdict`).
+    pub per_uav_runs_flown: Vec<u64>,
+    /// See `per_uav_runs_flown`.
+    pub per_uav_runs_passed: Vec<u64>,
     /// Faults of some UAVs' own sensors, when the scenario has any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_faults: Option<SensorFaultSummary>,
@@ -433,12 +438,15 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
     let sample = runs.first().map_or(0, |r| r.per_uav.len());
     let mut per_uav_worst = vec![[0.0f64; 6]; sample];
     let mut per_uav_adj = vec![0.0f64; sample];
+    let (mut flown, mut passed) = (vec![0u64; sample], vec![0u64; sample]);
     for r in runs {
         for (f, u) in r.per_uav.iter().enumerate().take(sample) {
             for k in 0..6 {
                 per_uav_worst[f][k] = per_uav_worst[f][k].max(u.max_abs_error[k]);
             }
             per_uav_adj[f] += u.adjustments as f64 / n;
+            flown[f] += u64::from(u.judged_steps > 0);
+            passed[f] += u64::from(u.pass);
         }
     }
     let adj_rate = runs.iter().map(RunSummary::adjustments_per_uav_minute).sum::<f64>() / n;
@@ -485,6 +493,8 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         per_uav: runs.first().map(|r| r.per_uav.iter().map(|u| u.uav + 1).collect()).unwrap_or_default(),
         per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
         per_uav_adjustments: per_uav_adj,
+        per_uav_runs_flown: flown,
+        per_uav_runs_passed: passed,
         sensor_faults: sensor_fault_summary(runs),
         forming: forming_summary(runs),
         transitions: transition_summary(runs),

@@ -8,6 +8,7 @@ use proxform_core::state::{State9, P};
 use proxform_scenario::Scenario;
 
 use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame, StepOutcome};
+use super::verdict::{formed_at, Criterion, Evidence, FollowerJudge};
 
 /// Followers with per-UAV detail in summaries and tables.
 pub const PER_UAV_SAMPLE: usize = 32;
@@ -25,6 +26,11 @@ pub struct UavStats {
     pub adjustments: u64,
     /// Steps flown alone (nothing perceived).
     pub alone_steps: u64,
+    /// Steps judged as a follower (0: it never flew as one).
+    pub judged_steps: u64,
+    /// Whether it met the run's criterion over its own errors (`measure::verdict`); false when
+    /// it never flew.
+    pub pass: bool,
 }
 
 /// What one run measured, small enough to keep for thousands of runs.
@@ -200,6 +206,9 @@ pub struct RunMetrics {
     nav: usize,
     total: Acc,
     sample: Vec<(usize, Acc)>,
+    /// The run's criterion, and each sampled follower's evidence for it.
+    criterion: Criterion,
+    judges: Vec<FollowerJudge>,
     samples: u64,
     followers: u64,
     separation: super::separation::Separation,
@@ -231,8 +240,6 @@ pub struct RunMetrics {
     /// Forming: measured at all, the last time a follower was outside its allowable errors,
     /// the largest error ratio so far and at that time, and the distance flown by all.
     forming: bool,
-    /// Scattered starts: a run passes when it formed by this time (s).
-    form_within_s: Option<f64>,
     /// Changes of formation in flight, and the largest error ratio before the first.
     transitions: Vec<Transition>,
     /// Separation during the changes (made when the formation may change).
@@ -263,12 +270,22 @@ impl RunMetrics {
     pub fn new(scenario: &Scenario) -> Self {
         let nav = scenario.navigator().index();
         let aftermaths = aftermaths(scenario);
-        let sample =
+        let sample: Vec<(usize, Acc)> =
             (0..scenario.len()).filter(|&i| i != nav).take(PER_UAV_SAMPLE).map(|i| (i, Acc::default())).collect();
+        let settled_uavs = settled(scenario);
+        let forming = !scenario.placement().in_slots()
+            || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. }));
+        let changes = scenario.schedule().stages().len();
+        let judges = sample
+            .iter()
+            .map(|(i, _)| FollowerJudge::new(settled_uavs.get(*i).copied().unwrap_or(false), changes))
+            .collect();
         Self {
             nav,
             total: Acc::default(),
             sample,
+            criterion: Criterion { form_within_s: scenario.form_within_s(), forming },
+            judges,
             samples: 0,
             followers: scenario.len() as u64 - 1,
             separation: super::separation::Separation::new(scenario.safety_distance_m()),
@@ -297,9 +314,7 @@ impl RunMetrics {
             suspect_before: Vec::new(),
             suspect_episodes: 0,
             t_last: 0.0,
-            forming: !scenario.placement().in_slots()
-                || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. })),
-            form_within_s: scenario.form_within_s(),
+            forming,
             transitions: {
                 let stages = scenario.schedule().stages();
                 (0..stages.len())
@@ -317,7 +332,7 @@ impl RunMetrics {
             last_out_any: f64::NEG_INFINITY,
             ratio_so_far: 0.0,
             ratio_before_formed: 0.0,
-            settled: settled(scenario),
+            settled: settled_uavs,
             settled_ratio: 0.0,
             flown: !scenario.placement().in_slots()
                 || !scenario.schedule().is_empty()
@@ -400,8 +415,7 @@ impl RunMetrics {
         // Formed when every follower was within its errors from some time to the last frame
         // before the first change of formation (or the end).
         let form_end = self.transitions.first().map_or(self.t_last, |c| (c.at_s - self.dt).min(self.t_last));
-        let time_to_form_s =
-            if self.last_out_any >= form_end - 1e-9 { f64::INFINITY } else { (self.last_out_any + self.dt).max(0.0) };
+        let time_to_form_s = formed_at(self.last_out_any, form_end, self.dt);
         // A run in which no follower flew has nothing to judge: it does not pass. A formation
         // that did not start in its slots passes when it formed in time and stayed formed.
         let transitions = (!self.transitions.is_empty()).then(|| TransitionMetrics {
@@ -422,23 +436,37 @@ impl RunMetrics {
             before_error_ratio: self.before_ratio,
             closest_m: self.change_separation.as_ref().map_or(f64::INFINITY, |s| s.min_m()),
         });
-        let pass = self.total.follower_steps > 0
-            && match (self.form_within_s, &transitions) {
-                // Formed in time, then every change completed.
-                (Some(limit), t) => {
-                    time_to_form_s <= limit + 1e-9 && t.as_ref().is_none_or(|t| t.transition_s.is_finite())
-                }
-                // UAVs joining: the others kept their errors and the joiners formed (before the
-                // first change, then every change completed).
-                (None, None) if self.forming => self.settled_ratio <= 1.0 && time_to_form_s.is_finite(),
-                (None, Some(t)) if self.forming => {
-                    self.settled_ratio <= 1.0 && time_to_form_s.is_finite() && t.transition_s.is_finite()
-                }
-                // A formation that changes passes when it kept its errors before the first
-                // change and completed every change before the next.
-                (None, Some(t)) => t.before_error_ratio <= 1.0 && t.transition_s.is_finite(),
-                (None, None) => self.total.max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a),
-            };
+        // The run's criterion over all followers; a pair closer than the safety distance fails
+        // the run, whatever the errors.
+        let within = |max_abs: &[f64; 6]| max_abs.iter().zip(&self.allowable).all(|(v, a)| v <= a);
+        let evidence = Evidence {
+            judged_steps: self.total.follower_steps,
+            within: within(&self.total.max_abs),
+            time_to_form_s,
+            settled_ratio: self.settled_ratio,
+            before_ratio: self.before_ratio,
+            changes_completed: transitions.as_ref().map(|t| t.transition_s.is_finite()),
+        };
+        let safe = self.separation.close_pairs() == 0;
+        let pass = safe && self.criterion.passes(&evidence);
+        // Each sampled follower by the same criterion over its own errors.
+        let window_last = |k: usize| {
+            let c = &self.transitions[k];
+            if c.until_s.is_finite() {
+                (c.until_s - self.dt).min(self.t_last)
+            } else {
+                self.t_last
+            }
+        };
+        let uav_pass: Vec<bool> = self
+            .sample
+            .iter()
+            .zip(&self.judges)
+            .map(|((_, a), j)| {
+                let e = j.evidence(a.follower_steps, within(&a.max_abs), (form_end, self.dt), window_last);
+                self.criterion.passes(&e)
+            })
+            .collect();
         let uav_s = self.uav_steps.max(1) as f64 * self.dt;
         let mn = self.model_n.max(1) as f64;
         let mut model_error_rms = [0.0; P];
@@ -507,12 +535,15 @@ impl RunMetrics {
             per_uav: self
                 .sample
                 .iter()
-                .map(|(i, a)| UavStats {
+                .zip(uav_pass)
+                .map(|((i, a), pass)| UavStats {
                     uav: *i as u32,
                     max_abs_error: a.max_abs,
                     rms_error: rms(a, steps),
                     adjustments: a.adjustments,
                     alone_steps: a.alone,
+                    judged_steps: a.follower_steps,
+                    pass,
                 })
                 .collect(),
             min_separation_m: self.separation.min_m(),
@@ -736,6 +767,9 @@ impl Observer for RunMetrics {
                 c.until_s = t;
             }
             let at = self.transitions.iter().position(|c| c.at_s > t).unwrap_or(self.transitions.len());
+            for j in self.judges.iter_mut() {
+                j.changes_last_out.insert(at, f64::NEG_INFINITY);
+            }
             let change = Transition {
                 at_s: t,
                 until_s: until.unwrap_or(f64::INFINITY),
@@ -799,12 +833,18 @@ impl Observer for RunMetrics {
                 *before = u.own_suspect;
             }
         }
-        for (i, acc) in self.sample.iter_mut() {
+        let (transitions, allowable) = (&self.transitions, &self.allowable);
+        for ((i, acc), judge) in self.sample.iter_mut().zip(self.judges.iter_mut()) {
             if !frame.active[*i] {
                 continue;
             }
             let e = formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
+            let ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(0.0, f64::max);
+            judge.observe(t, ratio, before_change, |k| {
+                let c = &transitions[k];
+                t >= c.at_s - 1e-9 && t < c.until_s - 1e-9
+            });
         }
     }
 }
@@ -997,6 +1037,40 @@ mod tests {
         m.on_step(&sc, &frame(0, &in_slots(&sc), &uavs, &active));
         let r = m.finish(0, 0.1);
         assert_eq!((r.connectivity_min, r.order_min), (1.0, 1.0));
+    }
+
+    #[test]
+    fn a_pair_inside_the_safety_distance_fails_a_run_whose_errors_are_within_their_bounds() {
+        use proxform_scenario::load::parse_spec;
+        // The paper's six with allowable errors of 100 m: UAV5 40 m from UAV4 (the safety
+        // distance is 50 m) is 60 m off its slot, within its errors.
+        let spec = parse_spec(proxform_scenario::builtin::PAPER, "paper.toml").expect("parses").with(|s| {
+            for v in [&mut s.allowable.x_m, &mut s.allowable.y_m, &mut s.allowable.z_m] {
+                *v = Some(100.0);
+            }
+        });
+        let sc = Scenario::try_from(spec).expect("valid");
+        let good = in_slots(&sc);
+        let mut near = good.clone();
+        near[4][Y] = near[3][Y] - 40.0;
+        let active = [true; 6];
+        let mut held: Vec<UavStep> = (0..6).map(|_| step(proxform_core::Outcome::Held, 0.0)).collect();
+        held[0].outcome = None;
+        let judge = |states: &[State9]| {
+            let mut m = RunMetrics::new(&sc);
+            m.on_step(&sc, &frame(0, &good, &held, &active));
+            m.on_step(&sc, &frame(1, states, &held, &active));
+            m.finish(0, 0.2)
+        };
+        let r = judge(&near);
+        assert!(r.max_abs_error[1] < 100.0 && r.close_pairs == 1, "{:?} {}", r.max_abs_error, r.close_pairs);
+        assert!(!r.pass, "a pair 40 m apart with a 50 m safety distance");
+        // As far off its slot but far from the others passes: UAV5 60 m above its slot.
+        let mut apart = good.clone();
+        apart[4][Z] += 60.0;
+        let r = judge(&apart);
+        assert_eq!(r.close_pairs, 0);
+        assert!(r.pass, "{:?}", r.max_abs_error);
     }
 
     #[test]

@@ -6,3 +6,4 @@ pub mod observer;
 pub mod separation;
 pub mod stats;
 pub mod trajectory;
+pub(crate) mod verdict;

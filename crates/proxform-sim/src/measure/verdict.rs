@@ -1,0 +1,189 @@
+//! The pass criterion of a run: one rule, applied to the whole formation for the run's verdict
+//! and to each follower for its own.
+//!
+//! What is judged depends on the scenario: a formation kept from the start stays within its
+//! allowable errors for the whole flight; one that starts scattered must have formed by
+//! `form_within_s` and stayed formed; with joiners, the followers that started in their slots
+//! keep their errors and the joiners form; with changes of formation, the errors held before
+//! the first change and every change was completed before the next. A follower is judged by the
+//! same rule over its own errors; one that never flew as a follower has no verdict. (The
+//! safety distance, which concerns pairs, is the run's alone: `RunMetrics::finish`.)
+
+/// How a scenario's runs are judged.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Criterion {
+    /// Scattered starts: formed by this time (s).
+    pub form_within_s: Option<f64>,
+    /// Some followers do not start in their slots (scattered starts, joiners).
+    pub forming: bool,
+}
+
+/// What the criterion looks at, for the whole formation or for one follower.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Evidence {
+    /// Follower steps judged (0: no follower flew).
+    pub judged_steps: u64,
+    /// Every error within its allowable error over the whole flight.
+    pub within: bool,
+    /// When the formation (or the follower) was formed, to the end or the first change (s; ∞:
+    /// never).
+    pub time_to_form_s: f64,
+    /// Largest error over its allowable error of the followers judged from the start (those
+    /// that started in their slots and do not join), before the first change.
+    pub settled_ratio: f64,
+    /// Largest error over its allowable error before the first change.
+    pub before_ratio: f64,
+    /// With changes of formation: whether every one was completed before the next.
+    pub changes_completed: Option<bool>,
+}
+
+impl Criterion {
+    /// Whether `e` passes.
+    pub fn passes(&self, e: &Evidence) -> bool {
+        e.judged_steps > 0
+            && match (self.form_within_s, e.changes_completed) {
+                // Formed in time, then every change completed.
+                (Some(limit), changes) => e.time_to_form_s <= limit + 1e-9 && changes.unwrap_or(true),
+                // Joiners: the others kept their errors and the joiners formed (before the
+                // first change, then every change completed).
+                (None, changes) if self.forming => {
+                    e.settled_ratio <= 1.0 && e.time_to_form_s.is_finite() && changes.unwrap_or(true)
+                }
+                // Changes: the errors held before the first, and each was completed.
+                (None, Some(completed)) => e.before_ratio <= 1.0 && completed,
+                (None, None) => e.within,
+            }
+    }
+}
+
+/// One follower's evidence as a run goes: its errors over their allowable errors before the
+/// first change and when it was last outside them, then in each change of formation.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct FollowerJudge {
+    /// Judged from the start (started in its slot, does not join).
+    pub settled: bool,
+    /// Largest error ratio before the first change.
+    pub before_ratio: f64,
+    /// Last time (s) outside its allowable errors before the first change.
+    pub last_out: f64,
+    /// Per change of formation (in the run's order): the last time it was outside them.
+    pub changes_last_out: Vec<f64>,
+}
+
+impl FollowerJudge {
+    /// A follower judged from the start when `settled`, with `changes` changes known so far.
+    pub fn new(settled: bool, changes: usize) -> Self {
+        Self {
+            settled,
+            before_ratio: 0.0,
+            last_out: f64::NEG_INFINITY,
+            changes_last_out: vec![f64::NEG_INFINITY; changes],
+        }
+    }
+
+    /// Its error ratio `ratio` at time `t`: before the first change when `before_change`,
+    /// and in the changes whose windows hold `t` (`in_change(k)`).
+    pub fn observe(&mut self, t: f64, ratio: f64, before_change: bool, in_change: impl Fn(usize) -> bool) {
+        let out = ratio > 1.0;
+        if before_change {
+            self.before_ratio = self.before_ratio.max(ratio);
+            if out {
+                self.last_out = t;
+            }
+        }
+        if out {
+            for (k, last) in self.changes_last_out.iter_mut().enumerate() {
+                if in_change(k) {
+                    *last = t;
+                }
+            }
+        }
+    }
+
+    /// Its evidence: `judged_steps` and `within` from its accumulated errors; formed from its
+    /// last time out when that was before `form_end`'s frame; each change completed when it
+    /// was last out before the window's last frame (`window_last(k)`).
+    pub fn evidence(
+        &self,
+        judged_steps: u64,
+        within: bool,
+        (form_end, dt): (f64, f64),
+        window_last: impl Fn(usize) -> f64,
+    ) -> Evidence {
+        Evidence {
+            judged_steps,
+            within,
+            time_to_form_s: formed_at(self.last_out, form_end, dt),
+            settled_ratio: if self.settled { self.before_ratio } else { 0.0 },
+            before_ratio: self.before_ratio,
+            changes_completed: (!self.changes_last_out.is_empty())
+                .then(|| self.changes_last_out.iter().enumerate().all(|(k, &l)| l < window_last(k) - 1e-9)),
+        }
+    }
+}
+
+/// When a formation (or a follower) last outside its allowable errors at `last_out` was formed,
+/// judged up to the frame `form_end` of a flight in steps of `dt`: ∞ when it was still out then.
+pub(crate) fn formed_at(last_out: f64, form_end: f64, dt: f64) -> f64 {
+    if last_out >= form_end - 1e-9 {
+        f64::INFINITY
+    } else {
+        (last_out + dt).max(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kept(within: bool) -> Evidence {
+        Evidence {
+            judged_steps: 10,
+            within,
+            time_to_form_s: 0.0,
+            settled_ratio: 0.0,
+            before_ratio: 0.0,
+            changes_completed: None,
+        }
+    }
+
+    #[test]
+    fn each_kind_of_scenario_is_judged_by_its_own_rule() {
+        let keeping = Criterion { form_within_s: None, forming: false };
+        assert!(keeping.passes(&kept(true)));
+        assert!(!keeping.passes(&kept(false)));
+        assert!(!keeping.passes(&Evidence { judged_steps: 0, ..kept(true) }), "nothing flew");
+        // Scattered: formed by 30 s, whatever the errors on the way.
+        let scattered = Criterion { form_within_s: Some(30.0), forming: true };
+        assert!(scattered.passes(&Evidence { time_to_form_s: 29.0, ..kept(false) }));
+        assert!(!scattered.passes(&Evidence { time_to_form_s: 31.0, ..kept(true) }));
+        // Joiners: formed at all, the settled ones within their errors.
+        let joining = Criterion { form_within_s: None, forming: true };
+        assert!(joining.passes(&Evidence { time_to_form_s: 80.0, settled_ratio: 0.9, ..kept(false) }));
+        assert!(!joining.passes(&Evidence { time_to_form_s: 80.0, settled_ratio: 1.1, ..kept(true) }));
+        assert!(!joining.passes(&Evidence { time_to_form_s: f64::INFINITY, ..kept(true) }));
+        // Changes: held before the first, each completed.
+        let change =
+            |before_ratio: f64, done: bool| Evidence { before_ratio, changes_completed: Some(done), ..kept(false) };
+        assert!(keeping.passes(&change(0.5, true)));
+        assert!(!keeping.passes(&change(1.5, true)));
+        assert!(!keeping.passes(&change(0.5, false)));
+    }
+
+    #[test]
+    fn a_follower_is_formed_from_its_last_time_out_and_completes_a_change_before_the_next() {
+        let mut j = FollowerJudge::new(false, 1);
+        // Out until 4.9 s, then within; a change from 10 s, out until 12 s.
+        for k in 0..200 {
+            let t = k as f64 * 0.1;
+            let ratio = if t < 4.95 || (10.0..12.05).contains(&t) { 2.0 } else { 0.5 };
+            j.observe(t, ratio, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+        }
+        let e = j.evidence(200, false, (9.9, 0.1), |_| 19.9);
+        assert!((e.time_to_form_s - 5.0).abs() < 1e-9, "{}", e.time_to_form_s);
+        assert_eq!(e.changes_completed, Some(true));
+        assert_eq!(e.settled_ratio, 0.0, "not judged from the start");
+        // Still out at the window's last frame: not completed.
+        assert_eq!(j.evidence(200, false, (9.9, 0.1), |_| 12.0).changes_completed, Some(false));
+    }
+}
