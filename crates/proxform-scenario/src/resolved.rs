@@ -1,9 +1,13 @@
 //! The checked scenario written back as a spec with every default filled in: what
 //! `proxform run --print-scenario` prints, and a file that converts to the same scenario.
 //!
-//! Units go back to the file's (km/h, degrees), so a value may differ from the file's in its
-//! last bit; derived values are written explicitly (every slot with its `depends_on`, a
-//! waypoint path as its segments, the separation distance).
+//! Units go back to the file's (km/h, degrees) as the shortest decimal that converts back to
+//! the same SI value bit for bit, so the printed file runs the same as the scenario. Values
+//! that follow other keys stay unset when the file left them so (the reference dropout, the
+//! separation and avoidance distances, the isolation gate off the slots, the initial speed): the
+//! printed file says each as a comment with its value and the key it follows, and editing the
+//! key it follows moves it. Shapes and derived dependency tables are written out (every slot
+//! with its `depends_on`); a waypoint path is written as its points.
 
 use std::collections::BTreeMap;
 
@@ -18,17 +22,84 @@ use crate::spec::{
     ScenarioSpec, SegmentSpec, SensingSpec, SlotSpec, ThresholdsSpec, VehicleSpec, WindSpec,
 };
 
+/// `v` (m/s) in km/h: the shortest decimal that the file format converts back to `v` exactly.
 fn kmh(v: f64) -> f64 {
-    v * 3.6
+    exact(v, proxform_core::angle::kmh, v * 3.6)
+}
+
+/// `v` (rad) in degrees: the shortest decimal that converts back to `v` exactly.
+fn deg(v: f64) -> f64 {
+    exact(v, proxform_core::angle::deg, v.to_degrees())
 }
 
 fn deg3(v: &nalgebra::Vector3<f64>) -> [f64; 3] {
-    [v.x.to_degrees(), v.y.to_degrees(), v.z.to_degrees()]
+    [deg(v.x), deg(v.y), deg(v.z)]
 }
 
-/// The scenario as a spec with every key that has a value.
+/// A value `y` near `guess` with `to_si(y) == v` bit for bit: the one of fewest significant
+/// digits, else the nearest within 64 units in the last place; `guess` when there is none (a
+/// computed value may fall between two conversions: every value read from a file has one).
+fn exact(v: f64, to_si: fn(f64) -> f64, guess: f64) -> f64 {
+    if !v.is_finite() || !guess.is_finite() {
+        return guess;
+    }
+    let same = |y: f64| to_si(y).to_bits() == v.to_bits();
+    for digits in 1..=17 {
+        if let Ok(y) = format!("{:.*e}", digits - 1, guess).parse::<f64>() {
+            if same(y) {
+                return y;
+            }
+        }
+    }
+    let (mut up, mut down) = (guess, guess);
+    for _ in 0..64 {
+        up = next_float(up, true);
+        down = next_float(down, false);
+        for y in [up, down] {
+            if same(y) {
+                return y;
+            }
+        }
+    }
+    guess
+}
+
+/// The next float above (`up`) or below a finite `x`.
+fn next_float(x: f64, up: bool) -> f64 {
+    if x == 0.0 {
+        let tiny = f64::from_bits(1);
+        return if up { tiny } else { -tiny };
+    }
+    let bits = x.to_bits();
+    // Away from zero is one more in the bits, toward zero one less.
+    f64::from_bits(if (x > 0.0) == up { bits + 1 } else { bits - 1 })
+}
+
+/// Values left to follow other keys: (section, key, value, what it follows), printed as comments.
+type Derived = Vec<(&'static str, &'static str, f64, &'static str)>;
+
+/// The spec's own value of a key that follows others, noting the resolved value when unset.
+fn follows(
+    set: Option<f64>,
+    resolved: f64,
+    (section, key, why): (&'static str, &'static str, &'static str),
+    notes: &mut Derived,
+) -> Option<f64> {
+    if set.is_none() {
+        notes.push((section, key, resolved, why));
+    }
+    set
+}
+
+/// The scenario as a spec with every key that has a value (keys that follow others only when
+/// the file set them).
 pub fn resolved(sc: &Scenario) -> ScenarioSpec {
-    ScenarioSpec {
+    resolved_with_notes(sc).0
+}
+
+fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
+    let mut notes = Derived::new();
+    let spec = ScenarioSpec {
         name: Some(sc.name().to_string()),
         dt_s: Some(sc.dt_s()),
         duration_s: Some(sc.duration_s()),
@@ -37,23 +108,44 @@ pub fn resolved(sc: &Scenario) -> ScenarioSpec {
         warmup_s: Some(sc.warmup_s()),
         engine: Some(sc.engine().name().into()),
         formation: formation(sc),
-        path: path(sc.path()),
-        initial: initial(sc),
-        controller: controller(sc),
+        path: path(sc),
+        initial: initial(sc, &mut notes),
+        controller: controller(sc, &mut notes),
         vehicle: vehicle(sc.vehicle()),
         noise: noise(sc),
-        sensing: SensingSpec { dropout: Some(sc.dropout()), reference_dropout: Some(sc.reference_dropout()) },
+        sensing: SensingSpec {
+            dropout: Some(sc.dropout()),
+            reference_dropout: follows(
+                sc.reference_dropout_set(),
+                sc.reference_dropout(),
+                ("sensing", "reference_dropout", "sensing.dropout"),
+                &mut notes,
+            ),
+        },
         radio: radio(sc),
         network: NetworkSpec { loss: Some(sc.network().loss), delay_s: Some(sc.network().delay_s) },
         wind: wind(sc),
         allowable: allowable(sc),
         fault: sc.faults().iter().map(fault).collect(),
-    }
+    };
+    (spec, notes)
 }
 
-/// [`resolved`] as TOML text.
+/// [`resolved`] as TOML text, each value that follows other keys noted as a comment in its
+/// section.
 pub fn to_toml(sc: &Scenario) -> Result<String, toml::ser::Error> {
-    toml::to_string(&resolved(sc))
+    let (spec, notes) = resolved_with_notes(sc);
+    let text = toml::to_string(&spec)?;
+    let mut out = String::with_capacity(text.len() + 80 * notes.len());
+    for line in text.lines() {
+        out.push_str(line);
+        out.push('\n');
+        let section = line.strip_prefix('[').and_then(|l| l.strip_suffix(']'));
+        for (_, key, value, why) in notes.iter().filter(|n| Some(n.0) == section) {
+            out.push_str(&format!("# {key} = {value:?}    # unset: follows {why}\n"));
+        }
+    }
+    Ok(out)
 }
 
 fn formation(sc: &Scenario) -> FormationSpec {
@@ -99,28 +191,39 @@ fn slot_specs(sc: &Scenario, f: &proxform_core::Formation, deps: &[proxform_core
         .collect()
 }
 
-fn path(p: &NavigatorPath) -> PathSpec {
+fn path(sc: &Scenario) -> PathSpec {
+    let (p, set) = (sc.path(), &sc.spec.path);
     match p {
+        // A waypoint path as the file wrote it (its turns and ramps follow the points).
+        NavigatorPath::Segments(p) if set.kind.as_deref() == Some("waypoints") => PathSpec {
+            kind: set.kind.clone(),
+            points_m: set.points_m.clone(),
+            turn_radius_m: set.turn_radius_m,
+            leg_speeds_kmh: set.leg_speeds_kmh.clone(),
+            speed_kmh: set.speed_kmh,
+            transition_s: Some(p.transition_s),
+            ..PathSpec::default()
+        },
         NavigatorPath::Paper(p) => PathSpec {
             kind: Some("paper".into()),
             height_amplitude_m: Some(p.height_amplitude_m),
-            pitch_swing_deg: Some(p.pitch_swing_rad.to_degrees()),
-            yaw_amplitude_deg: Some(p.yaw_amplitude_rad.to_degrees()),
-            roll_amplitude_deg: Some(p.roll_amplitude_rad.to_degrees()),
+            pitch_swing_deg: Some(deg(p.pitch_swing_rad)),
+            yaw_amplitude_deg: Some(deg(p.yaw_amplitude_rad)),
+            roll_amplitude_deg: Some(deg(p.roll_amplitude_rad)),
             lead_in_s: (p.lead_in_s > 0.0).then_some(p.lead_in_s),
             ..PathSpec::default()
         },
         NavigatorPath::Segments(p) => PathSpec {
             kind: Some("segments".into()),
             speed_kmh: Some(kmh(p.start_speed_mps)),
-            course_deg: Some(p.start_course_rad.to_degrees()),
+            course_deg: Some(deg(p.start_course_rad)),
             transition_s: Some(p.transition_s),
             segment: p
                 .segments
                 .iter()
                 .map(|s| SegmentSpec {
                     duration_s: Some(s.duration_s),
-                    turn_rate_deg_s: Some(s.turn_rate_radps.to_degrees()),
+                    turn_rate_deg_s: Some(deg(s.turn_rate_radps)),
                     climb_kmh: Some(kmh(s.climb_mps)),
                     speed_kmh: Some(kmh(s.end_speed_mps)),
                 })
@@ -130,8 +233,9 @@ fn path(p: &NavigatorPath) -> PathSpec {
     }
 }
 
-fn controller(sc: &Scenario) -> ControllerSpec {
+fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
     let p = sc.controller();
+    let set = &sc.spec.controller;
     let d: &State9 = &p.envelope.thresholds;
     let (predictor, alpha, beta, singer) = match p.predictor {
         PredictorKind::ConstantVelocity => ("constant_velocity", None, None, None),
@@ -166,10 +270,25 @@ fn controller(sc: &Scenario) -> ControllerSpec {
         turn_feedforward: Some(p.turn_feedforward),
         stop_closing: Some(p.stop_closing),
         own_filter_gain: Some(p.own_filter_gain),
-        separation_m: p.separation_m,
-        avoid_m: p.avoid_m,
+        separation_m: follows(
+            set.separation_m,
+            p.separation_m.unwrap_or(0.0),
+            ("controller", "separation_m", "safety_distance_m"),
+            notes,
+        ),
+        avoid_m: follows(
+            set.avoid_m,
+            p.avoid_m.unwrap_or(0.0),
+            ("controller", "avoid_m", "safety_distance_m and vehicle.model"),
+            notes,
+        ),
         horizon: Some(i64::from(p.horizon)),
-        isolation_gate: Some(p.isolation_gate.unwrap_or(0.0)),
+        isolation_gate: follows(
+            set.isolation_gate,
+            p.isolation_gate.unwrap_or(0.0),
+            ("controller", "isolation_gate", "whether UAVs start or fly off their slots"),
+            notes,
+        ),
         own_gate_m: Some(p.own_gate_m.unwrap_or(0.0)),
         own_gate_growth_mps: p.own_gate_m.map(|_| p.own_gate_growth_mps),
         method: Some(method.label().into()),
@@ -181,9 +300,9 @@ fn controller(sc: &Scenario) -> ControllerSpec {
             vx_kmh: Some(kmh(d[state::VX])),
             vy_kmh: Some(kmh(d[state::VY])),
             vz_kmh: Some(kmh(d[state::VZ])),
-            alpha_deg: Some(d[state::ALPHA].to_degrees()),
-            beta_deg: Some(d[state::BETA].to_degrees()),
-            gamma_deg: Some(d[state::GAMMA].to_degrees()),
+            alpha_deg: Some(deg(d[state::ALPHA])),
+            beta_deg: Some(deg(d[state::BETA])),
+            gamma_deg: Some(deg(d[state::GAMMA])),
         }),
     }
 }
@@ -208,12 +327,12 @@ fn vehicle(v: &VehicleModel) -> VehicleSpec {
             model: Some("fixed_wing".into()),
             stall_speed_kmh: Some(kmh(m.stall_speed_mps)),
             max_speed_kmh: Some(kmh(m.max_speed_mps)),
-            bank_max_deg: Some(m.bank_max_rad.to_degrees()),
+            bank_max_deg: Some(deg(m.bank_max_rad)),
             load_factor_max: Some(m.load_factor_max),
-            pitch_max_deg: Some(m.pitch_max_rad.to_degrees()),
-            roll_rate_max_deg_s: Some(m.roll_rate_max_radps.to_degrees()),
-            pitch_rate_max_deg_s: Some(m.pitch_rate_max_radps.to_degrees()),
-            yaw_rate_max_deg_s: Some(m.yaw_rate_max_radps.to_degrees()),
+            pitch_max_deg: Some(deg(m.pitch_max_rad)),
+            roll_rate_max_deg_s: Some(deg(m.roll_rate_max_radps)),
+            pitch_rate_max_deg_s: Some(deg(m.pitch_rate_max_radps)),
+            yaw_rate_max_deg_s: Some(deg(m.yaw_rate_max_radps)),
             throttle_accel_kmh_s: Some(kmh(m.accel_max_mps2)),
             ..VehicleSpec::default()
         },
@@ -224,9 +343,9 @@ fn vehicle(v: &VehicleModel) -> VehicleSpec {
             descent_max_kmh: Some(kmh(m.descent_max_mps)),
             accel_max_mps2: Some(m.accel_max_mps2),
             vertical_accel_max_mps2: Some(m.vertical_accel_max_mps2),
-            tilt_max_deg: Some(m.tilt_max_rad.to_degrees()),
+            tilt_max_deg: Some(deg(m.tilt_max_rad)),
             thrust_to_weight: Some(m.thrust_to_weight),
-            yaw_rate_max_deg_s: Some(m.yaw_rate_max_radps.to_degrees()),
+            yaw_rate_max_deg_s: Some(deg(m.yaw_rate_max_radps)),
             velocity_time_constant_s: Some(m.velocity_time_constant_s),
             attitude_time_constant_s: Some(m.attitude_time_constant_s),
             yaw_time_constant_s: Some(m.yaw_time_constant_s),
@@ -242,7 +361,7 @@ fn noise(sc: &Scenario) -> NoiseSpec {
     NoiseSpec {
         position_m: Some(n.position_m),
         velocity_kmh: Some(kmh(n.velocity_mps)),
-        attitude_deg: Some(n.attitude_rad.to_degrees()),
+        attitude_deg: Some(deg(n.attitude_rad)),
         actuation_error: Some(sc.actuation_error()),
         scale: None,
         gnss_bias_m: sc.gnss_bias().map(|g| g.sigma_m),
@@ -250,9 +369,14 @@ fn noise(sc: &Scenario) -> NoiseSpec {
     }
 }
 
-fn initial(sc: &Scenario) -> InitialSpec {
+fn initial(sc: &Scenario, notes: &mut Derived) -> InitialSpec {
     use crate::placement::Placement;
-    let speed_kmh = Some(kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()])));
+    let speed_kmh = follows(
+        sc.spec.initial.speed_kmh,
+        kmh(sc.vehicle().forward_speed(&sc.initial()[sc.navigator().index()])),
+        ("initial", "speed_kmh", "the navigator's path"),
+        notes,
+    );
     let assign_by = sc
         .reassign_on_loss()
         .or(match sc.placement() {
@@ -337,9 +461,9 @@ fn allowable(sc: &Scenario) -> AllowableSpec {
         x_m: Some(a.position_m[0]),
         y_m: Some(a.position_m[1]),
         z_m: Some(a.position_m[2]),
-        alpha_deg: Some(a.attitude_rad[0].to_degrees()),
-        beta_deg: Some(a.attitude_rad[1].to_degrees()),
-        gamma_deg: Some(a.attitude_rad[2].to_degrees()),
+        alpha_deg: Some(deg(a.attitude_rad[0])),
+        beta_deg: Some(deg(a.attitude_rad[1])),
+        gamma_deg: Some(deg(a.attitude_rad[2])),
     }
 }
 
@@ -380,6 +504,27 @@ mod tests {
     /// Relative closeness of two floats (unit conversions may change the last bits).
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-9)
+    }
+
+    #[test]
+    fn units_are_written_as_the_shortest_decimals_that_convert_back_exactly() {
+        // 90 km/h is 25 m/s; 25 m/s times 3.6 is 90.00000000000001.
+        assert_eq!(kmh(proxform_core::angle::kmh(90.0)), 90.0);
+        let mut rng = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..20_000 {
+            rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let u = (rng >> 11) as f64 / (1u64 << 53) as f64;
+            // Values read from a file (km/h, degrees) come back exactly.
+            let x = ((u - 0.5) * 1e6).round() / 1e3;
+            let v = proxform_core::angle::kmh(x);
+            assert_eq!(proxform_core::angle::kmh(kmh(v)).to_bits(), v.to_bits(), "{x} km/h");
+            let a = proxform_core::angle::deg(x / 10.0);
+            assert_eq!(proxform_core::angle::deg(deg(a)).to_bits(), a.to_bits(), "{} deg", x / 10.0);
+            // Any other value (computed, not read) may have no exact decimal: within an ulp.
+            let w = (u - 0.5) * 1e3;
+            assert!((proxform_core::angle::kmh(kmh(w)) - w).abs() <= 2.0 * f64::EPSILON * w.abs(), "{w} m/s");
+        }
+        assert_eq!((next_float(1.0, true), next_float(-1.0, false)), (1.0 + f64::EPSILON, -1.0 - f64::EPSILON));
     }
 
     #[test]
