@@ -121,6 +121,7 @@ fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
                 ("sensing", "reference_dropout", "sensing.dropout"),
                 &mut notes,
             ),
+            relative: Some(sc.relative_sensing()),
         },
         radio: radio(sc),
         network: NetworkSpec { loss: Some(sc.network().loss), delay_s: Some(sc.network().delay_s) },

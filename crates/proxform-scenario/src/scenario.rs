@@ -122,6 +122,7 @@ pub struct Scenario {
     pub(crate) engine: EngineChoice,
     pub(crate) dropout: f64,
     pub(crate) reference_dropout: Option<f64>,
+    pub(crate) relative_sensing: bool,
     pub(crate) faults: Vec<Fault>,
     pub(crate) beacons: Vec<UavId>,
     pub(crate) wind: Wind,
@@ -309,6 +310,13 @@ impl Scenario {
     /// that sets the key).
     pub fn reference_dropout_set(&self) -> Option<f64> {
         self.reference_dropout
+    }
+
+    /// Whether onboard observations are measured relative to the observer and placed in the
+    /// world with its own measured state (`sensing.relative`): its position-fix bias and
+    /// noise then enter its own state and its view of every neighbour alike.
+    pub fn relative_sensing(&self) -> bool {
+        self.relative_sensing
     }
 
     /// Scheduled faults.

@@ -443,6 +443,9 @@ pub struct SensingSpec {
     /// Probability that an observation of one of the UAV's main references is lost, per
     /// observation and step, in [0, 1]. Default: `dropout`.
     pub reference_dropout: Option<f64>,
+    /// Onboard observations measured relative to the observer and placed in the world with its
+    /// own measured state (its position-fix bias and noise included). Default false.
+    pub relative: Option<bool>,
 }
 
 /// `[network]`: faults of the transport between the world and the agents of a distributed run

@@ -248,6 +248,12 @@ fn the_engine_is_chosen_by_the_scenario() {
         s.noise.gnss_bias_m = Some(0.5);
     });
     assert_eq!(engine_for(&windy), Ok(EngineKind::Fast), "wind and a position-fix bias are run");
+    let relative = swarm(100, |s| {
+        s.engine = Some("fast".into());
+        s.sensing.relative = Some(true);
+    });
+    let e = engine_for(&relative).expect_err("relative sensing is not supported");
+    assert!(e.to_string().contains("sensing.relative"), "{e}");
     let paper = proxform_scenario::builtin::paper();
     assert_eq!(engine_for(&paper), Ok(EngineKind::Reference));
 }

@@ -180,7 +180,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             *position_sigma_m = noise.position_m.max(1e-4);
             *velocity_sigma_mps = noise.velocity_mps.max(1e-4);
         }
-        let (dropout, reference_dropout) = world::sensing(&spec.sensing)?;
+        let (dropout, reference_dropout, relative_sensing) = world::sensing(&spec.sensing)?;
         let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
         let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable, &vehicle)?;
@@ -329,6 +329,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             engine,
             dropout,
             reference_dropout,
+            relative_sensing,
             faults,
             beacons,
             wind,

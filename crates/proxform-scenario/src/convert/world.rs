@@ -56,11 +56,12 @@ pub fn noise(n: &NoiseSpec) -> Result<(MeasurementNoise, Option<CorrelatedNoise>
     Ok((noise, gnss, actuation))
 }
 
-/// Onboard dropout, and the dropout of observations of main references when it differs.
-pub fn sensing(s: &SensingSpec) -> Result<(f64, Option<f64>), SpecError> {
+/// Onboard dropout, the dropout of observations of main references when it differs, and
+/// whether observations are relative to the observer.
+pub fn sensing(s: &SensingSpec) -> Result<(f64, Option<f64>, bool), SpecError> {
     let dropout = or_default("sensing.dropout", s.dropout, 0.0, probability)?;
     let reference = s.reference_dropout.map(|v| probability("sensing.reference_dropout", v)).transpose()?;
-    Ok((dropout, reference))
+    Ok((dropout, reference, s.relative.unwrap_or(false)))
 }
 
 /// The allowable errors (SI).

@@ -24,7 +24,7 @@ pub struct Unsupported(pub &'static str);
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 18] = [
+    let checks: [(bool, &'static str); 19] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
@@ -39,6 +39,7 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (sc.placement().in_slots(), "scattered starts"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (radio.delay_steps == 0, "radio delay"),
+        (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
         (!radio.relay_navigator, "relays of the navigator"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (p.areas.areas + max_refs(sc) <= MAX_TRACKS, "more than 16 areas and references"),

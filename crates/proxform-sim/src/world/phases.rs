@@ -192,7 +192,9 @@ impl StepContext<'_> {
     }
 
     /// Estimate: each active follower's noisy measurement of its own state (with its
-    /// position-fix bias and sensor faults, in flight).
+    /// position-fix bias and sensor faults, in flight). With relative sensing, its onboard
+    /// observations, measured relative to it, are then placed in the world with that
+    /// measurement: each moves by the measurement's error (`own − truth`).
     fn estimate(&self, first: usize, blk: &mut Block<'_>) {
         let sensors = OwnSensors {
             sigma: self.scenario.noise().sigma(),
@@ -203,10 +205,20 @@ impl StepContext<'_> {
         let nav = self.scenario.navigator().index();
         let s = &mut *blk.scratch;
         s.own.clear();
+        let relative = self.scenario.relative_sensing();
         for b in 0..blk.agents.len() {
             let i = first + b;
             let truth = &self.scene.states[i];
-            s.own.push(if self.active[i] && i != nav { sensors.measure(i, truth) } else { *truth });
+            let own = if self.active[i] && i != nav { sensors.measure(i, truth) } else { *truth };
+            if relative && i != nav {
+                let error = state::difference(&own, truth);
+                for o in s.heard[s.spans[b].clone()].iter_mut() {
+                    if matches!(o.source, ObservationSource::Onboard | ObservationSource::Close) {
+                        o.state += error;
+                    }
+                }
+            }
+            s.own.push(own);
         }
     }
 
