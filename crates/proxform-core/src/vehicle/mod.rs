@@ -10,7 +10,7 @@ mod multirotor;
 
 pub use fixed_wing::FixedWingModel;
 pub use kinematic::{KinematicLimits, KinematicModel};
-pub use multirotor::{MultirotorModel, MIN_VELOCITY_TIME_CONSTANT_S};
+pub use multirotor::{MultirotorModel, MAX_TIME_CONSTANT_S, MIN_VELOCITY_TIME_CONSTANT_S};
 
 use crate::control::ControlMatrix;
 use crate::error::ConfigError;

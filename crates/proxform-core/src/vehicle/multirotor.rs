@@ -48,6 +48,11 @@ pub const SUBSTEP_S: f64 = 0.02;
 /// sub-steps (a quarter of it) stay at most 80 a period of 1 s.
 pub const MIN_VELOCITY_TIME_CONSTANT_S: f64 = 0.05;
 
+/// The slowest lag of a multirotor's loops (velocity, attitude, yaw; s). Its loops answer within
+/// a second or two; a lag of minutes is not a multirotor (its nose would never follow a turn of
+/// its path, nor its velocity a change of its slot's).
+pub const MAX_TIME_CONSTANT_S: f64 = 5.0;
+
 /// Parameters of the multirotor and its autopilot's inner loop. Defaults: a 1-2 kg quadrotor
 /// with PX4's default velocity-control limits.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -156,6 +161,15 @@ impl MultirotorModel {
         }
         positive("attitude_time_constant", self.attitude_time_constant_s)?;
         positive("yaw_time_constant", self.yaw_time_constant_s)?;
+        for (field, tau) in [
+            ("velocity_time_constant", self.velocity_time_constant_s),
+            ("attitude_time_constant", self.attitude_time_constant_s),
+            ("yaw_time_constant", self.yaw_time_constant_s),
+        ] {
+            if tau > MAX_TIME_CONSTANT_S {
+                return Err(ConfigError::OutOfRange { field, value: tau, expected: "at most 5 s" });
+            }
+        }
         for (field, v) in [("drag_linear", self.drag_linear_per_s), ("drag_quadratic", self.drag_quadratic_per_m)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(ConfigError::OutOfRange { field, value: v, expected: "a finite drag ≥ 0" });

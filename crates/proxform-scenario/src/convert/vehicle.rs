@@ -167,6 +167,19 @@ fn multirotor(v: &VehicleSpec) -> Result<VehicleModel, SpecError> {
             ),
         ));
     }
+    for (key, tau) in [
+        ("vehicle.velocity_time_constant_s", m.velocity_time_constant_s),
+        ("vehicle.attitude_time_constant_s", m.attitude_time_constant_s),
+        ("vehicle.yaw_time_constant_s", m.yaw_time_constant_s),
+    ] {
+        let most = proxform_core::vehicle::MAX_TIME_CONSTANT_S;
+        if tau > most {
+            return Err(err(
+                key,
+                format!("must be at most {most} s (a multirotor's loops answer within seconds), found {}", show(tau)),
+            ));
+        }
+    }
     if m.tilt_max_rad >= deg(90.0) {
         return Err(err(
             "vehicle.tilt_max_deg",

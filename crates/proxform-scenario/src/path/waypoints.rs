@@ -26,9 +26,10 @@ pub fn waypoint_segments(
 }
 
 /// [`waypoint_segments`] with a speed per leg: the path starts at `v0` and flies leg k at
-/// `leg_speeds[k]` (all at `v0` when None). A leg's change of speed is a cosine ramp over the
-/// straight part of the leg, between the turns at its ends; the turn at the end of a leg is
-/// flown at that leg's speed (its rate `v/r`), so the turns keep their radius.
+/// `leg_speeds[k]` (all at `v0` when None). A leg's change of speed is a cosine ramp at the
+/// start of its straight part, over `transition_s` (less when the straight is shorter); the
+/// turn at the end of a leg is flown at that leg's speed (its rate `v/r`), so the turns keep
+/// their radius.
 ///
 /// A turn is a blend in, an arc of radius `r`, and a blend out, symmetric about the corner's
 /// bisector. It is placed like a railway transition curve: it leaves the incoming leg and joins
@@ -139,12 +140,15 @@ pub fn waypoint_segments_at(
                     message: format!("leg {} has no straight part to change its speed on", k + 1),
                 });
             }
-            // The blend out of the turn before at its speed, the ramp, the blend into the next
-            // turn at the leg's speed; one climb rate over all three (no rate changes between).
-            let ramp_s = 2.0 * straight_m / (v_in + v);
-            let t = half_in + ramp_s + half_out;
+            // The blend out of the turn before at its speed, the ramp to the leg's speed over
+            // the path's transition (shorter when the straight is), the rest of the straight
+            // and the blend into the next turn at the leg's speed; one climb rate over all of
+            // them (no rate changes between).
+            let ramp_s = transition_s.min(2.0 * straight_m / (v_in + v));
+            let rest_s = (straight_m - 0.5 * (v_in + v) * ramp_s).max(0.0) / v;
+            let t = half_in + ramp_s + rest_s + half_out;
             let climb = leg.2 / t;
-            let pieces = [(half_in, v_in, blend_in), (ramp_s, v, None), (half_out, v, None)];
+            let pieces = [(half_in, v_in, blend_in), (ramp_s, v, None), (rest_s + half_out, v, None)];
             for (d, end, blend) in pieces {
                 if d > 1e-9 {
                     segments.push(Segment {
@@ -368,6 +372,20 @@ mod tests {
             }
         }
         assert_eq!(seen, [true; 3], "every leg's speed is reached");
+        // ... over the transition at the start of the leg: the second leg (x = 300 m, y from
+        // about 40 to 260 m) is at its 10 m/s from a transition (4 s, 30 m) after its start.
+        let (segs2, c2) = waypoint_segments_at(&pts, 5.0, Some(&speeds), 40.0, 4.0).expect("flyable");
+        let p2 = SegmentsPath::new(5.0, c2, segs2, 4.0);
+        let mut first_at_speed = None;
+        for k in 0..4000 {
+            let s = p2.state_at(k as f64 * 0.05, [0.0; 3]);
+            if (s[state::VX].hypot(s[state::VY]) - 10.0).abs() < 1e-9 {
+                first_at_speed = Some(s[1]);
+                break;
+            }
+        }
+        let y = first_at_speed.expect("reached");
+        assert!(y < 100.0, "10 m/s first reached at y = {y} m");
         // One speed per leg, or an error that says how many there are.
         let e = waypoint_segments_at(&pts, 5.0, Some(&[5.0, 10.0]), 40.0, 4.0).expect_err("two of three");
         assert!(e.message.contains("3 legs but 2 leg speeds"), "{}", e.message);
