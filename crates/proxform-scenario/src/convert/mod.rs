@@ -105,13 +105,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
         let mut params = controller::params(&spec.controller, dt_s, &vehicle)?;
 
-        // The vehicle's defaults of the formation's keys: a multirotor formation's derived tables
-        // lean on the navigator (its errors would otherwise grow rank by rank through its
-        // turns, README "Robust formation keeping").
+        // The vehicle's defaults of the formation's keys: a multirotor or fixed-wing
+        // formation's derived tables lean on the navigator (its errors would otherwise grow
+        // rank by rank through its turns, README "Robust formation keeping"); the kinematic
+        // vehicle keeps the paper's tables.
         let mut formation_spec = spec.formation.clone();
-        if let VehicleModel::Multirotor(_) = vehicle {
+        if !matches!(vehicle, VehicleModel::Kinematic(_)) {
             let d = formation_spec.dependencies.get_or_insert_with(Default::default);
-            d.navigator_degree = d.navigator_degree.or(Some(defaults::MULTIROTOR_NAVIGATOR_DEGREE));
+            d.navigator_degree = d.navigator_degree.or(Some(defaults::VEHICLE_NAVIGATOR_DEGREE));
         }
         let formation::Slots { slots, mut frame, explicit } = formation::slots(&formation_spec)?;
         if spec.formation.frame.is_none() {
