@@ -82,6 +82,20 @@ pub fn print(
             s.unsafe_runs
         )?;
     }
+    if s.off_path_runs > 0 {
+        writeln!(
+            out,
+            "off path                 in {} run(s) the formation left its planned path by more than {} m: those runs do not pass",
+            s.off_path_runs,
+            number(s.path_bound_m)
+        )?;
+    }
+    writeln!(
+        out,
+        "path                     the navigator (or the formation's estimate of its slot) at most {} m from the planned path (bound {} m)",
+        number(s.path_deviation_m_max),
+        number(s.path_bound_m)
+    )?;
     writeln!(
         out,
         "min separation           {} m (safety distance {} m, {} run(s) closer; true positions)",

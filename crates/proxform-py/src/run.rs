@@ -100,6 +100,7 @@ fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) -> PyResult<B
     d.set_item("order_min", col(&|r| r.order_min))?;
     d.set_item("connectivity_min", col(&|r| r.connectivity_min))?;
     d.set_item("alone_s_per_uav", col(&|r| r.alone_s_per_uav))?;
+    d.set_item("path_deviation_m", col(&|r| r.path_deviation_m))?;
     // The columns of sensor faults, forming, changes of formation, what was flown and the
     // robust checks, as runs.csv has them: each group when some run has it (NaN for a run
     // without, or a value it does not have).

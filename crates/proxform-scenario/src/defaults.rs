@@ -51,6 +51,11 @@ pub const ALLOWABLE_POSITION_M: [f64; 3] = [0.5, 0.6, 0.2];
 /// Allowable errors α, β, γ (deg).
 pub const ALLOWABLE_ATTITUDE_DEG: [f64; 3] = [0.4, 0.3, 1.0];
 
+/// How far the formation may leave its planned path, in largest allowable position errors: a
+/// navigator flies its path within a fraction of one (a multirotor's gusts move it by tenths),
+/// a formation that lost it drifts off by hundreds of metres.
+pub const PATH_PER_ALLOWABLE: f64 = 10.0;
+
 /// A multirotor's allowable errors x, y, z (m).
 pub const MULTIROTOR_ALLOWABLE_POSITION_M: [f64; 3] = [1.0, 1.0, 1.0];
 /// A multirotor's allowable errors α, β, γ (deg): yaw 3°; pitch and roll are its inner loop's

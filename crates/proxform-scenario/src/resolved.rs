@@ -126,7 +126,7 @@ fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
         radio: radio(sc),
         network: NetworkSpec { loss: Some(sc.network().loss), delay_s: Some(sc.network().delay_s) },
         wind: wind(sc),
-        allowable: allowable(sc),
+        allowable: allowable(sc, &mut notes),
         fault: sc.faults().iter().map(fault).collect(),
     };
     (spec, notes)
@@ -456,9 +456,15 @@ fn wind(sc: &Scenario) -> WindSpec {
     }
 }
 
-fn allowable(sc: &Scenario) -> AllowableSpec {
+fn allowable(sc: &Scenario, notes: &mut Derived) -> AllowableSpec {
     let a = sc.allowable();
     AllowableSpec {
+        path_m: follows(
+            sc.spec.allowable.path_m,
+            a.path_m,
+            ("allowable", "path_m", "ten times the largest allowable position error"),
+            notes,
+        ),
         x_m: Some(a.position_m[0]),
         y_m: Some(a.position_m[1]),
         z_m: Some(a.position_m[2]),

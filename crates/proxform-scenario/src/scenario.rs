@@ -62,6 +62,9 @@ pub struct AllowableErrors {
     pub position_m: [f64; 3],
     /// α, β, γ (rad).
     pub attitude_rad: [f64; 3],
+    /// How far the navigator (or, once it is gone, the formation's estimate of its slot) may be
+    /// from its planned path (m).
+    pub path_m: f64,
 }
 
 impl AllowableErrors {

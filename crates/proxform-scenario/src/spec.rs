@@ -496,6 +496,9 @@ pub struct AllowableSpec {
     pub alpha_deg: Option<f64>,
     pub beta_deg: Option<f64>,
     pub gamma_deg: Option<f64>,
+    /// How far the formation's navigator slot may leave its planned path (m, > 0). Default: ten
+    /// times the largest allowable position error.
+    pub path_m: Option<f64>,
 }
 
 /// One `[[fault]]`.

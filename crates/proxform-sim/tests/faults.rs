@@ -45,13 +45,21 @@ fn a_uav_removed_before_it_flies_has_no_verdict_and_the_others_have_theirs() {
 }
 
 #[test]
-fn losing_the_navigator_leaves_a_formation_that_holds_together() {
+fn losing_the_navigator_leaves_a_formation_that_holds_together_but_leaves_its_path() {
     let s = paper(|s| s.fault = vec![FaultSpec::remove(1, 50.0)]);
     let r = one(&s, 5);
     // Errors are measured against the formation's own estimate of the navigator's slot.
     assert!(r.max_abs_error[1] < 2.0, "{:?}", r.max_abs_error);
     assert!(r.min_separation_m > 50.0);
     assert_eq!(r.connectivity_min, 1.0, "the five followers stay within sensing range of each other");
+    // Nobody flies the mission any more: the formation drifts off its planned path (by hundreds
+    // of metres), beyond the bound of ten allowable errors (6 m), and the run does not pass.
+    assert_eq!(s.allowable().path_m, 6.0);
+    assert!(r.path_deviation_m > 50.0, "{}", r.path_deviation_m);
+    assert!(!r.pass);
+    // With the navigator, it flies its path exactly.
+    let kept = one(&paper(|_| {}), 5);
+    assert!(kept.path_deviation_m < 1e-9 && kept.pass, "{}", kept.path_deviation_m);
 }
 
 #[test]

@@ -75,12 +75,15 @@ pub fn allowable(a: &AllowableSpec, vehicle: &proxform_core::VehicleModel) -> Re
         }
         proxform_core::VehicleModel::Kinematic(_) => (defaults::ALLOWABLE_POSITION_M, defaults::ALLOWABLE_ATTITUDE_DEG),
     };
+    let position_m = [
+        or_default("allowable.x_m", a.x_m, x, positive)?,
+        or_default("allowable.y_m", a.y_m, y, positive)?,
+        or_default("allowable.z_m", a.z_m, z, positive)?,
+    ];
+    let path_default = defaults::PATH_PER_ALLOWABLE * position_m.iter().copied().fold(0.0, f64::max);
     Ok(AllowableErrors {
-        position_m: [
-            or_default("allowable.x_m", a.x_m, x, positive)?,
-            or_default("allowable.y_m", a.y_m, y, positive)?,
-            or_default("allowable.z_m", a.z_m, z, positive)?,
-        ],
+        position_m,
+        path_m: or_default("allowable.path_m", a.path_m, path_default, positive)?,
         attitude_rad: [
             deg(or_default("allowable.alpha_deg", a.alpha_deg, al, positive)?),
             deg(or_default("allowable.beta_deg", a.beta_deg, be, positive)?),

@@ -88,6 +88,14 @@ pub struct Summary {
     pub safety_distance_m: f64,
     /// Runs in which some pair came closer than the safety distance (they do not pass).
     pub unsafe_runs: u64,
+    /// Largest distance of the navigator (or the formation's estimate of its slot, once it is
+    /// gone) from its planned path over all runs (m), the bound, and the runs beyond it (they
+    /// do not pass).
+    pub path_deviation_m_max: f64,
+    /// See `path_deviation_m_max`.
+    pub path_bound_m: f64,
+    /// See `path_deviation_m_max`.
+    pub off_path_runs: u64,
     /// Adjustments per follower per minute of flight, mean over runs.
     pub adjustments_per_uav_minute: f64,
     /// Swarm and control metrics, each the mean over runs of the run's value.
@@ -476,6 +484,9 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         min_separation_m: runs.iter().map(|r| r.min_separation_m).fold(f64::INFINITY, f64::min),
         safety_distance_m: scenario.safety_distance_m(),
         unsafe_runs: runs.iter().filter(|r| r.min_separation_m < scenario.safety_distance_m()).count() as u64,
+        path_deviation_m_max: runs.iter().map(|r| r.path_deviation_m).fold(0.0, f64::max),
+        path_bound_m: scenario.allowable().path_m,
+        off_path_runs: runs.iter().filter(|r| r.path_deviation_m > scenario.allowable().path_m).count() as u64,
         adjustments_per_uav_minute: adj_rate,
         swarm: SwarmMetrics {
             held_fraction: runs.iter().map(|r| r.held_fraction).sum::<f64>() / n,
@@ -609,6 +620,7 @@ mod tests {
             alone_steps: 0,
             per_uav: Vec::new(),
             min_separation_m: 90.0 + k as f64,
+            path_deviation_m: 0.0,
             model_error_rms: [model; 9],
             duration_s: 60.0,
             flown: None,

@@ -57,6 +57,9 @@ pub struct RunSummary {
     /// Smallest distance between any two flying UAVs over the flight, from their true
     /// positions (m; ∞ when fewer than two flew).
     pub min_separation_m: f64,
+    /// Largest distance of the navigator (once it is gone, of the formation's estimate of its
+    /// slot) from its planned path over the flight (m).
+    pub path_deviation_m: f64,
     /// RMS model error σm per state parameter over all follower steps.
     pub model_error_rms: [f64; P],
     /// Flight duration (s).
@@ -212,6 +215,10 @@ pub struct RunMetrics {
     samples: u64,
     followers: u64,
     separation: super::separation::Separation,
+    /// The navigator's start (its path's origin) and the largest distance from its path so far.
+    start: [f64; 3],
+    path_deviation: f64,
+    path_bound: f64,
     range: f64,
     model_sq: State9,
     model_n: u64,
@@ -289,6 +296,12 @@ impl RunMetrics {
             samples: 0,
             followers: scenario.len() as u64 - 1,
             separation: super::separation::Separation::new(scenario.safety_distance_m()),
+            start: {
+                let s0 = &scenario.initial()[nav];
+                [s0[0], s0[1], s0[2]]
+            },
+            path_deviation: 0.0,
+            path_bound: scenario.allowable().path_m,
             range: scenario.controller().areas.sensing_range_m,
             model_sq: State9::zeros(),
             model_n: 0,
@@ -448,7 +461,10 @@ impl RunMetrics {
             changes_completed: transitions.as_ref().map(|t| t.transition_s.is_finite()),
         };
         let safe = self.separation.close_pairs() == 0;
-        let pass = safe && self.criterion.passes(&evidence);
+        // The formation must also keep to its mission: its navigator (or, once it is gone, the
+        // formation's estimate of its slot) within the path bound of the planned path.
+        let on_path = self.path_deviation <= self.path_bound;
+        let pass = safe && on_path && self.criterion.passes(&evidence);
         // Each sampled follower by the same criterion over its own errors.
         let window_last = |k: usize| {
             let c = &self.transitions[k];
@@ -547,6 +563,7 @@ impl RunMetrics {
                 })
                 .collect(),
             min_separation_m: self.separation.min_m(),
+            path_deviation_m: self.path_deviation,
             model_error_rms,
             duration_s,
         }
@@ -716,6 +733,10 @@ impl Observer for RunMetrics {
         let nav = self.nav;
         let reference = navigator_reference(scenario, frame.formation(scenario), frame.states, frame.active);
         self.separation.observe(frame.states, frame.active);
+        let planned = scenario.path().state_at(frame.t, self.start);
+        let off = (0..3).map(|k| (reference[k] - planned[k]).powi(2)).sum::<f64>().sqrt();
+        // NaN counts as off (a state that is not a number is nowhere near the path).
+        self.path_deviation = if off.is_nan() { f64::INFINITY } else { self.path_deviation.max(off) };
         self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
         let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| {
