@@ -884,6 +884,13 @@ mod tests {
         (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect()
     }
 
+    /// The scenario's UAVs in their slots around its navigator on its path at `t`.
+    fn along_path(sc: &Scenario, t: f64) -> Vec<State9> {
+        let s0 = &sc.initial()[sc.navigator().index()];
+        let nav = sc.path().state_at(t, [s0[0], s0[1], s0[2]]);
+        (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect()
+    }
+
     fn frame<'a>(k: u64, states: &'a [State9], uavs: &'a [UavStep], active: &'a [bool]) -> StepFrame<'a> {
         StepFrame { radio_sent: 2, ..StepFrame::new(k, k as f64 * 0.1, states, uavs, active) }
     }
@@ -997,14 +1004,13 @@ mod tests {
             }];
         }))
         .expect("valid");
-        let good = in_slots(&sc);
         let uavs = vec![UavStep::default(); 6];
         let active = [true; 6];
         let fly = |late: bool| {
             let mut m = RunMetrics::new(&sc);
             for k in 0..40u64 {
                 let t = k as f64 * 0.1;
-                let mut states = good.clone();
+                let mut states = along_path(&sc, t);
                 if t < 0.95 || (late && t > 2.45) {
                     states[2][Y] += 3.0;
                 }
