@@ -94,7 +94,28 @@ pub fn allowable(a: &AllowableSpec, vehicle: &proxform_core::VehicleModel) -> Re
 
 /// The fault schedule.
 pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
-    specs.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect()
+    let faults: Vec<Fault> = specs.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect::<Result<_, _>>()?;
+    // A UAV flies from its join (if it has one) to its removal (if it has one): a removal at or
+    // before its join would leave it never flying, silently.
+    for (k, f) in faults.iter().enumerate() {
+        let Fault::Remove { uav, at_s: removed } = *f else { continue };
+        let joins = faults.iter().filter_map(|g| match *g {
+            Fault::Join { uav: u, at_s, .. } if u == uav => Some(at_s),
+            _ => None,
+        });
+        if let Some(joined) = joins.filter(|&j| j >= removed).reduce(f64::min) {
+            return Err(err(
+                format!("fault[{}].at_s", k + 1),
+                format!(
+                    "UAV {} is removed at {removed} s, before it joins at {joined} s: a UAV flies from its join to \
+                     its removal, so it would never fly (remove it after it joins, or give the one that comes \
+                     back its own id)",
+                    uav.0 + 1
+                ),
+            ));
+        }
+    }
+    Ok(faults)
 }
 
 /// The wind.
