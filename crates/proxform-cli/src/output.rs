@@ -86,7 +86,7 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
             format!("{:.6}", r.order_min),
             format!("{:.6}", r.connectivity_min),
             format!("{:.3}", r.alone_s_per_uav),
-            format!("{:.3}", r.path_deviation_m),
+            format!("{:.6}", r.path_deviation_m),
         ]);
         if let (true, Some(f)) = (faults, r.sensor_faults) {
             rec.extend([u8::from(f.healthy_pass).to_string(), format!("{:.3}", f.rejoin_s)]);

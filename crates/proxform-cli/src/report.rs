@@ -154,6 +154,17 @@ pub fn print(
             f.settled_error_ratio_max
                 .map_or_else(String::new, |v| format!("; of the followers that started in their slots {}×", number(v)))
         )?;
+        // Formed at all is not formed in time: the criterion's deadline, when there is one.
+        if let Some(limit) = scenario.form_within_s() {
+            let in_time =
+                result.runs.iter().filter(|r| r.forming.is_some_and(|f| f.time_to_form_s <= limit + 1e-9)).count();
+            writeln!(
+                out,
+                "formed in time           by form_within_s = {} s in {in_time} of {} runs (the others do not pass)",
+                number(limit),
+                s.runs
+            )?;
+        }
     }
     if let Some(f) = &s.flown {
         writeln!(
