@@ -143,7 +143,10 @@ pub fn to_toml(sc: &Scenario) -> Result<String, toml::ser::Error> {
         out.push('\n');
         let section = line.strip_prefix('[').and_then(|l| l.strip_suffix(']'));
         for (_, key, value, why) in notes.iter().filter(|n| Some(n.0) == section) {
-            out.push_str(&format!("# {key} = {value:?}    # unset: follows {why}\n"));
+            // Twelve significant digits: a derived value computed in SI need not have a short
+            // decimal, and a comment is read, not loaded.
+            let shown: f64 = format!("{value:.11e}").parse().unwrap_or(*value);
+            out.push_str(&format!("# {key} = {shown:?}    # unset: follows {why}\n"));
         }
     }
     Ok(out)
