@@ -96,6 +96,14 @@ pub fn print(
         number(s.path_deviation_m_max),
         number(s.path_bound_m)
     )?;
+    if let Some(latest) = s.succession_latest_s {
+        writeln!(
+            out,
+            "succession               in {} run(s) the navigator was lost and a successor led its slot's path (from {} s at the latest)",
+            s.succession_runs,
+            number(latest)
+        )?;
+    }
     writeln!(
         out,
         "min separation           {} m (safety distance {} m, {} run(s) closer; true positions)",

@@ -183,7 +183,7 @@ impl Agent {
         let (formation, deps) = match &ch.assignment {
             None => (stage.formation.clone(), stage.dependencies.get(ch.id.index()).cloned().unwrap_or_default()),
             Some(a) => {
-                let (f, mut tables) = relabel(&stage.formation, &stage.dependencies, &a.slot_of, &a.flying);
+                let (f, mut tables) = relabel(&stage.formation, &stage.dependencies, &a.slot_of, &a.flying, a.lead);
                 let own = std::mem::take(&mut tables[ch.id.index()]);
                 (Arc::new(f), own)
             }
@@ -195,22 +195,33 @@ impl Agent {
             .expect("a checked schedule's stages are valid for every UAV");
     }
 
-    /// Flies the slots of `assignment` from now on (and the later stages of the schedule
-    /// relabelled by it): the controller is set up afresh for UAV `id`'s new slot and table
-    /// (its neighbour tracks restart from the next observations), as at a change of formation.
+    /// Flies the slots of `assignment` from now on, led by its leader (and the later stages
+    /// of the schedule relabelled by it). When slots moved, the controller is set up afresh
+    /// for UAV `id`'s new slot and table (its neighbour tracks restart from the next
+    /// observations), as at a change of formation; when only the leader changed (a
+    /// succession), the proximity controller keeps what it knows of its neighbours.
     pub fn reassign(&mut self, setup: &AgentSetup, id: UavId, assignment: &Reassignment) -> Result<(), ConfigError> {
         let table = assignment.tables.get(id.index()).cloned().unwrap_or_default();
-        self.controller = FormationController::new(
-            &setup.method,
-            id,
-            setup.navigator,
-            setup.controller.clone(),
-            assignment.formation.clone(),
-            table,
-        )?;
+        let leader = assignment.lead.leader;
+        match &mut self.controller {
+            FormationController::Proximity(c) if !assignment.moved => {
+                c.lead_by(leader, assignment.formation.clone(), table)?;
+            }
+            _ => {
+                self.controller = FormationController::new(
+                    &setup.method,
+                    id,
+                    leader,
+                    setup.controller.clone(),
+                    assignment.formation.clone(),
+                    table,
+                )?;
+            }
+        }
         // Without a schedule there is no stage to come (next = 0 = the number of stages).
         let ch = self.changes.get_or_insert_with(|| Changes::new(setup, id));
         ch.assignment = Some(assignment.clone());
+        ch.navigator = leader;
         Ok(())
     }
 

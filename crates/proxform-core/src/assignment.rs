@@ -17,6 +17,7 @@ use pathfinding::matrix::Matrix;
 use crate::dependency::DependencySet;
 use crate::formation::Formation;
 use crate::observation::UavId;
+pub use crate::succession::Lead;
 
 /// What an assignment minimises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -181,13 +182,18 @@ pub fn after_loss(
 }
 
 /// Slots re-assigned in flight, as every agent is handed them: which slot each UAV flies,
-/// which UAVs still fly, and the formation in force relabelled ([`relabel`]).
+/// which UAVs still fly, who leads, and the formation in force relabelled ([`relabel`]).
 #[derive(Debug, Clone)]
 pub struct Reassignment {
     /// The slot (of the formation as the scenario gives it) each UAV flies.
     pub slot_of: Arc<[usize]>,
     /// Which UAVs still fly (the others are nobody's reference).
     pub flying: Arc<[bool]>,
+    /// Who leads the formation.
+    pub lead: Lead,
+    /// Whether any UAV's slot or the formation changed with it (false: only the leader did,
+    /// and the agents keep their tracks).
+    pub moved: bool,
     /// The formation in force, indexed by UAV.
     pub formation: Arc<Formation>,
     /// Every UAV's table in it.
@@ -195,43 +201,68 @@ pub struct Reassignment {
 }
 
 impl Reassignment {
-    /// `formation` (indexed by slot, with its `tables`) flown by UAVs assigned `slot_of`.
-    pub fn new(formation: &Formation, tables: &[DependencySet], slot_of: Vec<usize>, flying: Vec<bool>) -> Self {
-        let (f, t) = relabel(formation, tables, &slot_of, &flying);
-        Self { slot_of: slot_of.into(), flying: flying.into(), formation: Arc::new(f), tables: t.into() }
+    /// `formation` (indexed by slot, with its `tables`) flown by UAVs assigned `slot_of`, led
+    /// by `lead`.
+    pub fn new(
+        formation: &Formation,
+        tables: &[DependencySet],
+        slot_of: Vec<usize>,
+        flying: Vec<bool>,
+        lead: Lead,
+    ) -> Self {
+        let (f, t) = relabel(formation, tables, &slot_of, &flying, lead);
+        Self {
+            slot_of: slot_of.into(),
+            flying: flying.into(),
+            lead,
+            moved: true,
+            formation: Arc::new(f),
+            tables: t.into(),
+        }
+    }
+
+    /// The same, stating whether slots moved with it.
+    pub fn moving(self, moved: bool) -> Self {
+        Self { moved, ..self }
     }
 }
 
 /// The formation `formation` (indexed by slot) flown by UAVs assigned `slot_of` (a
 /// permutation): indexed by UAV, each UAV's table rewritten to the UAVs flying the slots its
 /// slot leaned on, leaving out the UAVs not `flying` (the degrees of the others keep their
-/// ratios: the method's mean is normalised).
+/// ratios: the method's mean is normalised). A reference to the navigator's slot while the
+/// navigator is lost goes to the leader (its degree added to the leader's, if the table
+/// already names it).
 pub fn relabel(
     formation: &Formation,
     tables: &[DependencySet],
     slot_of: &[usize],
     flying: &[bool],
+    lead: Lead,
 ) -> (Formation, Vec<DependencySet>) {
     let n = formation.len();
     let mut uav_of = vec![usize::MAX; n];
     for (u, &s) in slot_of.iter().enumerate() {
         uav_of[s] = u;
     }
+    let (navigator, leader) = (lead.navigator.index(), lead.leader.index());
     let slots = slot_of.iter().map(|&s| formation.slots[s]).collect();
     let tables = slot_of
         .iter()
         .enumerate()
         .map(|(u, &s)| {
-            let refs: Vec<(UavId, f64)> = tables
-                .get(s)
-                .map(|t| t.refs())
-                .unwrap_or(&[])
-                .iter()
-                .filter_map(|&(r, c)| {
-                    let v = *uav_of.get(r.index())?;
-                    (v < n && v != u && flying[v]).then_some((UavId(v as u32), c))
-                })
-                .collect();
+            let mut refs: Vec<(UavId, f64)> = Vec::new();
+            for &(r, c) in tables.get(s).map(|t| t.refs()).unwrap_or(&[]) {
+                let Some(&v) = uav_of.get(r.index()) else { continue };
+                let v = if v == navigator && !flying.get(v).copied().unwrap_or(false) { leader } else { v };
+                if v >= n || v == u || !flying.get(v).copied().unwrap_or(false) {
+                    continue;
+                }
+                match refs.iter_mut().find(|(w, _)| w.index() == v) {
+                    Some(e) => e.1 += c,
+                    None => refs.push((UavId(v as u32), c)),
+                }
+            }
             // The references are distinct UAVs of the formation, other than the owner, with
             // the degrees of a checked table.
             DependencySet::new(UavId(u as u32), n, refs).unwrap_or_default()
@@ -345,14 +376,34 @@ mod tests {
         let flying = [true, false, true, true, true];
         let out = after_loss(&f, &tables, UavId(0), (&ids, &flying), (&slots, &slots), AssignBy::Total);
         assert_eq!(out, vec![0, 3, 2, 1, 4]);
-        let (g, t) = relabel(&f, &tables, &out, &flying);
+        let (g, t) = relabel(&f, &tables, &out, &flying, Lead::navigator(UavId(0)));
         assert_eq!(g.slots[3], f.slots[1], "UAV 3 flies slot 1");
         assert_eq!(t[3].refs(), &[(UavId(0), 1.0)], "and leans on the navigator as slot 1 did");
         assert!(t[4].refs() == [(UavId(2), 1.0)] && t[2].refs() == [(UavId(0), 1.0)]);
         // A lost UAV is never a reference.
         let flying = [true, false, true, true, true];
-        let (_, t) = relabel(&f, &tables, &ids, &flying);
+        let (_, t) = relabel(&f, &tables, &ids, &flying, Lead::navigator(UavId(0)));
         assert!(t[3].is_empty(), "{:?}", t[3]);
+    }
+
+    #[test]
+    fn a_lost_navigators_dependents_lean_on_its_successor() {
+        // Navigator 0 lost, 1 succeeds: 2 leaned on 0 and now on 1; 3 leaned on 1 and still
+        // does; 1's own table (on 0) is left empty (it leads).
+        let (f, mut tables) = v5();
+        tables[3] = DependencySet::new(UavId(3), 5, vec![(UavId(0), 0.4), (UavId(1), 0.6)]).expect("valid");
+        let ids: Vec<usize> = (0..5).collect();
+        let flying = [false, true, true, true, true];
+        let lead = Lead { navigator: UavId(0), leader: UavId(1) };
+        let (_, t) = relabel(&f, &tables, &ids, &flying, lead);
+        assert!(t[1].is_empty());
+        assert_eq!(t[2].refs(), &[(UavId(1), 1.0)]);
+        // Both of 3's references are now UAV 1: one entry, the degrees added.
+        assert_eq!(t[3].refs(), &[(UavId(1), 1.0)]);
+        assert_eq!(t[4].refs(), &[(UavId(2), 1.0)]);
+        // While the navigator flies, nothing is redirected.
+        let (_, t) = relabel(&f, &tables, &ids, &[true; 5], lead);
+        assert_eq!(t[2].refs(), &[(UavId(0), 1.0)]);
     }
 
     #[test]

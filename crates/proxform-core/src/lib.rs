@@ -25,6 +25,7 @@ pub mod predictor;
 pub mod schedule;
 pub mod singer;
 pub mod state;
+pub mod succession;
 pub mod vehicle;
 
 pub use agent::{Agent, AgentSetup};

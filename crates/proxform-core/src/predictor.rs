@@ -208,6 +208,20 @@ impl NeighbourTracks {
         }
     }
 
+    /// Room for at least `capacity` neighbours, the tracks kept (a table with more main
+    /// references after a succession).
+    pub fn grow_to(&mut self, capacity: usize) {
+        if capacity > self.capacity {
+            let more = capacity - self.ids.len();
+            self.ids.reserve_exact(more);
+            self.tracks.reserve_exact(more);
+            if let Kind::Singer(k) = &mut self.kind {
+                k.axes.reserve_exact(more);
+            }
+            self.capacity = capacity;
+        }
+    }
+
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
         self.ids.capacity() * std::mem::size_of::<(u32, u8)>()

@@ -2,10 +2,9 @@
 //! This module holds the schedule; the simulator applies it step by step.
 //!
 //! A removed UAV vanishes: nobody perceives it, it is not stepped, and metrics ignore it. When
-//! the navigator is removed, the followers keep flying on their remaining references (those
-//! that leaned only on it fall back to their azimuth-area means), and formation errors are
-//! measured against the formation's own estimate of the navigator's slot (the mean of the
-//! followers' states minus their offsets). A joining UAV appears in its slot relative to the
+//! the navigator is removed, a successor leads once the loss is known (METHOD §8, "Navigator
+//! succession"), and formation errors are measured against the formation's own estimate of
+//! the navigator's slot (fitted to the followers' states and their offsets). A joining UAV appears in its slot relative to the
 //! navigator, shifted by `offset_m`, with the navigator's velocity and attitude.
 
 use nalgebra::Vector3;

@@ -45,21 +45,43 @@ fn a_uav_removed_before_it_flies_has_no_verdict_and_the_others_have_theirs() {
 }
 
 #[test]
-fn losing_the_navigator_leaves_a_formation_that_holds_together_but_leaves_its_path() {
-    let s = paper(|s| s.fault = vec![FaultSpec::remove(1, 50.0)]);
-    let r = one(&s, 5);
-    // Errors are measured against the formation's own estimate of the navigator's slot.
-    assert!(r.max_abs_error[1] < 2.0, "{:?}", r.max_abs_error);
-    assert!(r.min_separation_m > 50.0);
-    assert_eq!(r.connectivity_min, 1.0, "the five followers stay within sensing range of each other");
-    // Nobody flies the mission any more: the formation drifts off its planned path (by hundreds
-    // of metres), beyond the bound of ten allowable errors (6 m), and the run does not pass.
+fn a_lost_navigator_is_succeeded_within_two_seconds_and_the_formation_keeps_its_path() {
+    // Lost at 60 s, as the paper's path levels off from its climb: the followers coast on
+    // their tracks of it for the track timeout (1 s), then UAV2 (leaning on it most, lowest
+    // id) leads from where the formation is, along its own slot of the path.
+    let s = paper(|s| s.fault = vec![FaultSpec::remove(1, 60.0)]);
+    let (r, t) = run_one(&s, RunOptions::default(), 5, 0, true);
+    let rows = t.expect("recorded").rows;
+    let first_led = rows.iter().find(|r| r.outcome == "leads").expect("a successor leads");
+    assert_eq!(first_led.uav, 1, "UAV2 succeeds");
+    assert!(first_led.t > 60.0 && first_led.t <= 62.0, "{}", first_led.t);
+    assert_eq!(r.succession, Some((first_led.t, 1)));
+    assert!(rows.iter().filter(|r| r.uav == 1 && r.t > first_led.t).all(|r| r.outcome == "leads"));
+    // The formation stays within its errors and near its planned path: without a successor it
+    // drifted off by hundreds of metres (beyond the bound of ten allowable errors, 6 m).
     assert_eq!(s.allowable().path_m, 6.0);
-    assert!(r.path_deviation_m > 50.0, "{}", r.path_deviation_m);
-    assert!(!r.pass);
-    // With the navigator, it flies its path exactly.
+    assert!(r.path_deviation_m < 3.0, "{}", r.path_deviation_m);
+    assert!(r.pass, "{:?}", r.max_abs_error);
+    assert!(r.min_separation_m > 50.0);
+    let b = batch(&s, 5, 20);
+    assert_eq!((b.pass_fraction, b.succession_runs), (1.0, 20));
+    // With the navigator, it flies its path exactly, and nobody succeeds it.
     let kept = one(&paper(|_| {}), 5);
-    assert!(kept.path_deviation_m < 1e-9 && kept.pass, "{}", kept.path_deviation_m);
+    assert!(kept.path_deviation_m < 1e-9 && kept.pass && kept.succession.is_none(), "{}", kept.path_deviation_m);
+}
+
+#[test]
+fn successors_succeed_each_other_and_a_follower_lost_is_not_succeeded() {
+    // UAV2 succeeds the navigator, then is lost itself: UAV3 leads.
+    let s = paper(|s| s.fault = vec![FaultSpec::remove(1, 30.0), FaultSpec::remove(2, 50.0)]);
+    let (r, t) = run_one(&s, RunOptions::default(), 2, 0, true);
+    let rows = t.expect("recorded").rows;
+    let led = |uav: u32| rows.iter().find(|r| r.uav == uav && r.outcome == "leads").map(|r| r.t);
+    assert!(led(1).is_some_and(|t| t > 30.0 && t <= 32.0), "{:?}", led(1));
+    assert!(led(2).is_some_and(|t| t > 50.0 && t <= 52.0), "{:?}", led(2));
+    assert!(r.path_deviation_m < 6.0 && r.min_separation_m > 50.0, "{} {}", r.path_deviation_m, r.min_separation_m);
+    let other = one(&paper(|s| s.fault = vec![FaultSpec::remove(4, 30.0)]), 2);
+    assert!(other.succession.is_none());
 }
 
 #[test]

@@ -75,6 +75,18 @@ pub fn run(
              re-assignment is not part of the wire yet: fly it without --distributed"
         );
     }
+    let navigator = scenario.navigator();
+    if let Some(k) = scenario
+        .faults()
+        .iter()
+        .position(|f| matches!(f, proxform_scenario::faults::Fault::Remove { uav, .. } if *uav == navigator))
+    {
+        bail!(
+            "fault[{}]: the navigator's successor is named and handed its new table in the simulator's \
+             process; succession is not part of the wire yet: fly it without --distributed",
+            k + 1
+        );
+    }
     let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
     let (session, endpoint) = serve(args.listen.as_deref())?;
     let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;

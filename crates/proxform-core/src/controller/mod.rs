@@ -206,6 +206,27 @@ impl ProximityController {
         })
     }
 
+    /// Flies under a new leader (the navigator's successor) with table `dependency` in
+    /// `formation` (the same slots, relabelled): what it knows of its neighbours, its tracks
+    /// and its turn trend, is kept (they are the same UAVs, where they were).
+    pub fn lead_by(
+        &mut self,
+        leader: UavId,
+        formation: Arc<Formation>,
+        dependency: DependencySet,
+    ) -> Result<(), ConfigError> {
+        for &(r, _) in dependency.refs() {
+            if formation.slot(r).is_none() {
+                return Err(ConfigError::BadReference { owner: self.id, reference: r, reason: "not in the formation" });
+            }
+        }
+        self.tracks.grow_to(self.setup.params.areas.areas + dependency.refs().len());
+        self.formation = formation;
+        self.dependency = dependency;
+        self.navigator = self.formation.slot(leader).map(|_| leader);
+        Ok(())
+    }
+
     /// Names the formation's navigator: the robust fusion (`isolation_gate`) never leaves it
     /// out, and takes its median over the UAVs whose slots are no farther from the navigator's
     /// than this UAV's own, so that the UAVs that follow this one cannot outvote those it

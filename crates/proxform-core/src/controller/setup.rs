@@ -84,6 +84,20 @@ impl ControllerSetup {
     /// way is moved by the wind like every other UAV, and its followers keep station on where
     /// it is, not on where its path says it should be.
     pub fn input_along_path(&self, own: &State9, path: impl Fn(f64) -> State9) -> Input {
+        self.input_on_path(own, path, None)
+    }
+
+    /// The autopilot of a UAV that leads from a slot of the formation (the navigator's
+    /// successor, METHOD §8): as [`Self::input_along_path`] toward its slot's state on the
+    /// path, with the velocity closing the position gap over the closing time τ
+    /// (`closing_time_s`, as the controller's step 4 does): a vehicle whose input moves its
+    /// position only through its velocity (the fixed wing's bank) would otherwise match the
+    /// slot's velocity and keep any gap it took over.
+    pub fn input_to_slot_on_path(&self, own: &State9, path: impl Fn(f64) -> State9) -> Input {
+        self.input_on_path(own, path, self.params.closing_time_s)
+    }
+
+    fn input_on_path(&self, own: &State9, path: impl Fn(f64) -> State9, closing_s: Option<f64>) -> Input {
         let dt = self.params.dt_s;
         let mut target = path(dt);
         let lag = self.vehicle.setpoint_lag_s();
@@ -93,7 +107,13 @@ impl ControllerSetup {
                 target[k] = ahead[k];
             }
         }
-        let r = crate::state::difference(&self.vehicle.hold(own, dt), &target);
+        let held = self.vehicle.hold(own, dt);
+        if let Some(tau) = closing_s {
+            for k in crate::state::X..crate::state::VX {
+                target[k + 3] += (target[k] - held[k]) / tau;
+            }
+        }
+        let r = crate::state::difference(&held, &target);
         self.input_toward(own, &r)
     }
 

@@ -96,6 +96,11 @@ pub struct Summary {
     pub path_bound_m: f64,
     /// See `path_deviation_m_max`.
     pub off_path_runs: u64,
+    /// Runs in which the navigator's successor took over (METHOD §8), and the latest time
+    /// (s) at which one began to lead (None when none did).
+    pub succession_runs: u64,
+    /// See `succession_runs`.
+    pub succession_latest_s: Option<f64>,
     /// Adjustments per follower per minute of flight, mean over runs.
     pub adjustments_per_uav_minute: f64,
     /// Swarm and control metrics, each the mean over runs of the run's value.
@@ -487,6 +492,8 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         path_deviation_m_max: runs.iter().map(|r| r.path_deviation_m).fold(0.0, f64::max),
         path_bound_m: scenario.allowable().path_m,
         off_path_runs: runs.iter().filter(|r| r.path_deviation_m > scenario.allowable().path_m).count() as u64,
+        succession_runs: runs.iter().filter(|r| r.succession.is_some()).count() as u64,
+        succession_latest_s: runs.iter().filter_map(|r| r.succession.map(|s| s.0)).reduce(f64::max),
         adjustments_per_uav_minute: adj_rate,
         swarm: SwarmMetrics {
             held_fraction: runs.iter().map(|r| r.held_fraction).sum::<f64>() / n,
@@ -621,6 +628,7 @@ mod tests {
             per_uav: Vec::new(),
             min_separation_m: 90.0 + k as f64,
             path_deviation_m: 0.0,
+            succession: None,
             model_error_rms: [model; 9],
             duration_s: 60.0,
             flown: None,

@@ -344,6 +344,7 @@ impl<'s> FastSimulation<'s> {
             radio_sent: self.messages.len(),
             formation: None,
             reassigned: false,
+            successor: None,
         }
     }
 

@@ -60,6 +60,9 @@ pub struct RunSummary {
     /// Largest distance of the navigator (once it is gone, of the formation's estimate of its
     /// slot) from its planned path over the flight (m).
     pub path_deviation_m: f64,
+    /// When the navigator's successor began to lead, and which UAV (METHOD §8; None: the
+    /// navigator led throughout, or nobody took over).
+    pub succession: Option<(f64, u32)>,
     /// RMS model error σm per state parameter over all follower steps.
     pub model_error_rms: [f64; P],
     /// Flight duration (s).
@@ -218,6 +221,7 @@ pub struct RunMetrics {
     /// The navigator's start (its path's origin) and the largest distance from its path so far.
     start: [f64; 3],
     path_deviation: f64,
+    succession: Option<(f64, u32)>,
     path_bound: f64,
     range: f64,
     model_sq: State9,
@@ -301,6 +305,7 @@ impl RunMetrics {
                 [s0[0], s0[1], s0[2]]
             },
             path_deviation: 0.0,
+            succession: None,
             path_bound: scenario.allowable().path_m,
             range: scenario.controller().areas.sensing_range_m,
             model_sq: State9::zeros(),
@@ -564,6 +569,7 @@ impl RunMetrics {
                 .collect(),
             min_separation_m: self.separation.min_m(),
             path_deviation_m: self.path_deviation,
+            succession: self.succession,
             model_error_rms,
             duration_s,
         }
@@ -737,6 +743,9 @@ impl Observer for RunMetrics {
         let off = (0..3).map(|k| (reference[k] - planned[k]).powi(2)).sum::<f64>().sqrt();
         // NaN counts as off (a state that is not a number is nowhere near the path).
         self.path_deviation = if off.is_nan() { f64::INFINITY } else { self.path_deviation.max(off) };
+        if let (None, Some(s)) = (self.succession, frame.successor) {
+            self.succession = Some((frame.t, s as u32));
+        }
         self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
         let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| {

@@ -3,7 +3,7 @@
 //! The engine calls [`Observer::on_step`] once with the initial states (k = 0, no decisions)
 //! and once after every step with the new states and the decisions that produced them.
 
-use proxform_core::state::State9;
+use proxform_core::state::{self, State9};
 use proxform_core::Formation;
 use proxform_core::Outcome;
 
@@ -29,12 +29,14 @@ pub struct StepFrame<'a> {
     pub formation: Option<&'a Formation>,
     /// Slots were re-assigned in the step that led here.
     pub reassigned: bool,
+    /// The navigator's successor, once it leads (METHOD §8; None: the navigator leads).
+    pub successor: Option<usize>,
 }
 
 impl<'a> StepFrame<'a> {
     /// A frame of the scenario's own formation (no re-assignment).
     pub fn new(k: u64, t: f64, states: &'a [State9], uavs: &'a [UavStep], active: &'a [bool]) -> Self {
-        Self { k, t, states, uavs, active, radio_sent: 0, formation: None, reassigned: false }
+        Self { k, t, states, uavs, active, radio_sent: 0, formation: None, reassigned: false, successor: None }
     }
 
     /// The formation the UAVs fly now, indexed by UAV.
@@ -166,7 +168,12 @@ pub fn formation_error_to(
 
 /// The navigator's state, or, once it is gone, the formation's estimate of its slot: the mean
 /// over flying followers of `X_i − W_i,nav` in formation `f` (indexed by UAV; attitudes
-/// averaged as small differences from the first follower's).
+/// averaged as small differences from the first follower's). In a frame that turns (course,
+/// heading) a follower's own course or heading is not the frame's in a turn (a slot off the
+/// navigator flies faster or slower, and its course leans by its rate over the radius): the
+/// frame's yaw and the navigator's horizontal position are then fitted to the followers'
+/// positions as one rigid body (least squares over the slots' offsets), and the estimate
+/// takes that yaw as its course or heading.
 pub fn navigator_reference(scenario: &Scenario, f: &Formation, states: &[State9], active: &[bool]) -> State9 {
     let nav = scenario.navigator().index();
     if active[nav] {
@@ -175,27 +182,111 @@ pub fn navigator_reference(scenario: &Scenario, f: &Formation, states: &[State9]
     let mut sum = State9::zeros();
     let mut base: Option<State9> = None;
     let mut n = 0.0;
-    for (i, s) in states.iter().enumerate() {
-        if i == nav || !active[i] {
-            continue;
-        }
+    let flying = || states.iter().enumerate().filter(|(i, _)| *i != nav && active[*i]);
+    for (i, s) in flying() {
         let w = f.w(&f.slots[i], &f.slots[nav], s);
         let implied = s - w;
         let b = *base.get_or_insert(implied);
         sum += proxform_core::state::difference(&implied, &b);
         n += 1.0;
     }
-    match base {
-        Some(b) => b + sum / n,
-        None => states[nav],
+    let Some(b) = base else { return states[nav] };
+    let mut estimate = b + sum / n;
+    if f.frame == proxform_core::FormationFrame::World {
+        return estimate;
     }
+    // The rigid fit: the centroids of the positions and of the offsets, then the yaw that
+    // best turns the centred offsets onto the centred positions.
+    let offset = |i: usize| f.slots[i].offset_m - f.slots[nav].offset_m;
+    let (mut x, mut d) = ([0.0; 2], [0.0; 2]);
+    for (i, s) in flying() {
+        let o = offset(i);
+        x = [x[0] + s[state::X] / n, x[1] + s[state::Y] / n];
+        d = [d[0] + o.x / n, d[1] + o.y / n];
+    }
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (i, s) in flying() {
+        let o = offset(i);
+        let (dx, dy) = (o.x - d[0], o.y - d[1]);
+        let (px, py) = (s[state::X] - x[0], s[state::Y] - x[1]);
+        dot += dx * px + dy * py;
+        cross += dx * py - dy * px;
+    }
+    let spread = dot.hypot(cross);
+    if spread.is_nan() || spread <= 1e-6 {
+        // One follower, or all in one place: no yaw to fit.
+        return estimate;
+    }
+    let (c, s) = (dot / spread, cross / spread);
+    estimate[state::X] = x[0] - (c * d[0] - s * d[1]);
+    estimate[state::Y] = x[1] - (s * d[0] + c * d[1]);
+    let yaw = s.atan2(c);
+    match f.frame {
+        proxform_core::FormationFrame::Course => {
+            let h = estimate[state::VX].hypot(estimate[state::VY]);
+            estimate[state::VX] = h * c;
+            estimate[state::VY] = h * s;
+            // The nose: the course and the followers' mean crab (heading less course).
+            let mut crab = 0.0;
+            for (i, st) in flying() {
+                let course = st[state::VY].atan2(st[state::VX]);
+                crab += proxform_core::angle::wrap_pi(st[state::BETA] - f.slots[i].attitude_offset_rad.y - course) / n;
+            }
+            estimate[state::BETA] = proxform_core::angle::wrap_pi(yaw + crab + f.slots[nav].attitude_offset_rad.y);
+        }
+        _ => estimate[state::BETA] = yaw,
+    }
+    estimate
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use proxform_core::state::{BETA, VX, X, Y, Z};
+    use proxform_core::state::{BETA, VX, VY, X, Y, Z};
     use proxform_scenario::builtin::paper;
+
+    #[test]
+    fn in_a_turn_a_lost_navigator_is_fitted_to_the_followers_as_one_rigid_body() {
+        // The paper's six in a course frame, turning left at ω about the navigator, each
+        // follower exactly at its slot with its rigid-body velocity v + ω × r (its own course
+        // and nose lean by ω·r/v): the fit puts the navigator where it is, on its course and
+        // its nose; taking each follower's own course for its frame misses it by metres.
+        let mut f = (**paper().formation()).clone();
+        f.frame = proxform_core::FormationFrame::Course;
+        let (v, omega, psi) = (70.0, 0.05, 0.3_f64);
+        let mut nav = State9::zeros();
+        (nav[X], nav[Y], nav[Z]) = (100.0, -40.0, 300.0);
+        (nav[VX], nav[VY], nav[BETA]) = (v * psi.cos(), v * psi.sin(), psi);
+        let states: Vec<State9> = (0..6)
+            .map(|i| {
+                let mut s = nav + f.w(&f.slots[i], &f.slots[0], &nav);
+                let (rx, ry) = (s[X] - nav[X], s[Y] - nav[Y]);
+                s[VX] -= omega * ry;
+                s[VY] += omega * rx;
+                // A coordinated turn in calm air: the nose along its own course.
+                s[BETA] = s[VY].atan2(s[VX]);
+                s
+            })
+            .collect();
+        let mut active = [true; 6];
+        active[0] = false;
+        let sc = paper();
+        let r = navigator_reference(&sc, &f, &states, &active);
+        for k in [X, Y, Z] {
+            assert!((r[k] - nav[k]).abs() < 1e-6, "axis {k}: {} vs {}", r[k], nav[k]);
+        }
+        assert!((r[VY].atan2(r[VX]) - psi).abs() < 1e-9);
+        assert!((r[BETA] - psi).abs() < 1e-9, "{}", r[BETA]);
+        // Each follower's own course: the mean misses by more than a metre.
+        let naive: f64 = (1..6)
+            .map(|i| {
+                let s = &states[i];
+                let implied = s - f.w(&f.slots[i], &f.slots[0], s);
+                (implied[Y] - nav[Y]) / 5.0
+            })
+            .sum();
+        assert!(naive.abs() > 1.0, "{naive}");
+    }
 
     #[test]
     fn the_error_is_the_offset_from_the_slot_and_a_lost_navigator_is_estimated_from_the_slots() {

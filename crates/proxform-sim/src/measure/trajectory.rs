@@ -18,7 +18,7 @@ pub struct TrajectoryRow {
     /// Formation error x, y, z (m), α, β, γ (rad); zero for the navigator.
     pub error: [f64; 6],
     /// The decision's outcome at the previous update: "held", "adjusted", "alone", or
-    /// "navigator"/"initial".
+    /// "navigator"/"leads" (the navigator's successor)/"initial".
     pub outcome: &'static str,
     /// True when the UAV's course was inside its envelope (it held).
     pub in_envelope: bool,
@@ -117,6 +117,7 @@ impl Observer for Trajectory {
             let (outcome, in_envelope) = match frame.uavs[i].outcome {
                 Some(o) => (o.label(), o == crate::measure::observer::StepOutcome::Held),
                 None if i == nav => ("navigator", false),
+                None if frame.successor == Some(i) => ("leads", false),
                 None => ("initial", false),
             };
             let within_allowable = error.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a);

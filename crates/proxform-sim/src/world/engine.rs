@@ -108,6 +108,12 @@ struct World<'s> {
     slots: Option<Reassigned>,
     /// When the next re-assignment is due (s): a UAV was lost.
     reassign_due: Option<f64>,
+    /// Who leads: the navigator, or its successor after its loss.
+    lead: assignment::Lead,
+    /// When the leader's loss becomes known and its successor takes over (s).
+    succession_due: Option<f64>,
+    /// The successor's take-over, once it leads.
+    take_over: Option<proxform_core::succession::TakeOver>,
 }
 
 /// The slots of a flight after a re-assignment.
@@ -119,7 +125,8 @@ struct Reassigned {
     /// is of (None: the first formation).
     flown: std::sync::Arc<proxform_core::Formation>,
     stage: Option<usize>,
-    /// The first frame flown with it (made at the start of the step before).
+    /// The first frame flown with its slots (made at the start of the step before; u64::MAX
+    /// when nobody has moved slot).
     at_k: u64,
 }
 
@@ -189,6 +196,9 @@ impl<'s> Simulation<'s> {
             parallel: n >= PARALLEL_MIN_UAVS,
             slots: None,
             reassign_due: None,
+            lead: assignment::Lead::navigator(scenario.navigator()),
+            succession_due: None,
+            take_over: None,
         };
         Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] }
     }
@@ -290,6 +300,7 @@ impl<'s> Simulation<'s> {
             radio_sent: w.sent_now,
             formation: w.slots.as_ref().map(|s| &*s.flown),
             reassigned: w.slots.as_ref().is_some_and(|s| s.at_k == w.k),
+            successor: (w.lead.leader != w.lead.navigator).then_some(w.lead.leader.index()),
         }
     }
 
@@ -331,11 +342,14 @@ impl<'s> Simulation<'s> {
         self.world.k += 1;
     }
 
-    /// Slot re-assignment (`formation.reassign_on_loss`), when a loss becomes known and at
-    /// every change of formation after one: from the positions of the UAVs and of the slots
-    /// now, every UAV still flying gets its slot by [`assignment::after_loss`] and its agent
-    /// flies it from this step on (so a later formation's vacated slot is at its own edge).
-    /// The formation flown is kept relabelled for the measures.
+    /// Slot re-assignment (`formation.reassign_on_loss`) and the navigator's succession, when
+    /// a loss becomes known, and at every change of formation after one. A lost leader's
+    /// successor ([`assignment::successor`]) flies the navigator's path at its own slot from
+    /// then on, and every table that named the navigator names it. With re-assignment, from
+    /// the positions of the UAVs and of the slots now, every UAV still flying gets its slot by
+    /// [`assignment::after_loss`]. The agents fly the result from this step on (so a later
+    /// formation's vacated slot is at its own edge); the formation flown is kept relabelled
+    /// for the measures.
     fn reassign_slots(&mut self) {
         // Agents outside the engine do not receive new slots (the command line refuses such a
         // scenario with them): nothing is re-assigned.
@@ -344,7 +358,6 @@ impl<'s> Simulation<'s> {
         }
         let w = &mut self.world;
         let sc = w.scenario;
-        let Some(by) = sc.reassign_on_loss() else { return };
         let t = w.t();
         let stage = sc.schedule().stages().iter().rposition(|s| t >= s.at_s - 1e-9);
         let (formation, tables) = match stage {
@@ -354,41 +367,69 @@ impl<'s> Simulation<'s> {
             }
             None => (&**sc.formation(), sc.dependencies()),
         };
-        // A loss made known now, or a change of formation after a re-assignment: the vacated
-        // slots are chosen again at the new formation's edge.
-        let due = w.reassign_due.is_some_and(|due| t >= due - 1e-9);
-        if due || w.slots.as_ref().is_some_and(|s| s.stage != stage) {
-            if due {
-                w.reassign_due = None;
-            }
-            let n = sc.len();
-            let slot_of: Vec<usize> =
-                w.slots.as_ref().map_or_else(|| (0..n).collect(), |s| s.assignment.slot_of.to_vec());
-            let flown = w.slots.as_ref().map_or(formation, |s| &*s.flown);
-            let reference = crate::measure::observer::navigator_reference(sc, flown, &w.current, &w.active);
-            let nav_slot = &formation.slots[slot_of[sc.navigator().index()]];
-            let at = |s: &State9| [s[state::X], s[state::Y], s[state::Z]];
-            let slot_at: Vec<[f64; 3]> =
-                formation.slots.iter().map(|slot| at(&(reference + formation.w(slot, nav_slot, &reference)))).collect();
-            let uav_at: Vec<[f64; 3]> = w.current.iter().map(at).collect();
-            let new = assignment::after_loss(
-                formation,
-                tables,
-                sc.navigator(),
-                (&slot_of, &w.active),
-                (&uav_at, &slot_at),
-                by,
-            );
-            let r = Reassignment::new(formation, tables, new, w.active.clone());
-            for (i, a) in self.agents.iter_mut().enumerate() {
-                if let (Some(a), true) = (a, w.active[i]) {
-                    // The relabelled tables name UAVs of the formation, other than the owner.
-                    a.reassign(sc.agents(), proxform_core::UavId(i as u32), &r)
-                        .expect("a relabelled formation is valid for every UAV");
-                }
-            }
-            w.slots = Some(Reassigned { flown: r.formation.clone(), assignment: r, stage, at_k: w.k + 1 });
+        let known = |due: Option<f64>| due.is_some_and(|due| t >= due - 1e-9);
+        let by = sc.reassign_on_loss();
+        let restage = w.slots.as_ref().is_some_and(|s| s.stage != stage);
+        let reassign = by.is_some() && known(w.reassign_due);
+        let succession = known(w.succession_due);
+        if !(reassign || succession || restage) {
+            return;
         }
+        if reassign {
+            w.reassign_due = None;
+        }
+        let n = sc.len();
+        let slot_of: Vec<usize> = w.slots.as_ref().map_or_else(|| (0..n).collect(), |s| s.assignment.slot_of.to_vec());
+        let flown = w.slots.as_ref().map_or(formation, |s| &*s.flown);
+        let mut lead = w.lead;
+        if succession {
+            w.succession_due = None;
+            let flown_tables = w.slots.as_ref().map_or(tables, |s| &s.assignment.tables[..]);
+            if let Some(next) = proxform_core::succession::successor(flown, flown_tables, lead.leader, &w.active) {
+                lead.leader = next;
+                self.agents[next.index()] = None;
+                let i = next.index();
+                let slot = super::phases::slot_on_path(sc, flown, w.start, i, t);
+                w.take_over =
+                    Some(proxform_core::succession::TakeOver::for_controller(t, &w.current[i], &slot, sc.controller()));
+            }
+        }
+        let new = match by {
+            Some(by) if reassign || restage => {
+                let reference = crate::measure::observer::navigator_reference(sc, flown, &w.current, &w.active);
+                let nav_slot = &formation.slots[slot_of[sc.navigator().index()]];
+                let at = |s: &State9| [s[state::X], s[state::Y], s[state::Z]];
+                let slot_at: Vec<[f64; 3]> = formation
+                    .slots
+                    .iter()
+                    .map(|slot| at(&(reference + formation.w(slot, nav_slot, &reference))))
+                    .collect();
+                let uav_at: Vec<[f64; 3]> = w.current.iter().map(at).collect();
+                assignment::after_loss(
+                    formation,
+                    tables,
+                    sc.navigator(),
+                    (&slot_of, &w.active),
+                    (&uav_at, &slot_at),
+                    by,
+                )
+            }
+            _ => slot_of.clone(),
+        };
+        // The measures judge a re-assignment as a change of formation; a succession alone
+        // moves nobody.
+        let moved = (by.is_some() && (reassign || restage)) || new != slot_of;
+        let at_k = if moved { w.k + 1 } else { w.slots.as_ref().map_or(u64::MAX, |s| s.at_k) };
+        let r = Reassignment::new(formation, tables, new, w.active.clone(), lead).moving(moved || restage);
+        for (i, a) in self.agents.iter_mut().enumerate() {
+            if let (Some(a), true) = (a, w.active[i]) {
+                // The relabelled tables name UAVs of the formation, other than the owner.
+                a.reassign(sc.agents(), proxform_core::UavId(i as u32), &r)
+                    .expect("a relabelled formation is valid for every UAV");
+            }
+        }
+        w.lead = lead;
+        w.slots = Some(Reassigned { flown: r.formation.clone(), assignment: r, stage, at_k });
     }
 
     /// Runs the whole flight, showing every step (and the initial state) to `observer`.
@@ -520,10 +561,13 @@ impl<'s> World<'s> {
             match *f {
                 Fault::Remove { uav, .. } => {
                     let now = flies[&uav.index()];
+                    // The others learn of a loss when their tracks of it end.
+                    let due = t + sc.controller().track_timeout_s;
                     if self.active[uav.index()] && !now && sc.reassign_on_loss().is_some() {
-                        // The others learn of the loss when their tracks of it end.
-                        let due = t + sc.controller().track_timeout_s;
                         self.reassign_due = Some(self.reassign_due.map_or(due, |d| d.min(due)));
+                    }
+                    if self.active[uav.index()] && !now && uav == self.lead.leader {
+                        self.succession_due = Some(due);
                     }
                     self.active[uav.index()] = now;
                 }
@@ -602,8 +646,8 @@ impl<'s> World<'s> {
             faults: flight.then_some(&self.faults),
         };
         let mut now = if self.history.len() > delay { self.history.pop_front() } else { None }.unwrap_or_default();
-        measurement::compose(self.scenario, &self.current, &sensors, self.parallel, &mut now);
-        measurement::relays(self.scenario, &self.current, &self.active, agents, t, &mut now);
+        measurement::compose(self.scenario, &self.current, &sensors, (self.lead, self.parallel), &mut now);
+        measurement::relays(self.scenario, &self.current, &self.active, (agents, self.lead.leader), t, &mut now);
         self.sent_now = now.len();
         if delay == 0 {
             std::mem::swap(&mut self.arriving, &mut now);
@@ -641,6 +685,11 @@ impl<'s> World<'s> {
             messages: &self.arriving,
             reach: &self.reach,
             env: &self.env,
+            lead: super::phases::Leading {
+                uav: self.lead.leader.index(),
+                formation: self.flown(),
+                take_over: self.take_over,
+            },
             mode,
         }
     }

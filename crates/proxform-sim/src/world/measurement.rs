@@ -5,7 +5,9 @@
 //! (a glitch, a stuck sensor). The agent decides from it, and a UAV that broadcasts sends it:
 //! a message carries what the sender believes, not the truth.
 
+use proxform_core::assignment::Lead;
 use proxform_core::state::{self, State9};
+use proxform_core::UavId;
 use proxform_scenario::Scenario;
 
 use super::environment::UavEnv;
@@ -67,19 +69,27 @@ impl Message {
     }
 }
 
-/// Fills `out` with the messages sent now from the true states `states`: the beacons first,
-/// then, when every UAV broadcasts, the others by id; each carries its sender's own
-/// measurement. Computed once per step for all receivers.
-pub fn compose(sc: &Scenario, states: &[State9], sensors: &OwnSensors<'_>, parallel: bool, out: &mut Vec<Message>) {
+/// Fills `out` with the messages sent now from the true states `states`: the beacons first
+/// (a lost navigator's beacon passes to its successor, the leader of `lead`), then, when
+/// every UAV broadcasts, the others by id; each carries its sender's own measurement.
+/// Computed once per step for all receivers.
+pub fn compose(
+    sc: &Scenario,
+    states: &[State9],
+    sensors: &OwnSensors<'_>,
+    (lead, parallel): (Lead, bool),
+    out: &mut Vec<Message>,
+) {
     let (radio, beacons) = (sc.radio(), sc.beacons());
     let n = states.len();
     let all = if radio.broadcast_all { n } else { 0 };
+    let beacon = |b: &UavId| if *b == lead.navigator { lead.leader.index() } else { b.index() };
     out.clear();
     out.extend(
         beacons
             .iter()
-            .map(|b| b.index())
-            .chain((0..all).filter(|j| !beacons.iter().any(|b| b.index() == *j)))
+            .map(beacon)
+            .chain((0..all).filter(|j| !beacons.iter().any(|b| beacon(b) == *j)))
             .filter(|&j| j < n)
             .map(|j| Message { sender: j as u32, about: j as u32, state: State9::zeros(), age_s: 0.0, at: [0.0; 3] }),
     );
@@ -92,20 +102,21 @@ pub fn compose(sc: &Scenario, states: &[State9], sensors: &OwnSensors<'_>, paral
 }
 
 /// Appends to `out` the relays of this step (`radio.relay_navigator`): every active follower
-/// whose agent knows the navigator forwards that knowledge (its track's state and age at
-/// `t`). Nothing without relaying, or when the agents run outside the engine.
+/// whose agent knows the leader (the navigator, or its successor `leader`) forwards that
+/// knowledge (its track's state and age at `t`). Nothing without relaying, or when the
+/// agents run outside the engine.
 pub fn relays(
     sc: &Scenario,
     states: &[State9],
     active: &[bool],
-    agents: &[Option<proxform_core::Agent>],
+    (agents, leader): (&[Option<proxform_core::Agent>], UavId),
     t: f64,
     out: &mut Vec<Message>,
 ) {
     if !sc.radio().relay_navigator {
         return;
     }
-    let nav = sc.navigator().0;
+    let nav = leader.0;
     for (j, agent) in agents.iter().enumerate() {
         let Some(agent) = agent.as_ref().filter(|_| active.get(j).copied().unwrap_or(false)) else { continue };
         if let Some((state, age_s)) = agent.navigator_report(t) {

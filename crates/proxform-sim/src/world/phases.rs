@@ -22,6 +22,9 @@ use super::sensing::{Link, PerceptionDraws, ProximitySensor, Scene, SensorScratc
 use crate::measure::observer::UavStep;
 use crate::random::{Source, StreamKey};
 
+/// Half the interval over which a successor's planned velocity is differenced (s).
+const PLANNED_DIFF_S: f64 = 0.01;
+
 /// UAVs per block of the per-UAV phases.
 pub const BLOCK: usize = 64;
 
@@ -112,6 +115,48 @@ impl BlockScratch {
     }
 }
 
+/// Who leads the formation this step: the navigator, or its successor flying its own slot of
+/// the formation flown (indexed by UAV) along the navigator's path, from its take-over.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Leading<'a> {
+    pub uav: usize,
+    pub formation: &'a proxform_core::Formation,
+    pub take_over: Option<proxform_core::succession::TakeOver>,
+}
+
+impl Leading<'_> {
+    /// The leader's target at `t`.
+    fn target(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
+        let slot = slot_on_path(sc, self.formation, start, self.uav, t);
+        self.take_over.map_or(slot, |k| k.target(t, &slot))
+    }
+}
+
+/// Where the mission path puts UAV `i` at `t` (the path starting at `start`): the navigator
+/// on the path, any other UAV at its slot of formation `f` (indexed by UAV) around it, with
+/// the slot's own velocity (a slot off the navigator moves faster or slower in a turn of the
+/// formation: the velocity is the slot's position differenced over [`PLANNED_DIFF_S`]
+/// either side).
+pub(super) fn slot_on_path(sc: &Scenario, f: &proxform_core::Formation, start: [f64; 3], i: usize, t: f64) -> State9 {
+    let nav = sc.navigator().index();
+    let (Some(mine), Some(its)) = (f.slots.get(i), f.slots.get(nav)) else {
+        return sc.path().state_at(t, start);
+    };
+    let at = |t: f64| {
+        let on_path = sc.path().state_at(t, start);
+        on_path + f.w(mine, its, &on_path)
+    };
+    let mut s = at(t);
+    if i != nav {
+        let h = PLANNED_DIFF_S;
+        let (ahead, behind) = (at(t + h), at(t - h));
+        for k in 0..3 {
+            s[state::VX + k] = (ahead[state::X + k] - behind[state::X + k]) / (2.0 * h);
+        }
+    }
+    s
+}
+
 /// Read-only view of one step, shared by the threads that run the blocks.
 pub(super) struct StepContext<'a> {
     pub scenario: &'a Scenario,
@@ -128,6 +173,8 @@ pub(super) struct StepContext<'a> {
     pub reach: &'a super::reach::Reach,
     /// Per-UAV environment (empty when the scenario needs none).
     pub env: &'a [UavEnv],
+    /// Who leads (the navigator, or its successor) and how.
+    pub lead: Leading<'a>,
     /// Flight or warm-up.
     pub mode: Mode<'a>,
 }
@@ -274,10 +321,16 @@ impl StepContext<'_> {
                 continue;
             }
             let e = self.env.get(i).copied().unwrap_or_default();
-            if i == nav && sc.navigator_flies() {
-                // Its autopilot tracks the path through the vehicle and the wind.
-                let (t, start) = (self.t, self.start);
-                let u = sc.agents().controller().input_along_path(me, |s| sc.path().state_at(t + s, start));
+            if i == self.lead.uav && (i != nav || sc.navigator_flies()) {
+                // Its autopilot tracks the path (the successor: its own slot on it, from where
+                // it took over) through the vehicle and the wind.
+                let autopilot = sc.agents().controller();
+                let path = |s| self.lead.target(sc, self.start, self.t + s);
+                let u = if i == nav {
+                    autopilot.input_along_path(me, path)
+                } else {
+                    autopilot.input_to_slot_on_path(me, path)
+                };
                 *next = sc.vehicle().propagate_in_wind(me, &u, dt, e.wind_now.into(), e.wind_next.into());
                 *aux = UavStep::default();
                 continue;
