@@ -8,6 +8,30 @@ use proxform_sim::BatchResult;
 
 const AXES: [&str; 6] = ["x m", "y m", "z m", "α °", "β °", "γ °"];
 
+/// The followers whose rows the table shows (indices into the summary's per-UAV detail, in
+/// id order): all of them up to [`MAX_ROWS`]; beyond, the [`MAX_ROWS`] farthest out of their
+/// allowable errors over the batch (the root sum of squares of their largest errors over the
+/// allowable ones; those not flown last), so that a deep formation's rear ranks show.
+fn rows_shown(s: &proxform_sim::Summary) -> Vec<usize> {
+    let n = s.per_uav.len();
+    if n <= MAX_ROWS {
+        return (0..n).collect();
+    }
+    let allow = s.allowable_error.as_array();
+    let ratio = |f: usize| {
+        if s.per_uav_runs_flown[f] == 0 {
+            return f64::NEG_INFINITY;
+        }
+        let w = s.per_uav_worst[f].as_array();
+        (0..6).map(|k| (w[k] / allow[k]).powi(2)).sum::<f64>()
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| ratio(b).total_cmp(&ratio(a)).then(a.cmp(&b)));
+    order.truncate(MAX_ROWS);
+    order.sort_unstable();
+    order
+}
+
 /// Prints the table of one batch.
 pub fn print(
     out: &mut impl Write,
@@ -39,8 +63,8 @@ pub fn print(
         write!(out, "{:>10}", number(a))?;
     }
     writeln!(out)?;
-    let shown = s.per_uav.len().min(MAX_ROWS);
-    for f in 0..shown {
+    let shown = rows_shown(s);
+    for &f in &shown {
         let verdict = match (s.per_uav_runs_flown[f], s.per_uav_runs_passed[f]) {
             (0, _) => "not flown",
             (flown, passed) if passed == flown => "PASS",
@@ -54,8 +78,19 @@ pub fn print(
             verdict,
         )?;
     }
-    if s.uavs as usize - 1 > shown {
-        writeln!(out, "… {} more followers", s.uavs as usize - 1 - shown)?;
+    let followers = s.uavs as usize - 1;
+    if followers > shown.len() {
+        let detail = if s.per_uav.len() < followers {
+            format!("the first {} have theirs in summary.json (per_uav)", s.per_uav.len())
+        } else {
+            "each has its row in summary.json (per_uav)".to_string()
+        };
+        writeln!(
+            out,
+            "… {} more followers (shown: the {} farthest out); {detail}",
+            followers - shown.len(),
+            shown.len()
+        )?;
         let per_run = s.adjustments_per_uav_minute * scenario.duration_s() / 60.0;
         let verdict = if s.pass_fraction == 1.0 { "PASS" } else { "FAIL" };
         uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, verdict)?;

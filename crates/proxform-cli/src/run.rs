@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use proxform_core::controller::MAX_HORIZON;
 use proxform_core::Method;
-use proxform_scenario::ScenarioSpec;
+use proxform_scenario::{Scenario, ScenarioSpec};
 use proxform_sim::measure::trajectory::RowSink;
 use proxform_sim::{run_batch, RunOptions, Trajectory};
 
@@ -48,6 +48,11 @@ pub struct RunArgs {
     /// Skip trajectories.csv.
     #[arg(long)]
     no_trajectories: bool,
+    /// UAVs whose trajectories the first run records (trajectories.csv and the figures), by
+    /// number from 1: a list of numbers and ranges, e.g. `1,250-300` (the navigator is always
+    /// recorded). Default: the first 64. More than 64 thin the steps recorded in proportion.
+    #[arg(long, value_name = "LIST")]
+    trajectory_uavs: Option<String>,
     /// Switch the controller's adjustment off (every input discarded): shows the check fail.
     #[arg(long)]
     no_adjust: bool,
@@ -254,7 +259,14 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         true => None,
         false => Some(Box::new(output::TrajectoryCsv::create(&csv, scenario.dt_s())?)),
     };
-    let record = (!(args.no_figures && args.no_trajectories)).then(|| Trajectory::for_flight(scenario.steps(), sink));
+    let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
+    let record = (!(args.no_figures && args.no_trajectories)).then(|| {
+        let t = Trajectory::for_flight(scenario.steps(), sink);
+        match chosen {
+            Some(uavs) => t.of_uavs(scenario.steps(), uavs),
+            None => t,
+        }
+    });
     let started = Instant::now();
     let mut result = if args.net.distributed {
         let d = distributed(&scenario, options, (args.seed, args.runs), record, &|| bar.inc(1), &args.net)?;
@@ -286,4 +298,38 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     writeln!(stdout, "engine                   {engine}")?;
     writeln!(stdout, "\nwrote {} files to {}", written.len(), out.display())?;
     Ok(if result.summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// `--trajectory-uavs`: UAV numbers (from 1) and ranges `a-b`, comma-separated, as indices,
+/// with the navigator's.
+fn uav_list(list: &str, scenario: &Scenario) -> Result<Vec<usize>> {
+    let n = scenario.len();
+    let number = |s: &str| -> Result<usize> {
+        let u: usize = s.trim().parse().map_err(|_| {
+            anyhow::anyhow!(
+                "--trajectory-uavs: \"{}\" is not a UAV number (numbers from 1 and ranges a-b, comma-separated)",
+                s.trim()
+            )
+        })?;
+        if u == 0 || u > n {
+            bail!("--trajectory-uavs: UAV {u} is not in the formation (UAVs 1 to {n})");
+        }
+        Ok(u - 1)
+    };
+    let mut out = vec![scenario.navigator().index()];
+    for part in list.split(',') {
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b) = (number(a)?, number(b)?);
+                if a > b {
+                    bail!("--trajectory-uavs: the range {}-{} runs backwards", a + 1, b + 1);
+                }
+                out.extend(a..=b);
+            }
+            None => out.push(number(part)?),
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
 }

@@ -299,3 +299,46 @@ fn compare_writes_rows_cells_and_plots_and_refuses_bad_files() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("bad.toml:7: condition[1].radio_loss"), "{stderr}");
 }
+
+/// A large formation's rear ranks show: every follower has its per-UAV row in summary.json,
+/// the console shows those farthest out, and `--trajectory-uavs` records the chosen UAVs
+/// (and the navigator) only; a bad list is refused naming the flag.
+#[test]
+fn every_follower_has_its_detail_and_chosen_uavs_their_trajectories() {
+    let out = scratch("cli-rear-ranks");
+    let o = proxform()
+        .args(["run", "--scenario", "swarm", "--uavs", "300", "--duration-s", "5", "--runs", "2"])
+        .args(["--no-figures", "--trajectory-uavs", "290-300,150", "-q", "--out"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{stdout}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("… 289 more followers (shown: the 10 farthest out)"), "{stdout}");
+    let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
+    let v: serde_json::Value = serde_json::from_str(&summary).expect("json");
+    let per_uav: Vec<u64> = v["per_uav"].as_array().expect("list").iter().filter_map(|u| u.as_u64()).collect();
+    assert_eq!(per_uav, (2..=300).collect::<Vec<u64>>());
+    assert_eq!(v["per_uav_runs_flown"].as_array().map(Vec::len), Some(299));
+    let csv = std::fs::read_to_string(out.join("trajectories.csv")).expect("trajectories");
+    let mut uavs: Vec<u32> = csv.lines().skip(1).filter_map(|l| l.split(',').nth(1)?.parse().ok()).collect();
+    uavs.sort_unstable();
+    uavs.dedup();
+    let mut want = vec![1, 150];
+    want.extend(290..=300);
+    assert_eq!(uavs, want);
+    for (list, says) in
+        [("0", "UAV 0 is not in the formation"), ("5-3", "runs backwards"), ("x", "\"x\" is not a UAV number")]
+    {
+        let o = proxform()
+            .args(["run", "--runs", "1", "--trajectory-uavs", list, "--out"])
+            .arg(&out)
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(2) && stderr.contains("--trajectory-uavs") && stderr.contains(says),
+            "{list}: {stderr}"
+        );
+    }
+}

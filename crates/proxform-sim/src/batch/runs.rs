@@ -361,8 +361,16 @@ pub fn run_batch_stoppable(
     progress: &(dyn Fn() + Sync),
     stop: &AtomicBool,
 ) -> Option<BatchResult> {
+    let totals = std::sync::Mutex::new(PerUavTotals::default());
+    // Each run's per-follower detail is folded into the totals as it ends.
+    let fold = |(mut s, t): (RunSummary, Option<Trajectory>)| {
+        if let Ok(mut totals) = totals.lock() {
+            totals.add(&std::mem::take(&mut s.per_uav));
+        }
+        (s, t)
+    };
     let results: Vec<(RunSummary, Option<Trajectory>)> = if runs == 1 {
-        vec![run_one_stoppable(scenario, options, (seed, 0), record_first, progress, stop)]
+        vec![fold(run_one_stoppable(scenario, options, (seed, 0), record_first, progress, stop))]
     } else {
         let first = std::sync::Mutex::new(record_first);
         (0..runs)
@@ -372,7 +380,7 @@ pub fn run_batch_stoppable(
                     return None;
                 }
                 let record = if r == 0 { first.lock().ok().and_then(|mut f| f.take()) } else { None };
-                let out = run_one_stoppable(scenario, options, (seed, r), record, &|| {}, stop);
+                let out = fold(run_one_stoppable(scenario, options, (seed, r), record, &|| {}, stop));
                 progress();
                 Some(out)
             })
@@ -389,7 +397,8 @@ pub fn run_batch_stoppable(
         }
         summaries.push(s);
     }
-    let summary = aggregate(scenario, seed, &summaries);
+    let totals = totals.into_inner().unwrap_or_default();
+    let summary = aggregate_with(scenario, seed, &summaries, totals);
     Some(BatchResult { runs: summaries, summary, first_trajectory })
 }
 
@@ -405,6 +414,7 @@ pub fn run_batch_with_agents(
     (agents, watch): (&mut dyn Agents, &mut dyn Observer),
 ) -> Option<BatchResult> {
     let mut summaries = Vec::with_capacity(runs as usize);
+    let mut totals = PerUavTotals::default();
     let mut first_trajectory = None;
     for r in 0..runs {
         if stop.load(Ordering::Relaxed) {
@@ -422,6 +432,8 @@ pub fn run_batch_with_agents(
         if trajectory.is_some() {
             first_trajectory = trajectory;
         }
+        let mut summary = summary;
+        totals.add(&std::mem::take(&mut summary.per_uav));
         summaries.push(summary);
         if runs > 1 {
             progress();
@@ -430,12 +442,54 @@ pub fn run_batch_with_agents(
     if stop.load(Ordering::Relaxed) {
         return None;
     }
-    let summary = aggregate(scenario, seed, &summaries);
+    let summary = aggregate_with(scenario, seed, &summaries, totals);
     Some(BatchResult { runs: summaries, summary, first_trajectory })
 }
 
 /// Aggregates run summaries (in run order) into a [`Summary`].
 pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary {
+    let mut per_uav = PerUavTotals::default();
+    for r in runs {
+        per_uav.add(&r.per_uav);
+    }
+    aggregate_with(scenario, seed, runs, per_uav)
+}
+
+/// Per-follower totals over a batch's runs, folded as each run ends (its per-UAV detail is
+/// then dropped, so a batch holds one set of totals whatever its number of runs). Maxima,
+/// integer sums and counts: the same in any order.
+#[derive(Debug, Clone, Default)]
+pub struct PerUavTotals {
+    uavs: Vec<u32>,
+    worst: Vec<[f64; 6]>,
+    adjustments: Vec<u64>,
+    flown: Vec<u64>,
+    passed: Vec<u64>,
+}
+
+impl PerUavTotals {
+    /// Adds one run's per-follower detail (every run lists the same followers).
+    pub fn add(&mut self, stats: &[crate::measure::metrics::UavStats]) {
+        if self.uavs.is_empty() && !stats.is_empty() {
+            let n = stats.len();
+            self.uavs = stats.iter().map(|u| u.uav).collect();
+            (self.worst, self.adjustments) = (vec![[0.0; 6]; n], vec![0; n]);
+            (self.flown, self.passed) = (vec![0; n], vec![0; n]);
+        }
+        for (f, u) in stats.iter().enumerate().take(self.uavs.len()) {
+            for k in 0..6 {
+                self.worst[f][k] = self.worst[f][k].max(u.max_abs_error[k]);
+            }
+            self.adjustments[f] += u.adjustments;
+            self.flown[f] += u64::from(u.judged_steps > 0);
+            self.passed[f] += u64::from(u.pass);
+        }
+    }
+}
+
+/// [`aggregate`] with the per-follower totals folded as the runs ended (their own detail
+/// dropped).
+pub fn aggregate_with(scenario: &Scenario, seed: u64, runs: &[RunSummary], per_uav: PerUavTotals) -> Summary {
     let n = runs.len().max(1) as f64;
     let mut worst = [0.0f64; 6];
     let mut p99 = [0.0f64; 6];
@@ -447,20 +501,6 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
         p99[k] = quantile_of(&mut col, 0.99);
         median[k] = quantile_of(&mut col, 0.5);
         rms[k] = (runs.iter().map(|r| r.rms_error[k] * r.rms_error[k]).sum::<f64>() / n).sqrt();
-    }
-    let sample = runs.first().map_or(0, |r| r.per_uav.len());
-    let mut per_uav_worst = vec![[0.0f64; 6]; sample];
-    let mut per_uav_adj = vec![0.0f64; sample];
-    let (mut flown, mut passed) = (vec![0u64; sample], vec![0u64; sample]);
-    for r in runs {
-        for (f, u) in r.per_uav.iter().enumerate().take(sample) {
-            for k in 0..6 {
-                per_uav_worst[f][k] = per_uav_worst[f][k].max(u.max_abs_error[k]);
-            }
-            per_uav_adj[f] += u.adjustments as f64 / n;
-            flown[f] += u64::from(u.judged_steps > 0);
-            passed[f] += u64::from(u.pass);
-        }
     }
     let adj_rate = runs.iter().map(RunSummary::adjustments_per_uav_minute).sum::<f64>() / n;
     // eq. 17: σ = sqrt(σm² + σn²), σm measured as the RMS actuation-error effect per step.
@@ -508,11 +548,11 @@ pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary
             connectivity_min: runs.iter().map(|r| r.connectivity_min).fold(1.0, f64::min),
             alone_s_per_uav: runs.iter().map(|r| r.alone_s_per_uav).sum::<f64>() / n,
         },
-        per_uav: runs.first().map(|r| r.per_uav.iter().map(|u| u.uav + 1).collect()).unwrap_or_default(),
-        per_uav_worst: per_uav_worst.into_iter().map(AxisErrors::from_si).collect(),
-        per_uav_adjustments: per_uav_adj,
-        per_uav_runs_flown: flown,
-        per_uav_runs_passed: passed,
+        per_uav: per_uav.uavs.iter().map(|u| u + 1).collect(),
+        per_uav_worst: per_uav.worst.into_iter().map(AxisErrors::from_si).collect(),
+        per_uav_adjustments: per_uav.adjustments.iter().map(|&a| a as f64 / n).collect(),
+        per_uav_runs_flown: per_uav.flown,
+        per_uav_runs_passed: per_uav.passed,
         sensor_faults: sensor_fault_summary(runs),
         forming: forming_summary(runs),
         transitions: transition_summary(runs),

@@ -1,7 +1,9 @@
 //! Per-run metrics: the formation errors, separations and corrections of one flight.
 //!
 //! Errors and adjustments are accumulated over every follower; per-UAV detail is kept for the
-//! first [`PER_UAV_SAMPLE`] followers only, so a run of a million UAVs stays small.
+//! first [`PER_UAV_MAX`] followers (every follower of any formation up to that size), so a run
+//! of a million UAVs stays small: about 130 bytes per follower and run in flight, folded into
+//! the batch's totals when the run ends (`batch::runs::PerUavTotals`).
 
 use proxform_core::state::{State9, P};
 
@@ -10,8 +12,8 @@ use proxform_scenario::Scenario;
 use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame, StepOutcome};
 use super::verdict::{formed_at, Criterion, Evidence, FollowerJudge};
 
-/// Followers with per-UAV detail in summaries and tables.
-pub const PER_UAV_SAMPLE: usize = 32;
+/// Followers with per-UAV detail in summaries (the first ones).
+pub const PER_UAV_MAX: usize = 4096;
 
 /// One follower's statistics over a run.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -282,7 +284,7 @@ impl RunMetrics {
         let nav = scenario.navigator().index();
         let aftermaths = aftermaths(scenario);
         let sample: Vec<(usize, Acc)> =
-            (0..scenario.len()).filter(|&i| i != nav).take(PER_UAV_SAMPLE).map(|i| (i, Acc::default())).collect();
+            (0..scenario.len()).filter(|&i| i != nav).take(PER_UAV_MAX).map(|i| (i, Acc::default())).collect();
         let settled_uavs = settled(scenario);
         let forming = !scenario.placement().in_slots()
             || scenario.faults().iter().any(|f| matches!(f, proxform_scenario::faults::Fault::Join { .. }));

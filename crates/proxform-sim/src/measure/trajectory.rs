@@ -43,14 +43,17 @@ pub trait RowSink: Send {
     }
 }
 
-/// Observer recording the rows of a run for the first `sample` UAVs: every `stream_every`-th
-/// step to its sink as the flight goes, and every `keep_every`-th step in memory, so memory
-/// stays bounded whatever the duration.
+/// Observer recording the rows of a run for the first `sample` UAVs, or for the chosen ones:
+/// every `stream_every`-th step to its sink as the flight goes, and every `keep_every`-th step
+/// in memory, so memory stays bounded whatever the duration (and, for more than
+/// [`DEFAULT_SAMPLE`] UAVs, whatever their number: the steps are decimated in proportion).
 pub struct Trajectory {
     /// Rows kept in memory, in time order, then UAV order.
     pub rows: Vec<TrajectoryRow>,
-    /// Number of UAVs recorded (the first ones).
+    /// Number of UAVs recorded (the first ones), when none are chosen.
     pub sample: usize,
+    /// The UAVs recorded (indices, ascending), when chosen.
+    pub uavs: Option<Vec<usize>>,
     /// Steps between rows kept in memory.
     pub keep_every: u64,
     /// Steps between rows streamed to the sink.
@@ -72,7 +75,7 @@ impl std::fmt::Debug for Trajectory {
 
 impl Default for Trajectory {
     fn default() -> Self {
-        Self { rows: Vec::new(), sample: DEFAULT_SAMPLE, keep_every: 1, stream_every: 1, sink: None }
+        Self { rows: Vec::new(), sample: DEFAULT_SAMPLE, uavs: None, keep_every: 1, stream_every: 1, sink: None }
     }
 }
 
@@ -87,6 +90,18 @@ impl Trajectory {
             sink,
             ..Self::default()
         }
+    }
+
+    /// The same recording of the UAVs `uavs` (indices) instead of the first ones: more than
+    /// [`DEFAULT_SAMPLE`] of them thin the steps kept and streamed in proportion, so that the
+    /// rows stay within the same bounds ([`MAX_KEPT_STEPS`] and [`MAX_STREAMED_STEPS`] times
+    /// [`DEFAULT_SAMPLE`]).
+    pub fn of_uavs(self, steps: u64, mut uavs: Vec<usize>) -> Self {
+        uavs.sort_unstable();
+        uavs.dedup();
+        let scale = (uavs.len() as u64).div_ceil(DEFAULT_SAMPLE as u64).max(1);
+        let every = |most: u64| steps.saturating_mul(scale).div_ceil(most).max(1);
+        Self { keep_every: every(MAX_KEPT_STEPS), stream_every: every(MAX_STREAMED_STEPS), uavs: Some(uavs), ..self }
     }
 
     /// Takes the sink back (to finish writing).
@@ -105,7 +120,10 @@ impl Observer for Trajectory {
         let nav = scenario.navigator().index();
         let allowable = scenario.allowable().as_array();
         let reference = navigator_reference(scenario, frame.formation(scenario), frame.states, frame.active);
-        for (i, s) in frame.states.iter().enumerate().take(self.sample) {
+        let count = self.uavs.as_ref().map_or(self.sample, Vec::len);
+        for j in 0..count {
+            let i = self.uavs.as_ref().map_or(j, |u| u[j]);
+            let Some(s) = frame.states.get(i) else { continue };
             if !frame.active[i] {
                 continue;
             }
