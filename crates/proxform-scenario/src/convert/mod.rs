@@ -105,15 +105,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let fixed_wing = matches!(vehicle, VehicleModel::FixedWing(_));
         let mut params = controller::params(&spec.controller, dt_s, &vehicle)?;
 
-        // The vehicle's defaults of the formation's keys: a multirotor or fixed-wing
-        // formation's derived tables lean on the navigator (its errors would otherwise grow
-        // rank by rank through its turns, README "Robust formation keeping"); the kinematic
-        // vehicle keeps the paper's tables.
         let mut formation_spec = spec.formation.clone();
-        if !matches!(vehicle, VehicleModel::Kinematic(_)) {
-            let d = formation_spec.dependencies.get_or_insert_with(Default::default);
-            d.navigator_degree = d.navigator_degree.or(Some(defaults::VEHICLE_NAVIGATOR_DEGREE));
-        }
         let formation::Slots { slots, mut frame, explicit } = formation::slots(&formation_spec)?;
         if spec.formation.frame.is_none() {
             // A formation of vehicles that turn turns with them: the fixed wing's with its course,
@@ -126,6 +118,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         let n = slots.len();
         let navigator = uav("navigator", spec.navigator.unwrap_or(defaults::NAVIGATOR), n)?;
+        // Derived tables lean on the navigator by default, whatever the vehicle: a deep
+        // formation's errors would otherwise grow rank by rank (README "Robust formation
+        // keeping"); a multirotor or fixed-wing formation hears the navigator in any case.
+        // Tables written out for every follower (`depends_on`, the paper's) are flown as written.
+        let derived = explicit.iter().enumerate().any(|(i, t)| i != navigator.index() && t.is_none());
+        if derived || !matches!(vehicle, VehicleModel::Kinematic(_)) {
+            let d = formation_spec.dependencies.get_or_insert_with(Default::default);
+            d.navigator_degree = d.navigator_degree.or(Some(defaults::NAVIGATOR_DEGREE));
+        }
         feasibility::separated(&slots, safety_distance_m)?;
         let dependencies =
             formation::dependencies(&formation_spec, &slots, &explicit, navigator, params.areas.sensing_range_m)?;
