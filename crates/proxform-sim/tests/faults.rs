@@ -230,3 +230,23 @@ fn under_30_percent_dropout_the_singer_filter_holds_more_runs_than_alpha_beta_tr
     let calm = batch(&paper(|s| s.controller.predictor = Some("singer".into())), 13, 100);
     assert_eq!(calm.pass_fraction, 1.0);
 }
+
+#[test]
+fn a_uav_joining_out_of_sensing_range_homes_on_the_navigators_broadcast() {
+    // UAV4 appears 500 m behind its slot (sensing range 250 m): the navigator broadcasts by
+    // default when UAVs join, and UAV4 heads for the formation on it.
+    let join = |beacons: Option<Vec<u32>>| {
+        paper(|s| {
+            s.duration_s = Some(70.0);
+            s.fault = vec![fault("join", 4, 20.0, None, Some([-500.0, 0.0, 0.0]))];
+            s.radio.beacons = beacons;
+        })
+    };
+    let homed = batch(&join(None), 3, 4);
+    let f = homed.forming.as_ref().expect("a join is measured as forming");
+    assert_eq!((f.formed_fraction, homed.pass_fraction), (1.0, 1.0), "{f:?}");
+    assert!(f.time_to_form_s_max < 60.0, "{f:?}");
+    // Without the broadcast (no beacons named) it never perceives anyone.
+    let lost = batch(&join(Some(vec![])), 3, 2);
+    assert_eq!(lost.forming.as_ref().map(|f| f.formed_fraction), Some(0.0));
+}

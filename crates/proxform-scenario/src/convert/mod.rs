@@ -195,10 +195,11 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if navigator_by_radio && !radio.broadcast_all && !beacons.contains(&navigator) {
             beacons.push(navigator);
         }
-        // Followers scattered out of sight of their references head for the formation on the
-        // navigator's broadcast (METHOD §8, homing): it broadcasts unless the file names the
-        // beacons (`beacons = []` for none).
-        let homing = !placement.in_slots() && spec.radio.beacons.is_none();
+        // Followers scattered out of sight of their references, and UAVs joining wherever they
+        // appear, head for the formation on the navigator's broadcast (METHOD §8, homing): it
+        // broadcasts unless the file names the beacons (`beacons = []` for none).
+        let joins = faults.iter().any(|f| matches!(f, crate::faults::Fault::Join { .. }));
+        let homing = (!placement.in_slots() || joins) && spec.radio.beacons.is_none();
         if homing && !radio.broadcast_all && !beacons.contains(&navigator) {
             beacons.push(navigator);
         }
