@@ -238,6 +238,8 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     }
     let options = RunOptions { adjustment_enabled: !args.no_adjust, ..RunOptions::default() };
     let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(scenario.name()));
+    // A bad list is refused before any file is written.
+    let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
 
     let pool =
@@ -259,7 +261,6 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         true => None,
         false => Some(Box::new(output::TrajectoryCsv::create(&csv, scenario.dt_s())?)),
     };
-    let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
     let record = (!(args.no_figures && args.no_trajectories)).then(|| {
         let t = Trajectory::for_flight(scenario.steps(), sink);
         match chosen {

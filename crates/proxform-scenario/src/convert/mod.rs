@@ -187,6 +187,18 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable, &vehicle)?;
         let faults = world::faults(&spec.fault, n)?;
+        if let Some(k) =
+            faults.iter().position(|f| matches!(f, crate::faults::Fault::Join { uav, .. } if *uav == navigator))
+        {
+            return Err(err(
+                format!("fault[{}].uav", k + 1),
+                format!(
+                    "UAV {} is the navigator: it leads from the start and cannot join later (a UAV that joins \
+                     takes a follower's slot; to fly without a navigator for a while, remove it: a successor leads)",
+                    navigator.0 + 1
+                ),
+            ));
+        }
         let method = controller::method(&spec.controller)?;
         // Derived tables that lean on the navigator hear it over the radio where it is out of
         // sensing range: the navigator broadcasts.

@@ -62,8 +62,8 @@ pub struct RunSummary {
     /// Largest distance of the navigator (once it is gone, of the formation's estimate of its
     /// slot) from its planned path over the flight (m).
     pub path_deviation_m: f64,
-    /// When the navigator's successor began to lead, and which UAV (METHOD §8; None: the
-    /// navigator led throughout, or nobody took over).
+    /// When the latest of the navigator's successors began to lead, and which UAV (METHOD §8;
+    /// None: the navigator led throughout, or nobody took over).
     pub succession: Option<(f64, u32)>,
     /// RMS model error σm per state parameter over all follower steps.
     pub model_error_rms: [f64; P],
@@ -739,13 +739,20 @@ impl Observer for RunMetrics {
         self.samples += 1;
         let n = frame.states.len();
         let nav = self.nav;
-        let reference = navigator_reference(scenario, frame.formation(scenario), frame.states, frame.active);
+        let reference = navigator_reference(
+            scenario,
+            frame.formation(scenario),
+            frame.states,
+            frame.active,
+            frame.successor.map(|s| s.1),
+        );
         self.separation.observe(frame.states, frame.active);
         let planned = scenario.path().state_at(frame.t, self.start);
         let off = (0..3).map(|k| (reference[k] - planned[k]).powi(2)).sum::<f64>().sqrt();
         // NaN counts as off (a state that is not a number is nowhere near the path).
         self.path_deviation = if off.is_nan() { f64::INFINITY } else { self.path_deviation.max(off) };
-        if let (None, Some(s)) = (self.succession, frame.successor) {
+        // The latest successor, from when it began to lead.
+        if let Some((s, _)) = frame.successor.filter(|&(s, _)| self.succession.is_none_or(|(_, u)| u as usize != s)) {
             self.succession = Some((frame.t, s as u32));
         }
         self.radio_sent += frame.radio_sent as u64;

@@ -29,8 +29,10 @@ pub struct StepFrame<'a> {
     pub formation: Option<&'a Formation>,
     /// Slots were re-assigned in the step that led here.
     pub reassigned: bool,
-    /// The navigator's successor, once it leads (METHOD §8; None: the navigator leads).
-    pub successor: Option<usize>,
+    /// The navigator's successor, once it leads (METHOD §8; None: the navigator leads), and
+    /// where it carries the navigator's slot: the planned path's position moved by the
+    /// successor's own distance from its target.
+    pub successor: Option<(usize, [f64; 3])>,
 }
 
 impl<'a> StepFrame<'a> {
@@ -174,7 +176,28 @@ pub fn formation_error_to(
 /// frame's yaw and the navigator's horizontal position are then fitted to the followers'
 /// positions as one rigid body (least squares over the slots' offsets), and the estimate
 /// takes that yaw as its course or heading.
-pub fn navigator_reference(scenario: &Scenario, f: &Formation, states: &[State9], active: &[bool]) -> State9 {
+pub fn navigator_reference(
+    scenario: &Scenario,
+    f: &Formation,
+    states: &[State9],
+    active: &[bool],
+    carried: Option<[f64; 3]>,
+) -> State9 {
+    let nav = scenario.navigator().index();
+    let mut estimate = fitted(scenario, f, states, active);
+    // Once a successor leads, the navigator's slot is where the leader carries it (the path,
+    // moved by the leader's own distance from its target): the followers still making for
+    // their slots (a change, a re-assignment, a joiner) do not move it.
+    if let Some(p) = carried.filter(|_| !active[nav]) {
+        for k in 0..3 {
+            estimate[state::X + k] = p[k];
+        }
+    }
+    estimate
+}
+
+/// [`navigator_reference`] without a leader: the fit to every flying follower.
+fn fitted(scenario: &Scenario, f: &Formation, states: &[State9], active: &[bool]) -> State9 {
     let nav = scenario.navigator().index();
     if active[nav] {
         return states[nav];
@@ -271,7 +294,7 @@ mod tests {
         let mut active = [true; 6];
         active[0] = false;
         let sc = paper();
-        let r = navigator_reference(&sc, &f, &states, &active);
+        let r = navigator_reference(&sc, &f, &states, &active, None);
         for k in [X, Y, Z] {
             assert!((r[k] - nav[k]).abs() < 1e-6, "axis {k}: {} vs {}", r[k], nav[k]);
         }
@@ -306,9 +329,9 @@ mod tests {
         // Without the navigator, the reference is the mean of the followers' implied
         // navigator states: UAV5's offset moves it by a fifth.
         let mut active = [true; 6];
-        assert_eq!(navigator_reference(&sc, sc.formation(), &states, &active), nav);
+        assert_eq!(navigator_reference(&sc, sc.formation(), &states, &active, None), nav);
         active[0] = false;
-        let r = navigator_reference(&sc, sc.formation(), &states, &active);
+        let r = navigator_reference(&sc, sc.formation(), &states, &active, None);
         assert!((r[X] - 0.2).abs() < 1e-9 && (r[Y] + 0.4).abs() < 1e-9 && (r[Z] - 300.0).abs() < 1e-9, "{r:?}");
     }
 

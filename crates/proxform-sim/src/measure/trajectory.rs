@@ -119,7 +119,13 @@ impl Observer for Trajectory {
         }
         let nav = scenario.navigator().index();
         let allowable = scenario.allowable().as_array();
-        let reference = navigator_reference(scenario, frame.formation(scenario), frame.states, frame.active);
+        let reference = navigator_reference(
+            scenario,
+            frame.formation(scenario),
+            frame.states,
+            frame.active,
+            frame.successor.map(|s| s.1),
+        );
         let count = self.uavs.as_ref().map_or(self.sample, Vec::len);
         for j in 0..count {
             let i = self.uavs.as_ref().map_or(j, |u| u[j]);
@@ -135,7 +141,7 @@ impl Observer for Trajectory {
             let (outcome, in_envelope) = match frame.uavs[i].outcome {
                 Some(o) => (o.label(), o == crate::measure::observer::StepOutcome::Held),
                 None if i == nav => ("navigator", false),
-                None if frame.successor == Some(i) => ("leads", false),
+                None if frame.successor.is_some_and(|s| s.0 == i) => ("leads", false),
                 None => ("initial", false),
             };
             let within_allowable = error.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a);

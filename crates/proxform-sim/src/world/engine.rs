@@ -114,6 +114,8 @@ struct World<'s> {
     succession_due: Option<f64>,
     /// The successor's take-over, once it leads.
     take_over: Option<proxform_core::succession::TakeOver>,
+    /// The successor's move to a new slot while it leads.
+    moving: Option<proxform_core::succession::TakeOver>,
 }
 
 /// The slots of a flight after a re-assignment.
@@ -199,8 +201,15 @@ impl<'s> Simulation<'s> {
             lead: assignment::Lead::navigator(scenario.navigator()),
             succession_due: None,
             take_over: None,
+            moving: None,
         };
-        Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] }
+        let mut sim = Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] };
+        if !sim.world.active[nav] {
+            // Removed at the start: the followers, which saw it through the warm-up, learn of
+            // the loss when their tracks of it end.
+            sim.world.succession_due = Some(scenario.controller().track_timeout_s);
+        }
+        sim
     }
 
     fn warmed(mut self) -> Self {
@@ -300,7 +309,7 @@ impl<'s> Simulation<'s> {
             radio_sent: w.sent_now,
             formation: w.slots.as_ref().map(|s| &*s.flown),
             reassigned: w.slots.as_ref().is_some_and(|s| s.at_k == w.k),
-            successor: (w.lead.leader != w.lead.navigator).then_some(w.lead.leader.index()),
+            successor: w.carried().map(|p| (w.lead.leader.index(), p)),
         }
     }
 
@@ -396,7 +405,8 @@ impl<'s> Simulation<'s> {
         }
         let new = match by {
             Some(by) if reassign || restage => {
-                let reference = crate::measure::observer::navigator_reference(sc, flown, &w.current, &w.active);
+                let reference =
+                    crate::measure::observer::navigator_reference(sc, flown, &w.current, &w.active, w.carried());
                 let nav_slot = &formation.slots[slot_of[sc.navigator().index()]];
                 let at = |s: &State9| [s[state::X], s[state::Y], s[state::Z]];
                 let slot_at: Vec<[f64; 3]> = formation
@@ -421,6 +431,20 @@ impl<'s> Simulation<'s> {
         let moved = (by.is_some() && (reassign || restage)) || new != slot_of;
         let at_k = if moved { w.k + 1 } else { w.slots.as_ref().map_or(u64::MAX, |s| s.at_k) };
         let r = Reassignment::new(formation, tables, new, w.active.clone(), lead).moving(moved || restage);
+        // A successor whose slot changes moves to it from where its old one had it.
+        let l = lead.leader.index();
+        let before = (lead.leader != lead.navigator).then(|| match lead.leader == w.lead.leader {
+            true => w.leading().slot(sc, w.start, t),
+            // A successor named now: from its slot in the formation it took over.
+            false => super::phases::slot_on_path(sc, flown, w.start, l, t),
+        });
+        if let Some(before) = before {
+            let after = super::phases::slot_on_path(sc, &r.formation, w.start, l, t);
+            if (state::position(&after) - state::position(&before)).norm() > 1e-9 {
+                w.moving =
+                    Some(proxform_core::succession::TakeOver::for_controller(t, &before, &after, sc.controller()));
+            }
+        }
         for (i, a) in self.agents.iter_mut().enumerate() {
             if let (Some(a), true) = (a, w.active[i]) {
                 // The relabelled tables name UAVs of the formation, other than the owner.
@@ -503,7 +527,8 @@ impl Outside<'_> {
                 (w.active[i], self.absent[i]) = (false, true);
             } else if here && self.absent[i] {
                 let f = w.flown();
-                let reference = crate::measure::observer::navigator_reference(sc, f, &w.current, &w.active);
+                let reference =
+                    crate::measure::observer::navigator_reference(sc, f, &w.current, &w.active, w.carried());
                 w.current[i] = slot_state(sc, f, i, &reference);
                 (w.active[i], self.absent[i]) = (true, false);
             }
@@ -531,6 +556,31 @@ impl Outside<'_> {
 impl<'s> World<'s> {
     fn t(&self) -> f64 {
         self.k as f64 * self.scenario.dt_s()
+    }
+
+    /// Where the successor, once it leads, carries the navigator's slot: the planned path's
+    /// position moved by the successor's own distance from its target.
+    fn carried(&self) -> Option<[f64; 3]> {
+        let l = self.lead.leader.index();
+        if self.lead.leader == self.lead.navigator || !self.active[l] {
+            return None;
+        }
+        let leading = self.leading();
+        let (sc, t) = (self.scenario, self.t());
+        // Its take-over's gap is the formation's own drift; a move to a new slot is planned.
+        let (target, on_path) = (leading.slot(sc, self.start, t), sc.path().state_at(t, self.start));
+        let at = &self.current[l];
+        Some(std::array::from_fn(|k| on_path[state::X + k] + at[state::X + k] - target[state::X + k]))
+    }
+
+    /// Who leads, as the block phases fly it.
+    fn leading(&self) -> super::phases::Leading<'_> {
+        super::phases::Leading {
+            uav: self.lead.leader.index(),
+            formation: self.flown(),
+            take_over: self.take_over,
+            moving: self.moving,
+        }
     }
 
     /// The formation flown now, indexed by UAV.
@@ -578,8 +628,13 @@ impl<'s> World<'s> {
                         // Appears in its slot relative to the navigator (or to the formation's
                         // estimate of it), shifted by the offset.
                         let f = self.flown();
-                        let reference =
-                            crate::measure::observer::navigator_reference(sc, f, &self.current, &self.active);
+                        let reference = crate::measure::observer::navigator_reference(
+                            sc,
+                            f,
+                            &self.current,
+                            &self.active,
+                            self.carried(),
+                        );
                         let mut s = slot_state(sc, f, i, &reference);
                         s[state::X] += offset_m.x;
                         s[state::Y] += offset_m.y;
@@ -685,11 +740,7 @@ impl<'s> World<'s> {
             messages: &self.arriving,
             reach: &self.reach,
             env: &self.env,
-            lead: super::phases::Leading {
-                uav: self.lead.leader.index(),
-                formation: self.flown(),
-                take_over: self.take_over,
-            },
+            lead: self.leading(),
             mode,
         }
     }

@@ -122,13 +122,21 @@ pub(super) struct Leading<'a> {
     pub uav: usize,
     pub formation: &'a proxform_core::Formation,
     pub take_over: Option<proxform_core::succession::TakeOver>,
+    /// Its move to a new slot (a change of formation, a re-assignment) while it leads.
+    pub moving: Option<proxform_core::succession::TakeOver>,
 }
 
 impl Leading<'_> {
     /// The leader's target at `t`.
-    fn target(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
-        let slot = slot_on_path(sc, self.formation, start, self.uav, t);
+    pub(super) fn target(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
+        let slot = self.slot(sc, start, t);
         self.take_over.map_or(slot, |k| k.target(t, &slot))
+    }
+
+    /// Its slot on the path at `t`, on its way there when it moves to a new one.
+    pub(super) fn slot(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
+        let slot = slot_on_path(sc, self.formation, start, self.uav, t);
+        self.moving.map_or(slot, |m| m.target(t, &slot))
     }
 }
 
