@@ -81,16 +81,12 @@ pub fn print(
     let followers = s.uavs as usize - 1;
     if followers > shown.len() {
         let detail = if s.per_uav.len() < followers {
-            format!("the first {} have theirs in summary.json (per_uav)", s.per_uav.len())
+            format!(" of the first {}, which have their rows in summary.json (per_uav)", s.per_uav.len())
         } else {
-            "each has its row in summary.json (per_uav)".to_string()
+            "); each has its row in summary.json (per_uav".to_string()
         };
-        writeln!(
-            out,
-            "… {} more followers (shown: the {} farthest out); {detail}",
-            followers - shown.len(),
-            shown.len()
-        )?;
+        let shown_n = shown.len();
+        writeln!(out, "… {} more followers (shown: the {shown_n} farthest out{detail})", followers - shown_n)?;
         let per_run = s.adjustments_per_uav_minute * scenario.duration_s() / 60.0;
         let verdict = if s.pass_fraction == 1.0 { "PASS" } else { "FAIL" };
         uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, verdict)?;

@@ -306,6 +306,9 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
 fn uav_list(list: &str, scenario: &Scenario) -> Result<Vec<usize>> {
     let n = scenario.len();
     let number = |s: &str| -> Result<usize> {
+        if s.trim().is_empty() {
+            bail!("--trajectory-uavs: an empty entry in \"{list}\" (numbers from 1 and ranges a-b, comma-separated)");
+        }
         let u: usize = s.trim().parse().map_err(|_| {
             anyhow::anyhow!(
                 "--trajectory-uavs: \"{}\" is not a UAV number (numbers from 1 and ranges a-b, comma-separated)",
