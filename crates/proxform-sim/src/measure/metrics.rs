@@ -9,7 +9,7 @@ use proxform_core::state::{State9, P};
 
 use proxform_scenario::Scenario;
 
-use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame, StepOutcome};
+use super::observer::{formation_error_to, Observer, StepFrame, StepOutcome};
 use super::verdict::{formed_at, Criterion, Evidence, FollowerJudge};
 
 /// Followers with per-UAV detail in summaries (the first ones).
@@ -739,13 +739,7 @@ impl Observer for RunMetrics {
         self.samples += 1;
         let n = frame.states.len();
         let nav = self.nav;
-        let reference = navigator_reference(
-            scenario,
-            frame.formation(scenario),
-            frame.states,
-            frame.active,
-            frame.successor.map(|s| s.1),
-        );
+        let reference = frame.navigator_reference(scenario);
         self.separation.observe(frame.states, frame.active);
         let planned = scenario.path().state_at(frame.t, self.start);
         let off = (0..3).map(|k| (reference[k] - planned[k]).powi(2)).sum::<f64>().sqrt();

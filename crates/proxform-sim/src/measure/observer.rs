@@ -45,6 +45,12 @@ impl<'a> StepFrame<'a> {
     pub fn formation<'x>(&'x self, scenario: &'x Scenario) -> &'x Formation {
         self.formation.unwrap_or_else(|| scenario.formation_at(self.t))
     }
+
+    /// The errors' reference now: the navigator's state, or the formation's estimate of its
+    /// slot ([`navigator_reference`]).
+    pub fn navigator_reference(&self, scenario: &Scenario) -> State9 {
+        navigator_reference(scenario, self.formation(scenario), self.states, self.active, self.successor.map(|s| s.1))
+    }
 }
 
 /// What one UAV's update produced, besides its next state.

@@ -4,7 +4,7 @@ use proxform_core::state::State9;
 
 use proxform_scenario::Scenario;
 
-use super::observer::{formation_error_to, navigator_reference, Observer, StepFrame};
+use super::observer::{formation_error_to, Observer, StepFrame};
 
 /// One UAV at one step.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,13 +119,7 @@ impl Observer for Trajectory {
         }
         let nav = scenario.navigator().index();
         let allowable = scenario.allowable().as_array();
-        let reference = navigator_reference(
-            scenario,
-            frame.formation(scenario),
-            frame.states,
-            frame.active,
-            frame.successor.map(|s| s.1),
-        );
+        let reference = frame.navigator_reference(scenario);
         let count = self.uavs.as_ref().map_or(self.sample, Vec::len);
         for j in 0..count {
             let i = self.uavs.as_ref().map_or(j, |u| u[j]);
