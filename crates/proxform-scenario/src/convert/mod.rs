@@ -201,9 +201,12 @@ impl TryFrom<ScenarioSpec> for Scenario {
         }
         let method = controller::method(&spec.controller)?;
         // Derived tables that lean on the navigator hear it over the radio where it is out of
-        // sensing range: the navigator broadcasts.
-        let navigator_by_radio =
+        // sensing range: the navigator broadcasts, unless the file names the beacons without it
+        // (then a warning says who cannot hear it).
+        let leans_on_navigator =
             formation_spec.dependencies.as_ref().and_then(|d| d.navigator_degree).is_some_and(|v| v > 0.0);
+        let silenced = leans_on_navigator && spec.radio.beacons.is_some() && !beacons.contains(&navigator);
+        let navigator_by_radio = leans_on_navigator && !silenced;
         if navigator_by_radio && !radio.broadcast_all && !beacons.contains(&navigator) {
             beacons.push(navigator);
         }
@@ -285,6 +288,17 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 radio.range_m,
                 setup.params().areas.sensing_range_m,
                 radio.relay_navigator,
+            ));
+        }
+        if silenced && !radio.broadcast_all {
+            warnings.push(err(
+                "radio.beacons",
+                format!(
+                    "the derived tables lean on the navigator (formation.dependencies.navigator_degree, 0.8 by \
+                     default) but the beacons named leave it silent: followers beyond its sensing range cannot \
+                     hear it (name UAV {} among the beacons, or set navigator_degree = 0)",
+                    navigator.0 + 1
+                ),
             ));
         }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &formation_spec));
