@@ -146,7 +146,9 @@ fn airspeed(x: &State9) -> f64 {
 
 fn limits(vehicle: &VehicleModel) -> Vec<Limit> {
     let of = |k: usize| move |_: &State9, x: &State9, _: f64| x[k];
+    // An angle's size (wrapped), a speed's (not: a speed is no angle).
     let abs = |k: usize| move |_: &State9, x: &State9, _: f64| wrap_pi(x[k]).abs();
+    let size = |k: usize| move |_: &State9, x: &State9, _: f64| x[k].abs();
     let rate = |k: usize| move |a: &State9, b: &State9, h: f64| (wrap_pi(b[k] - a[k]) / h).abs();
     let accel = |k: usize| move |a: &State9, b: &State9, h: f64| ((b[k] - a[k]) / h).abs();
     let kmh = (3.6, " km/h");
@@ -169,8 +171,8 @@ fn limits(vehicle: &VehicleModel) -> Vec<Limit> {
             let mut out = vec![
                 limit("vx_min_kmh", "vx", l.vx_min_mps, true, false, kmh, Box::new(of(state::VX))),
                 limit("vx_max_kmh", "vx", l.vx_max_mps, false, false, kmh, Box::new(of(state::VX))),
-                limit("vy_max_kmh", "|vy|", l.vy_max_mps, false, false, kmh, Box::new(abs(state::VY))),
-                limit("vz_max_kmh", "|vz|", l.vz_max_mps, false, false, kmh, Box::new(abs(state::VZ))),
+                limit("vy_max_kmh", "|vy|", l.vy_max_mps, false, false, kmh, Box::new(size(state::VY))),
+                limit("vz_max_kmh", "|vz|", l.vz_max_mps, false, false, kmh, Box::new(size(state::VZ))),
             ];
             const ANGLE: [&str; 3] = ["attitude_max_deg[1]", "attitude_max_deg[2]", "attitude_max_deg[3]"];
             const RATE: [&str; 3] = ["attitude_rate_deg_s[1]", "attitude_rate_deg_s[2]", "attitude_rate_deg_s[3]"];
