@@ -12,6 +12,9 @@
 
 use crate::error::{unit_interval, ConfigError};
 use crate::observation::{Observation, UavId};
+use std::sync::Arc;
+
+use crate::plan::Carry;
 use crate::singer::{Axis, Singer, Step as SingerStep};
 use crate::state::{State9, VX, X};
 
@@ -101,11 +104,14 @@ impl PredictorKind {
 
 /// One neighbour's filtered state, stored compactly: positions in f64 (they are large),
 /// velocities, attitudes and their rates in f32 (their resolution, 1e-5 m/s and 1e-7 rad,
-/// is far below any sensor's noise). 80 bytes.
+/// is far below any sensor's noise). 88 bytes.
 #[derive(Debug, Clone, Copy, Default)]
 struct Track {
     /// Time of the measurement behind the estimate (s).
     t: f64,
+    /// When a report of the neighbour last arrived (s): a delayed report is old when it
+    /// arrives, but the neighbour is missing only from then on.
+    heard: f64,
     pos: [f64; 3],
     /// vx, vy, vz, α, β, γ.
     va: [f32; 6],
@@ -138,6 +144,9 @@ pub struct NeighbourTracks {
     ids: Vec<(u32, u8)>,
     tracks: Vec<Track>,
     capacity: usize,
+    /// Reports older than a period are brought forward beyond it by the plan
+    /// ([`crate::plan`]); shared by the swarm.
+    carry: Option<Arc<Carry>>,
 }
 
 /// The predictor as the tracks run it: the Kalman filter's state boxed, so that the α-β tracks
@@ -161,6 +170,20 @@ struct SingerTracks {
 }
 
 const FREE: u32 = u32::MAX;
+/// The measurement count in a track's id entry (saturating at 2) ...
+const SEEN: u8 = 0x7f;
+/// ... and whether its last report came from the owner's own sensors.
+const ONBOARD: u8 = 0x80;
+
+/// [`ONBOARD`] for a report of the owner's own sensors.
+#[inline]
+fn onboard_flag(obs: &Observation) -> u8 {
+    if obs.source == crate::ObservationSource::Radio {
+        0
+    } else {
+        ONBOARD
+    }
+}
 
 /// Observation times closer than this (s) are the same instant. Time stamps reached by
 /// different sums (`now − age` of a delayed radio report against an earlier `now`) differ by
@@ -205,7 +228,27 @@ impl NeighbourTracks {
             ids: Vec::with_capacity(capacity),
             tracks: Vec::with_capacity(capacity),
             capacity,
+            carry: None,
         }
+    }
+
+    /// These tracks, bringing a report forward with its own rates over at most the carry's
+    /// period (and `coast_accel_s`) after its measurement and with `carry` beyond
+    /// ([`crate::plan`]): without it, a track's rates are extrapolated over the whole interval
+    /// (a coasting track's acceleration over `coast_accel_s`).
+    pub fn with_carry(mut self, carry: Option<Arc<Carry>>) -> Self {
+        self.carry = carry;
+        self
+    }
+
+    /// The track's state `h` seconds after its measurement, brought forward by the plan
+    /// beyond its own rates' span (the period, at most `coast_accel_s`); None without a plan,
+    /// or within that span.
+    #[inline]
+    fn carried(&self, tr: &Track, h: f64) -> Option<State9> {
+        let carry = self.carry.as_deref()?;
+        let own = carry.period_s().min(self.coast_accel_s);
+        (h > own + SAME_INSTANT_S).then(|| carry.carry(&extrapolate(tr, own), tr.t + own, tr.t + h))
     }
 
     /// Room for at least `capacity` neighbours, the tracks kept (a table with more main
@@ -250,7 +293,7 @@ impl NeighbourTracks {
             }
             Kind::AlphaBeta { alpha, beta } => {
                 let slot = self.slot_for(obs.id, t_obs);
-                let (id, seen) = self.ids[slot];
+                let (id, seen) = (self.ids[slot].0, self.ids[slot].1 & SEEN);
                 let tr = &mut self.tracks[slot];
                 let dt = elapsed(t_obs, tr.t);
                 let fresh = dt <= self.timeout_s; // false for NaN too
@@ -263,11 +306,13 @@ impl NeighbourTracks {
                 } else if dt > 0.0 {
                     alpha_beta_update(tr, &obs.state, dt, alpha, beta);
                 }
+                tr.heard = now;
+                self.ids[slot].1 = (self.ids[slot].1 & SEEN) | onboard_flag(obs);
                 *tr
             }
             Kind::Singer(_) => {
                 let slot = self.slot_for(obs.id, t_obs);
-                let (id, seen) = self.ids[slot];
+                let (id, seen) = (self.ids[slot].0, self.ids[slot].1 & SEEN);
                 let Kind::Singer(k) = &mut self.kind else { unreachable!("matched above") };
                 let SingerTracks { model: m, alpha, beta, axes, step } = &mut **k;
                 let (tr, axes) = (&mut self.tracks[slot], &mut axes[slot]);
@@ -301,6 +346,8 @@ impl NeighbourTracks {
                     }
                     tr.t = t_obs;
                 }
+                tr.heard = now;
+                self.ids[slot].1 = (self.ids[slot].1 & SEEN) | onboard_flag(obs);
                 for k in 0..3 {
                     tr.pos[k] = axes[k].x[0];
                     tr.va[k] = axes[k].x[1] as f32;
@@ -309,7 +356,33 @@ impl NeighbourTracks {
                 *tr
             }
         };
-        extrapolate(&track, now + horizon_s - track.t)
+        let h = now + horizon_s - track.t;
+        self.carried(&track, h).unwrap_or_else(|| extrapolate(&track, h))
+    }
+
+    /// Moves every track's position by `d` (m): the frame its observations are given in moved.
+    pub fn shift(&mut self, d: [f64; 3]) {
+        for tr in &mut self.tracks {
+            for k in 0..3 {
+                tr.pos[k] += d[k];
+            }
+        }
+        if let Kind::Singer(k) = &mut self.kind {
+            for axes in &mut k.axes {
+                for c in 0..3 {
+                    axes[c].x[0] += d[c];
+                }
+            }
+        }
+    }
+
+    /// Whether UAV `id`'s last report came from the owner's own sensors, no longer than
+    /// `max_s` before `now` (and its measurement within the timeout).
+    pub fn heard_onboard(&self, id: UavId, now: f64, max_s: f64) -> bool {
+        self.ids.iter().position(|t| t.0 == id.0 && t.0 != FREE).is_some_and(|s| {
+            let tr = &self.tracks[s];
+            self.ids[s].1 & ONBOARD != 0 && now - tr.heard <= max_s + SAME_INSTANT_S && now - tr.t <= self.timeout_s
+        })
     }
 
     /// Number of track slots in use.
@@ -317,13 +390,16 @@ impl NeighbourTracks {
         self.ids.len()
     }
 
-    /// The neighbour of track slot `s` if its track can coast at `now`: measured before `now`,
-    /// no longer ago than `max_s` (and the timeout). A neighbour missing from this step's
-    /// observations (a lost message, a dropped detection) is then predicted from its track.
+    /// The neighbour of track slot `s` if its track can coast at `now`: last heard before
+    /// `now`, no longer ago than `max_s`, and measured no longer ago than the timeout. A
+    /// neighbour missing from this step's observations (a lost message, a dropped detection)
+    /// is then predicted from its track.
     pub fn coasting(&self, s: usize, now: f64, max_s: f64) -> Option<UavId> {
         let (id, _) = self.ids[s];
+        let missing = self.missing(s, now);
         let age = now - self.tracks[s].t;
-        (id != FREE && age >= SAME_INSTANT_S && age <= max_s.min(self.timeout_s) + SAME_INSTANT_S).then_some(UavId(id))
+        (id != FREE && missing >= SAME_INSTANT_S && missing <= max_s + SAME_INSTANT_S && age <= self.timeout_s)
+            .then_some(UavId(id))
     }
 
     /// What the tracks know of UAV `id` at `now`: its filtered state at its last measurement
@@ -336,9 +412,10 @@ impl NeighbourTracks {
         (age >= -SAME_INSTANT_S && age <= self.timeout_s).then(|| (extrapolate(tr, 0.0), age.max(0.0)))
     }
 
-    /// Seconds since track slot `s` was last measured, at `now`.
-    pub fn age(&self, s: usize, now: f64) -> f64 {
-        now - self.tracks[s].t
+    /// Seconds since a report of track slot `s` last arrived, at `now` (its age less the age
+    /// it had when it arrived: a radio's delay is not a missing report).
+    pub fn missing(&self, s: usize, now: f64) -> f64 {
+        now - self.tracks[s].heard
     }
 
     /// The state of track slot `s` extrapolated to time `t` (a coasting neighbour): its
@@ -347,6 +424,9 @@ impl NeighbourTracks {
     pub fn state_at(&self, s: usize, t: f64) -> State9 {
         let tr = &self.tracks[s];
         let h = t - tr.t;
+        if let Some(st) = self.carried(tr, h) {
+            return st;
+        }
         let mut st = extrapolate(tr, h);
         let ha = self.coast_accel_s;
         if h > ha {
@@ -367,7 +447,7 @@ impl NeighbourTracks {
         }
         if self.ids.len() < self.capacity {
             self.ids.push((FREE, 0));
-            self.tracks.push(Track { t: t_obs, ..Track::default() });
+            self.tracks.push(Track { t: t_obs, heard: t_obs, ..Track::default() });
             if let Kind::Singer(k) = &mut self.kind {
                 k.axes.push([Axis::default(); 3]);
             }
@@ -452,6 +532,35 @@ fn extrapolate(tr: &Track, h: f64) -> State9 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_delayed_report_is_old_but_not_missing_and_tracks_move_with_their_frame() {
+        let mut tracks = NeighbourTracks::new(PredictorKind::default(), 4, 1.0, 0.2);
+        let mut s = State9::zeros();
+        s[VX] = 10.0;
+        let radio = |s: State9, age_s: f64| Observation {
+            id: UavId(3),
+            state: s,
+            age_s,
+            source: crate::ObservationSource::Radio,
+        };
+        tracks.predict(&radio(s, 0.3), 1.0, 0.1);
+        // Measured 0.3 s before it arrived, heard now: missing from the next period on only.
+        assert!((tracks.missing(0, 1.0)).abs() < 1e-12);
+        assert!((tracks.missing(0, 1.2) - 0.2).abs() < 1e-12);
+        assert!(tracks.coasting(0, 1.2, 0.5).is_some(), "0.2 s missing, 0.5 s old: coasts");
+        assert!(tracks.coasting(0, 1.8, 0.5).is_none(), "0.8 s missing: no longer");
+        assert!(!tracks.heard_onboard(UavId(3), 1.2, 0.5), "heard by radio");
+        let mut onboard = radio(s, 0.0);
+        onboard.source = crate::ObservationSource::Onboard;
+        tracks.predict(&onboard, 1.3, 0.1);
+        assert!(tracks.heard_onboard(UavId(3), 1.5, 0.5) && !tracks.heard_onboard(UavId(3), 1.9, 0.5));
+        // The frame the observations are given in moved by 0.4 m: so did the track.
+        let before = tracks.state_at(0, 1.4);
+        tracks.shift([0.0, 0.4, 0.0]);
+        let after = tracks.state_at(0, 1.4);
+        assert!((after[X + 1] - before[X + 1] - 0.4).abs() < 1e-12 && (after[X] - before[X]).abs() < 1e-12);
+    }
 
     #[test]
     fn a_track_reports_its_last_measurement_and_its_age() {

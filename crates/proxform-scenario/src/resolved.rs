@@ -272,6 +272,7 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         coast_accel_s: Some(p.coast_accel_s),
         coast_decay_s: Some(p.coast_decay_s),
         turn_feedforward: Some(p.turn_feedforward),
+        plan_forward: Some(p.plan_forward),
         stop_closing: Some(p.stop_closing),
         own_filter_gain: Some(p.own_filter_gain),
         separation_m: follows(

@@ -288,6 +288,9 @@ pub struct ControllerSpec {
     /// multirotor, off for the kinematic vehicle. `bank_turn_feedforward` is its older name.
     #[serde(alias = "bank_turn_feedforward")]
     pub turn_feedforward: Option<bool>,
+    /// A report older than one period (delayed, relayed, coasting) is brought forward beyond
+    /// it as the mission plan moves; false: by its track's rates (the paper's). Default true.
+    pub plan_forward: Option<bool>,
     /// Limit the closing velocity to what braking stops within the gap. Default: on for the
     /// kinematic vehicle, off for the fixed wing.
     pub stop_closing: Option<bool>,

@@ -213,6 +213,40 @@ fn under_30_percent_dropout_coasting_keeps_most_runs_within_the_tolerances() {
 }
 
 #[test]
+fn under_30_percent_dropout_coasting_tracks_brought_forward_with_the_plan_hold_the_formation() {
+    // The built-in paper states the paper's prediction (coasting tracks carried by their own
+    // rates); brought forward beyond one period as the mission plan moves (METHOD §3), the
+    // formation's changes of acceleration reach a coasting track when they happen.
+    let lossy = |plan_forward: bool| {
+        paper(|s| {
+            s.sensing.dropout = Some(0.3);
+            s.controller.plan_forward = Some(plan_forward);
+        })
+    };
+    let planned = batch(&lossy(true), 13, 200);
+    let tracked = batch(&lossy(false), 13, 200);
+    assert!(planned.pass_fraction >= 0.95, "{}", planned.pass_fraction);
+    assert!(
+        tracked.pass_fraction < planned.pass_fraction - 0.1,
+        "{} vs {}",
+        tracked.pass_fraction,
+        planned.pass_fraction
+    );
+    // A vanished UAV's last report moves with the formation: followed at full weight for
+    // coast_s it pulls no one off.
+    let ghost = batch(
+        &paper(|s| {
+            s.fault = vec![FaultSpec::remove(2, 40.0)];
+            s.controller.plan_forward = Some(true);
+            s.controller.coast_decay_s = Some(1000.0);
+        }),
+        12,
+        100,
+    );
+    assert!(ghost.pass_fraction >= 0.99, "{}", ghost.pass_fraction);
+}
+
+#[test]
 fn under_30_percent_dropout_the_losses_that_matter_are_those_of_the_main_references() {
     let with = |dropout: f64, reference: f64| {
         paper(|s| {

@@ -28,13 +28,14 @@ fn worst_over_allowable(s: &Summary, uav: u32) -> f64 {
 }
 
 /// Switches off the robust settings: no navigator in the derived tables, plain means, every
-/// own measurement trusted.
+/// own measurement trusted, reports carried by their tracks' rates.
 fn plain(s: &mut ScenarioSpec) {
     if let Some(d) = s.formation.dependencies.as_mut() {
         d.navigator_degree = Some(0.0);
     }
     s.controller.isolation_gate = Some(0.0);
     s.controller.own_gate_m = Some(0.0);
+    s.controller.plan_forward = Some(false);
 }
 
 #[test]
@@ -171,8 +172,11 @@ fn the_paper_under_loss_on_every_channel_holds_with_the_robust_settings() {
 
 #[test]
 fn the_navigator_where_perceivable_lifts_the_paper_under_onboard_loss() {
-    let with = batch(&scenario("paper-dropout30-navigator.toml", |_| {}), 400);
-    let without = batch(&scenario("paper-dropout30.toml", |_| {}), 400);
+    // With the paper's prediction (coasting tracks carried by their own rates), which leaves
+    // the navigator's share to hold them; brought forward with the plan both pass 0.99.
+    let tracked = |s: &mut ScenarioSpec| s.controller.plan_forward = Some(false);
+    let with = batch(&scenario("paper-dropout30-navigator.toml", tracked), 400);
+    let without = batch(&scenario("paper-dropout30.toml", tracked), 400);
     assert!(with.pass_fraction >= 0.975, "{}", with.pass_fraction);
     assert!(without.pass_fraction < 0.85, "{}", without.pass_fraction);
 }
@@ -206,4 +210,50 @@ fn a_deep_v_at_the_defaults_keeps_its_rear_rank_as_close_as_its_first() {
     let rank_off = |uavs: [u32; 2]| uavs.iter().map(|&u| worst_over_allowable(&off, u)).fold(0.0, f64::max);
     let ratio_off = rank_off([19, 20]) / rank_off([2, 3]);
     assert!(off.pass_fraction < 0.5 && ratio_off > 3.0, "{} {ratio_off}", off.pass_fraction);
+}
+
+#[test]
+fn delayed_radio_reports_brought_forward_with_the_plan_keep_the_formation() {
+    // The paper's six with their neighbours known over the radio only (sensing range 40 m,
+    // every UAV broadcasting, a quarter of the messages lost), each report arriving 0.1, 0.2
+    // or 0.3 s old (METHOD §3, "Reports brought forward").
+    let radio_only = |delay_s: f64, plan_forward: bool| {
+        scenario("paper.toml", |s| {
+            s.controller.sensing_range_m = Some(40.0);
+            s.controller.plan_forward = Some(plan_forward);
+            s.radio.broadcast_all = Some(true);
+            s.radio.loss = Some(0.25);
+            s.radio.delay_s = Some(delay_s);
+        })
+    };
+    for delay_s in [0.1, 0.2, 0.3] {
+        let planned = batch(&radio_only(delay_s, true), 100);
+        assert!(planned.pass_fraction >= 0.97, "{delay_s} s: {}", planned.pass_fraction);
+        // Carried all the way by their tracks' rates, the reports feed each follower's
+        // corrections back amplified: no run passes.
+        let tracked = batch(&radio_only(delay_s, false), 40);
+        assert!(tracked.pass_fraction <= 0.1, "{delay_s} s: {}", tracked.pass_fraction);
+    }
+}
+
+#[test]
+fn relative_sensing_keeps_a_wandering_position_fix_out_of_coasting_tracks() {
+    // Every UAV's own position fix wanders (3 m σ, 60 s correlation: 0.17 m a period); its
+    // neighbours are measured relative to it, and a fifth of the detections are lost, so tracks
+    // coast over periods in which the fix moved (METHOD §8, "the tracks in the observer's
+    // frame").
+    let biased = |relative: bool| {
+        scenario("paper.toml", |s| {
+            s.controller.plan_forward = None;
+            s.noise.gnss_bias_m = Some(3.0);
+            s.sensing.dropout = Some(0.2);
+            s.sensing.relative = Some(relative);
+        })
+    };
+    let relative = batch(&biased(true), 100);
+    assert!(relative.pass_fraction >= 0.99, "{}", relative.pass_fraction);
+    // Observations placed with the true relative position but the world's frame: the bias is
+    // every UAV's own, and none passes.
+    let world = batch(&biased(false), 20);
+    assert_eq!(world.pass_fraction, 0.0);
 }

@@ -126,7 +126,7 @@ impl Hearing {
             if id == *me || heard.iter().any(|h| h.id == id) {
                 continue;
             }
-            let weight = p.coasting_weight(tracks.age(s, now));
+            let weight = p.coasting_weight(tracks.missing(s, now));
             heard.push(Heard { id, now: tracks.state_at(s, now), next: tracks.state_at(s, now + dt), weight });
         }
     }

@@ -66,6 +66,18 @@ pub struct ProximityController {
     /// The formation's turn as this UAV sees it, for the setpoint lead (only for a vehicle that
     /// lags its setpoints, in a formation that turns as one body).
     trend: Option<Box<TurnTrend>>,
+    /// With relative sensing, the own measurement of the last period: what it moved by beyond
+    /// its measured velocity is its position fix's error moving, which moves every onboard
+    /// observation alike.
+    own_frame: Option<Box<OwnFix>>,
+}
+
+/// A UAV's own measured position and velocity at a time (relative sensing).
+#[derive(Debug, Clone, Copy)]
+struct OwnFix {
+    t: f64,
+    pos: [f64; 3],
+    vel: [f64; 3],
 }
 
 /// The formation's turn rate as one UAV sees it (the mean of its neighbours' turn rates) and
@@ -186,7 +198,8 @@ impl ProximityController {
         let p = &setup.params;
         let m = p.areas.areas;
         let slots = m + dependency.refs().len();
-        let tracks = NeighbourTracks::new(p.predictor, slots, p.track_timeout_s, p.coast_accel_s);
+        let tracks = NeighbourTracks::new(p.predictor, slots, p.track_timeout_s, p.coast_accel_s)
+            .with_carry(setup.carry(formation.frame));
         let fusion = p
             .isolation_gate
             .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
@@ -203,6 +216,7 @@ impl ProximityController {
             navigator: None,
             avoidance,
             trend,
+            own_frame: None,
         })
     }
 
@@ -298,6 +312,9 @@ impl ProximityController {
 
         // §2: S_i, the nearest perceived UAV in each azimuth area (§3: a repeated report of a
         // neighbour updates its track and takes no place of its own).
+        if params.relative_sensing {
+            self.follow_own_frame(now_s, own);
+        }
         self.sort_into_areas(now_s, own, observations);
         // Steps 1-3: X̂_ij per neighbour, accumulated into X̄_i and X̂ᴰ_i.
         let est = self.estimate(now_s, own, &slot_i, &x_hold, observations);
@@ -331,6 +348,29 @@ impl ProximityController {
         decide(Outcome::Adjusted { normalised_sq }, input)
     }
 
+    /// Relative sensing: every onboard observation is the UAV's own measured position plus the
+    /// neighbour's relative one, so a change of its own position fix's error (a GNSS bias that
+    /// wanders) moves all of them alike. The tracks move with it: by what the own measured
+    /// position moved beyond its measured velocity since the last period (trapezoid rule), so
+    /// that a track coasting from then and the UAV's own state keep the same error.
+    fn follow_own_frame(&mut self, now_s: f64, own: &State9) {
+        let pos = [own[X], own[X + 1], own[X + 2]];
+        let vel = [own[VX], own[VX + 1], own[VX + 2]];
+        let now = OwnFix { t: now_s, pos, vel };
+        if let Some(last) = self.own_frame.as_deref_mut() {
+            let h = now_s - last.t;
+            if h > 0.0 && h <= self.setup.params.track_timeout_s {
+                let d: [f64; 3] = std::array::from_fn(|k| pos[k] - last.pos[k] - 0.5 * h * (last.vel[k] + vel[k]));
+                if d.iter().all(|x| x.is_finite()) {
+                    self.tracks.shift(d);
+                }
+            }
+            *last = now;
+        } else {
+            self.own_frame = Some(Box::new(now));
+        }
+    }
+
     /// §2: fills S_i (`self.nearest`) with the nearest UAV per azimuth area, from the UAV's
     /// own view of the observations; then neighbours perceived recently but missing now coast
     /// on their tracks (§3) into areas that have no fresh observation. Every report of a UAV
@@ -347,6 +387,9 @@ impl ProximityController {
         for (k, o) in observations.iter().enumerate() {
             if o.source == ObservationSource::Close {
                 continue; // collision avoidance's alone
+            }
+            if out_of_frame(params, tracks, o, now_s) {
+                continue;
             }
             if observations[..k].iter().any(|p| p.id == o.id && p.source != ObservationSource::Close) {
                 tracks.predict(o, now_s, params.dt_s);
@@ -369,7 +412,11 @@ impl ProximityController {
         }
         for s in 0..tracks.slots() {
             let Some(id) = tracks.coasting(s, now_s, params.coast_s) else { continue };
-            if id == me || observations.iter().any(|o| o.id == id && o.source != ObservationSource::Close) {
+            if id == me
+                || observations.iter().any(|o| {
+                    o.id == id && o.source != ObservationSource::Close && !out_of_frame(params, tracks, o, now_s)
+                })
+            {
                 continue;
             }
             let x = tracks.state_at(s, now_s);
@@ -430,8 +477,11 @@ impl ProximityController {
         let nav_omega = match (params.turn_feedforward && heading_rate, navigator) {
             (true, Some(n)) => {
                 observations.iter().find(|o| o.id == n && o.source != ObservationSource::Close).and_then(|o| {
+                    // From its track's last measurement before this report (not yet fed) to
+                    // this report's: a delayed report is as old as the radio made it.
                     let (before, age) = tracks.report(n, now_s)?;
-                    (age > 0.0).then(|| setup.vehicle.turn_rate(&before, &o.state, age))
+                    let span = age - o.age_s;
+                    (span > crate::predictor::SAME_INSTANT_S).then(|| setup.vehicle.turn_rate(&before, &o.state, span))
                 })
             }
             _ => None,
@@ -468,7 +518,12 @@ impl ProximityController {
                 match tracks.coasting(s, now_s, params.coast_s) {
                     Some(id) => {
                         let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
-                        (id, tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)), (x_j, dt))
+                        (
+                            id,
+                            tracks.state_at(s, now_s + dt),
+                            params.coasting_weight(tracks.missing(s, now_s)),
+                            (x_j, dt),
+                        )
                     }
                     None => continue,
                 }
@@ -487,35 +542,35 @@ impl ProximityController {
         // Step 3: main references perceived but not the nearest in their area.
         for r in 0..dependency.refs().len() {
             let (id, c) = dependency.refs()[r];
-            let (f_x_j, f, x_j) =
-                match observations.iter().position(|o| o.id == id && o.source != ObservationSource::Close) {
-                    Some(k) => {
-                        if nearest.iter().any(|a| a.0 == k as u32) {
-                            continue; // already counted with its area
-                        }
-                        let o = &observations[k];
-                        if o.source == ObservationSource::Onboard
-                            && (state::position(&o.state) - state::position(own)).norm_squared() > r2
-                        {
-                            continue;
-                        }
-                        let f_x_j = tracks.predict(o, now_s, dt);
-                        (f_x_j, 1.0, seen_now(tracks, o, now_s, dt, needs_now))
+            let (f_x_j, f, x_j) = match observations.iter().position(|o| {
+                o.id == id && o.source != ObservationSource::Close && !out_of_frame(params, tracks, o, now_s)
+            }) {
+                Some(k) => {
+                    if nearest.iter().any(|a| a.0 == k as u32) {
+                        continue; // already counted with its area
                     }
-                    None => {
-                        // Not observed now: coast on its track, unless its area already did.
-                        let Some(s) =
-                            (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s, params.coast_s) == Some(id))
-                        else {
-                            continue;
-                        };
-                        if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
-                            continue;
-                        }
-                        let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
-                        (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.age(s, now_s)), (x_j, dt))
+                    let o = &observations[k];
+                    if o.source == ObservationSource::Onboard
+                        && (state::position(&o.state) - state::position(own)).norm_squared() > r2
+                    {
+                        continue;
                     }
-                };
+                    let f_x_j = tracks.predict(o, now_s, dt);
+                    (f_x_j, 1.0, seen_now(tracks, o, now_s, dt, needs_now))
+                }
+                None => {
+                    // Not observed now: coast on its track, unless its area already did.
+                    let Some(s) = (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s, params.coast_s) == Some(id))
+                    else {
+                        continue;
+                    };
+                    if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
+                        continue;
+                    }
+                    let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
+                    (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.missing(s, now_s)), (x_j, dt))
+                }
+            };
             let Some(x_hat) = implied(id, &x_j, &f_x_j, f) else { continue };
             let (suspect, upstream) = if fusion.is_some() { roles(id) } else { (true, true) };
             est.take(fusion, Implied { x_hat, f, c: Some(c), in_area: false, suspect, upstream });
@@ -532,6 +587,16 @@ impl ProximityController {
         }
         est
     }
+}
+
+/// With relative sensing, whether radio report `o` is left out: its neighbour was last heard by
+/// the UAV's own sensors within `coast_s`, so its track is in the UAV's own frame (onboard
+/// observations are placed in the world with the UAV's own measured state) while the report
+/// is in its sender's (its own measured state): mixed in, it would move the neighbour by the
+/// two position fixes' difference. The track coasts over the missed detection instead.
+#[inline]
+fn out_of_frame(params: &ControllerParams, tracks: &NeighbourTracks, o: &Observation, now_s: f64) -> bool {
+    params.relative_sensing && o.source == ObservationSource::Radio && tracks.heard_onboard(o.id, now_s, params.coast_s)
 }
 
 /// Step 4: `O_i − X_hold` with `O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i` (O_i = X̄_i when no main reference

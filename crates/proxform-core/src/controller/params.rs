@@ -42,7 +42,8 @@ pub struct ControllerParams {
     /// A coasting neighbour's acceleration is extrapolated for at most this long after its last
     /// measurement; beyond, it goes on at the velocity reached (s, ≥ 0). Default 0.2 s.
     pub coast_accel_s: f64,
-    /// A coasting neighbour weighs `exp(−age / coast_decay_s)` in the means (a measured one
+    /// A coasting neighbour weighs `exp(−missing / coast_decay_s)` in the means, `missing` the
+    /// time since a report of it last arrived (a measured one
     /// weighs 1), so that the centre does not jump when a neighbour drops out or comes back,
     /// and a UAV that has really gone fades out instead of being followed as a ghost (s, > 0).
     /// Default 0.1 s.
@@ -52,6 +53,16 @@ pub struct ControllerParams {
     /// ([`crate::VehicleModel::turn_rate`]: from its bank for the fixed wing, from its heading
     /// otherwise). Scenario files switch it on for the fixed wing and the multirotor. Default off.
     pub turn_feedforward: bool,
+    /// A report older than one period (delayed, relayed, or a coasting track) is brought
+    /// forward beyond it as the mission plan moves, when the setup knows the plan
+    /// ([`crate::plan`], METHOD §3); off, its track's rates carry it all the way (the paper's
+    /// prediction). Default on.
+    pub plan_forward: bool,
+    /// Onboard observations are measured relative to this UAV and placed in the world with its
+    /// own measured state (relative sensing): its neighbour tracks then move with that
+    /// measurement's error, so that a track coasting from an earlier period and the UAV's own
+    /// state share its position-fix error (METHOD §8). Default off.
+    pub relative_sensing: bool,
     /// Smoothing time (s, > 0) of the formation's turn acceleration ω̇ that a vehicle lagging
     /// its setpoints leads its slot's tangential acceleration by (METHOD §5, the multirotor).
     /// Default 0.3 s.
@@ -243,6 +254,8 @@ impl Default for ControllerParams {
             coast_accel_s: 0.2,
             coast_decay_s: 0.1,
             turn_feedforward: false,
+            plan_forward: true,
+            relative_sensing: false,
             turn_trend_s: 0.3,
             own_filter_gain: 1.0,
             separation_m: None,

@@ -5,7 +5,9 @@ use std::sync::Arc;
 use crate::azimuth::AreaClassifier;
 use crate::control::{solve, Hessian};
 use crate::error::ConfigError;
+use crate::formation::FormationFrame;
 use crate::horizon::{solve_horizon, HorizonProblem};
+use crate::plan::{Carry, Plan};
 use crate::state::{Input, State9};
 use crate::vehicle::VehicleModel;
 
@@ -24,6 +26,10 @@ pub struct ControllerSetup {
     /// The deceleration the stopping limit and collision avoidance count on (m/s²): their
     /// share ([`super::AVOID_BRAKING_SHARE`]) of the vehicle's braking.
     pub(super) braking_mps2: f64,
+    /// The mission plan, when the UAVs know it, and how it carries reports older than a period
+    /// in a formation of each frame (world, course, heading): shared by every UAV's tracks
+    /// ([`crate::plan`]).
+    carries: Option<[Arc<Carry>; 3]>,
 }
 
 impl ControllerSetup {
@@ -43,7 +49,33 @@ impl ControllerSetup {
             .then(|| Hessian::new(&vehicle.control_matrix(&State9::zeros(), params.dt_s), n, &q, &input_weights));
         let classifier = AreaClassifier::new(params.areas.areas);
         let braking_mps2 = super::AVOID_BRAKING_SHARE * vehicle.braking_mps2();
-        Ok(Arc::new(Self { params, vehicle, q, input_weights, classifier, hessian, braking_mps2 }))
+        Ok(Arc::new(Self { params, vehicle, q, input_weights, classifier, hessian, braking_mps2, carries: None }))
+    }
+
+    /// [`Self::new`], knowing the mission `plan` (the navigator's planned motion).
+    pub fn with_plan(
+        params: ControllerParams,
+        vehicle: VehicleModel,
+        plan: Arc<dyn Plan>,
+    ) -> Result<Arc<Self>, ConfigError> {
+        let mut s = Arc::unwrap_or_clone(Self::new(params, vehicle)?);
+        let dt = s.params.dt_s;
+        let carry = |frame| Arc::new(Carry::new(plan.clone(), frame, dt));
+        let carries = [carry(FormationFrame::World), carry(FormationFrame::Course), carry(FormationFrame::Heading)];
+        s.carries = Some(carries);
+        Ok(Arc::new(s))
+    }
+
+    /// The mission plan, when the UAVs know it.
+    pub fn plan(&self) -> Option<&Arc<dyn Plan>> {
+        self.carries.as_ref().map(|c| c[0].plan())
+    }
+
+    /// How reports older than a period are brought forward in a formation of frame `frame`:
+    /// with the plan, when the UAVs know it and `plan_forward` is on.
+    pub fn carry(&self, frame: FormationFrame) -> Option<Arc<Carry>> {
+        let carries = self.carries.as_ref().filter(|_| self.params.plan_forward)?;
+        Some(carries[frame as usize].clone())
     }
 
     /// The parameters.

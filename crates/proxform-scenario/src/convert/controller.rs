@@ -159,6 +159,9 @@ pub fn params(c: &ControllerSpec, dt_s: f64, vehicle: &VehicleModel) -> Result<C
             ))
         }
     };
+    if let Some(v) = c.plan_forward {
+        p.plan_forward = v;
+    }
     p.turn_feedforward = c.turn_feedforward.unwrap_or(!matches!(vehicle, VehicleModel::Kinematic(_)));
     // The fixed wing's braking is a rough figure (it avoids by turning): off unless asked.
     p.stop_closing = c.stop_closing.unwrap_or(!fixed_wing);

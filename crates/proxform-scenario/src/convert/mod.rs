@@ -278,7 +278,12 @@ impl TryFrom<ScenarioSpec> for Scenario {
             VehicleModel::FixedWing(_) => 0.0,
         };
         params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
-        let setup = ControllerSetup::new(params, vehicle).map_err(|e| err("controller", e.to_string()))?;
+        params.relative_sensing = relative_sensing;
+        // Every UAV knows the mission: reports are brought forward with the navigator's plan
+        // (METHOD §3, "Reports brought forward").
+        let s0 = initial[navigator.index()];
+        let plan = Arc::new(crate::path::MissionPlan(path.clone(), [s0[0], s0[1], s0[2]]));
+        let setup = ControllerSetup::with_plan(params, vehicle, plan).map_err(|e| err("controller", e.to_string()))?;
         let mut warnings = world::faults_after(&faults, duration_s);
         warnings.append(&mut schedule_warnings);
         if navigator_by_radio {
@@ -306,6 +311,17 @@ impl TryFrom<ScenarioSpec> for Scenario {
             warnings.push(err(
                 "controller.turn_feedforward",
                 "does nothing in a world frame, which does not turn (formation.frame = \"course\" or \"heading\")",
+            ));
+        }
+        if !setup.params().plan_forward && (radio.delay_steps > 0 || radio.relay_navigator) {
+            warnings.push(err(
+                "controller.plan_forward",
+                format!(
+                    "false (the paper's prediction) with radio reports that arrive old ({}): their tracks' rates carry \
+                     them over the delay, which feeds each follower's corrections back amplified (METHOD §3, \
+                     \"Reports brought forward\"); without the key they are brought forward as the mission plan moves",
+                    if radio.delay_steps > 0 { "radio.delay_s" } else { "radio.relay_navigator" }
+                ),
             ));
         }
         if fixed_wing && formation.frame == proxform_core::FormationFrame::Heading && !wind.is_calm() {

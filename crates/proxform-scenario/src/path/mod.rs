@@ -186,6 +186,17 @@ impl NavigatorPath {
     }
 }
 
+/// The navigator's path from its start position (m), as every UAV knows it before the flight
+/// ([`proxform_core::plan::Plan`]).
+#[derive(Debug, Clone)]
+pub struct MissionPlan(pub NavigatorPath, pub [f64; 3]);
+
+impl proxform_core::plan::Plan for MissionPlan {
+    fn state_at(&self, t_s: f64) -> State9 {
+        self.0.state_at(t_s, self.1)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

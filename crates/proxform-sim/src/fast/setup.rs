@@ -94,6 +94,9 @@ pub struct Consts {
     /// Tracks older than this (steps) are freed: the longer of the timeout and the coasting.
     pub track_limit: i64,
     pub coast_decay_s: f64,
+    /// Coasting tracks are brought forward beyond one period by the mission plan
+    /// ([`proxform_core::plan`]), as the reference's.
+    pub carry: Option<std::sync::Arc<proxform_core::plan::Carry>>,
     /// Measurement noise σ per parameter.
     pub sigma: [f32; 9],
     /// The formation turns with the course (W's offset rotated by the neighbour's course).
@@ -184,6 +187,7 @@ impl Consts {
             coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
             coast_decay_s: p.coast_decay_s,
+            carry: setup.carry(sc.formation().frame),
             sigma: std::array::from_fn(|k| sigma[k] as f32),
             course_frame: sc.formation().frame == proxform_core::FormationFrame::Course,
             inv_threshold: std::array::from_fn(|k| 1.0 / p.envelope.thresholds[k]),

@@ -329,6 +329,28 @@ impl Owner<'_> {
     pub fn state_at(&self, f: &Filter, s: usize, h: f64, d: [f64; 3]) -> [f32; 9] {
         extrapolate(&f.load(&self.tracks[s]), h as f32, d.map(|x| x as f32), f.coast_accel_s as f32)
     }
+
+    /// The state of slot `s`, measured at `t0` (s), at `t0 + h` as the reference's tracks
+    /// bring it forward with a plan: its own rates over one period (at most `coast_accel_s`),
+    /// `carry` beyond
+    /// (`proxform_core::plan`); relative to the reference point `d` metres from that of its
+    /// measurement.
+    pub fn carried(
+        &self,
+        f: &Filter,
+        carry: &proxform_core::plan::Carry,
+        s: usize,
+        (t0, h): (f64, f64),
+        d: [f64; 3],
+    ) -> [f32; 9] {
+        let span = f.dt.min(f.coast_accel_s);
+        let own = extrapolate(&f.load(&self.tracks[s]), span as f32, d.map(|x| x as f32), f32::INFINITY);
+        let mut x = State9::zeros();
+        for a in 0..9 {
+            x[a] = f64::from(own[a]);
+        }
+        to_f32(&carry.carry(&x, t0 + span, t0 + h))
+    }
 }
 
 /// The track's state `h` seconds after its measurement, its position shifted by `d`: the

@@ -479,7 +479,13 @@ fn decide(
     let mut fed = 0;
     let coast = |tracks: &Owner<'_>, t: usize| {
         let age = tracks.age_steps(t, k) as f64 * dt;
-        let x = tracks.state_at(f, t, age + dt, shifts(tracks.measured_at(t, k)));
+        let (k0, h) = (tracks.measured_at(t, k), age + dt);
+        let x = match &c.carry {
+            Some(carry) if h > dt.min(f.coast_accel_s) + proxform_core::predictor::SAME_INSTANT_S => {
+                tracks.carried(f, carry, t, (f64::from(k0) * dt, h), shifts(k0))
+            }
+            _ => tracks.state_at(f, t, h, shifts(k0)),
+        };
         (x, (-age / c.coast_decay_s).exp() as f32)
     };
     for a in 0..c.areas {
