@@ -189,4 +189,32 @@ mod tests {
         assert!(relayed.warnings().is_empty(), "{:?}", relayed.warnings());
         assert!(relayed.radio().relay_navigator);
     }
+
+    #[test]
+    fn the_paper_method_leaves_out_what_proxform_adds_unless_the_file_sets_it() {
+        let v = |controller: &str| {
+            crate::load::parse(
+                &format!("[formation.shape]\nkind = \"v\"\nuavs = 9\nspacing_m = 80.0\n[controller]\n{controller}\n"),
+                "v.toml",
+            )
+            .expect("valid")
+        };
+        let nav = proxform_core::UavId(0);
+        let default = v("");
+        assert!(default.dependencies()[8].degree(nav).is_some());
+        assert!(default.controller().plan_forward);
+        let paper = v("method = \"paper\"");
+        assert!(paper.dependencies()[8].degree(nav).is_none(), "the paper's derived tables hold neighbours only");
+        assert!(paper.beacons().is_empty());
+        assert!(!paper.controller().plan_forward);
+        assert!(paper.controller().isolation_gate.is_none());
+        // Keys the file sets win.
+        assert!(v("method = \"paper\"\nplan_forward = true").controller().plan_forward);
+        let e = crate::load::parse(
+            "[formation.shape]\nkind = \"v\"\nuavs = 3\nspacing_m = 80.0\n[controller]\nmethod = \"papers\"\n",
+            "m.toml",
+        )
+        .expect_err("unknown");
+        assert!(e.to_string().contains("\"paper\""), "{e}");
+    }
 }

@@ -296,7 +296,7 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         ),
         own_gate_m: Some(p.own_gate_m.unwrap_or(0.0)),
         own_gate_growth_mps: p.own_gate_m.map(|_| p.own_gate_growth_mps),
-        method: Some(method.label().into()),
+        method: Some(if crate::convert::paper_method(set) { crate::convert::PAPER } else { method.label() }.into()),
         gains,
         thresholds: Some(ThresholdsSpec {
             x_m: Some(d[state::X]),

@@ -308,8 +308,9 @@ pub struct ControllerSpec {
     pub own_gate_m: Option<f64>,
     /// How fast the own-sensor gate widens while measurements are refused (m/s, ≥ 0). Default 1.
     pub own_gate_growth_mps: Option<f64>,
-    /// Formation control method: "proximity" (default), "leader_follower", "consensus" or
-    /// "flocking" (baselines, default gains; the radio then carries what they need).
+    /// Formation control method: "proximity" (default), "paper" (the proximity method with the
+    /// paper's choices where proxform's defaults go beyond it), "leader_follower", "consensus"
+    /// or "flocking" (baselines, default gains; the radio then carries what they need).
     pub method: Option<String>,
     /// Gains of a baseline method (keys of its gains table; omitted ones keep their
     /// defaults), e.g. `{ pd = { kp = 2.0, kv = 2.8 } }`.

@@ -94,12 +94,12 @@ fn summaries_do_not_depend_on_the_thread_count() {
 
 #[test]
 fn the_defaults_are_the_paper_experiment() {
-    // Only the formation and its dependency table written, and the paper's prediction (a
-    // coasting track carried by its own rates, which the built-in states: proxform's default
-    // brings it forward with the plan, METHOD §3): every other value a default.
+    // Only the formation and its dependency table written, and the paper's method (proxform's
+    // defaults go beyond it, METHOD §8; the built-in states the one choice that would change
+    // its results, plan_forward = false): every other value a default.
     let mut bare = proxform_scenario::ScenarioSpec { name: Some("paper".into()), ..Default::default() };
     bare.formation = paper_spec().formation;
-    bare.controller.plan_forward = Some(false);
+    bare.controller.method = Some("paper".into());
     let bare = Scenario::try_from(bare).expect("valid");
     let built_in = paper();
     for seed in [1, 99] {

@@ -188,16 +188,33 @@ pub fn params(c: &ControllerSpec, dt_s: f64, vehicle: &VehicleModel) -> Result<C
     Ok(p)
 }
 
-/// The followers' method: `controller.method` with its `controller.gains`.
+/// The followers' method: `controller.method` with its `controller.gains` ("paper" is the
+/// proximity method with the paper's choices, [`paper_method`]).
 pub fn method(c: &ControllerSpec) -> Result<Method, SpecError> {
     match c.method.as_deref() {
-        None => match &c.gains {
+        None | Some(PAPER) => match &c.gains {
             Some(_) => Err(err("controller.gains", "the proximity method's parameters are the [controller] keys")),
             None => Ok(Method::Proximity),
         },
-        Some(label) => method_from(label, c.gains.as_ref())
-            .map_err(|(sub, message)| err(if sub { "controller.gains" } else { "controller.method" }, message)),
+        Some(label) => method_from(label, c.gains.as_ref()).map_err(|(sub, message)| {
+            let message = if sub {
+                message
+            } else {
+                format!("{message} or \"{PAPER}\" (the proximity method as the paper has it)")
+            };
+            err(if sub { "controller.gains" } else { "controller.method" }, message)
+        }),
     }
+}
+
+/// `controller.method = "paper"`: the proximity method with the paper's choices where
+/// proxform's defaults go beyond it (METHOD §8): derived tables without the navigator, plain
+/// means wherever UAVs fly, reports carried by their tracks' rates. Keys the file sets win.
+pub const PAPER: &str = "paper";
+
+/// Whether `c` asks for the paper's method.
+pub fn paper_method(c: &ControllerSpec) -> bool {
+    c.method.as_deref() == Some(PAPER)
 }
 
 /// The method of `label` with `gains` (keys of its gains struct; omitted ones keep their

@@ -23,7 +23,7 @@ use crate::defaults;
 use crate::scenario::Scenario;
 use crate::spec::ScenarioSpec;
 
-pub use controller::method_from;
+pub use controller::{method_from, paper_method, PAPER};
 pub use values::SpecError;
 use values::{err, non_negative, or_default, positive, uav};
 
@@ -123,7 +123,8 @@ impl TryFrom<ScenarioSpec> for Scenario {
         // keeping"); a multirotor or fixed-wing formation hears the navigator in any case.
         // Tables written out for every follower (`depends_on`, the paper's) are flown as written.
         let derived = explicit.iter().enumerate().any(|(i, t)| i != navigator.index() && t.is_none());
-        if derived || !matches!(vehicle, VehicleModel::Kinematic(_)) {
+        let paper = controller::paper_method(&spec.controller);
+        if !paper && (derived || !matches!(vehicle, VehicleModel::Kinematic(_))) {
             let d = formation_spec.dependencies.get_or_insert_with(Default::default);
             d.navigator_degree = d.navigator_degree.or(Some(defaults::NAVIGATOR_DEGREE));
         }
@@ -268,7 +269,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             || !schedule.is_empty()
             || reassign_on_loss.is_some()
             || faults.iter().any(|f| matches!(f, crate::faults::Fault::Join { .. }));
-        if spec.controller.isolation_gate.is_none() && off_slots {
+        if spec.controller.isolation_gate.is_none() && off_slots && !paper {
             params.isolation_gate = Some(defaults::ISOLATION_GATE_OFF_SLOTS);
         }
         // Collision avoidance by default for the kinematic vehicle; the fixed wing's braking is a
@@ -279,6 +280,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         };
         params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
         params.relative_sensing = relative_sensing;
+        if paper && spec.controller.plan_forward.is_none() {
+            params.plan_forward = false;
+        }
         // Every UAV knows the mission: reports are brought forward with the navigator's plan
         // (METHOD §3, "Reports brought forward").
         let s0 = initial[navigator.index()];
@@ -317,9 +321,10 @@ impl TryFrom<ScenarioSpec> for Scenario {
             warnings.push(err(
                 "controller.plan_forward",
                 format!(
-                    "false (the paper's prediction) with radio reports that arrive old ({}): their tracks' rates carry \
-                     them over the delay, which feeds each follower's corrections back amplified (METHOD §3, \
-                     \"Reports brought forward\"); without the key they are brought forward as the mission plan moves",
+                    "false (the paper's prediction, also with method = \"paper\") with radio reports that arrive old \
+                     ({}): their tracks' rates carry them over the delay, which feeds each follower's corrections back \
+                     amplified (METHOD §3, \"Reports brought forward\"); with plan_forward = true they are brought \
+                     forward as the mission plan moves",
                     if radio.delay_steps > 0 { "radio.delay_s" } else { "radio.relay_navigator" }
                 ),
             ));
