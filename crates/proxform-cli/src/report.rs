@@ -154,7 +154,7 @@ pub fn print(
     writeln!(out, "pairs closer than safety {:.2} per run (max {})", m.close_pairs_mean, m.close_pairs_max)?;
     writeln!(
         out,
-        "order, connectivity      order mean {:.4}, min {:.4}; largest connected group ≥ {} %",
+        "order, connectivity      order mean {:.4}, min {:.4}; largest group connected by onboard sensing ≥ {} %",
         m.order_mean,
         m.order_min,
         percent(m.connectivity_min)

@@ -71,9 +71,10 @@ pub struct RunArgs {
     /// Override the neighbour predictor.
     #[arg(long, value_enum)]
     predictor: Option<Predictor>,
-    /// Formation control method of the followers (baselines with their default gains); the
-    /// radio then carries what the method needs.
-    #[arg(long, value_parser = Method::LABELS)]
+    /// Formation control method of the followers ("paper": the proximity method with the
+    /// paper's choices; baselines with their default gains); the radio then carries what the
+    /// method needs.
+    #[arg(long, value_parser = method_labels())]
     method: Option<String>,
     /// Horizon H of the proximity method's predictive input (1: closed form; > 1: QP).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_HORIZON)))]
@@ -336,4 +337,9 @@ fn uav_list(list: &str, scenario: &Scenario) -> Result<Vec<usize>> {
     out.sort_unstable();
     out.dedup();
     Ok(out)
+}
+
+/// The labels `--method` takes: the methods', and "paper".
+fn method_labels() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(Method::LABELS.iter().copied().chain([proxform_scenario::convert::PAPER]))
 }

@@ -385,6 +385,17 @@ impl NeighbourTracks {
         })
     }
 
+    /// Whether any neighbour's last report came from the owner's own sensors, no longer than
+    /// `max_s` before `now` (and its measurement within the timeout).
+    pub fn any_heard_onboard(&self, now: f64, max_s: f64) -> bool {
+        self.ids.iter().zip(&self.tracks).any(|(&(id, flags), tr)| {
+            id != FREE
+                && flags & ONBOARD != 0
+                && now - tr.heard <= max_s + SAME_INSTANT_S
+                && now - tr.t <= self.timeout_s
+        })
+    }
+
     /// Number of track slots in use.
     pub fn slots(&self) -> usize {
         self.ids.len()

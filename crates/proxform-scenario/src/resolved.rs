@@ -273,6 +273,8 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         coast_decay_s: Some(p.coast_decay_s),
         turn_feedforward: Some(p.turn_feedforward),
         plan_forward: Some(p.plan_forward),
+        // Follows sensing.relative and noise.gnss_bias_m unless the file sets it.
+        radio_fallback: set.radio_fallback,
         stop_closing: Some(p.stop_closing),
         own_filter_gain: Some(p.own_filter_gain),
         separation_m: follows(

@@ -291,6 +291,9 @@ pub struct ControllerSpec {
     /// A report older than one period (delayed, relayed, coasting) is brought forward beyond
     /// it as the mission plan moves; false: by its track's rates (the paper's). Default true.
     pub plan_forward: Option<bool>,
+    /// With relative sensing, radio reports count only for a UAV that hears nobody onboard.
+    /// Default: on where position fixes carry a bias (`noise.gnss_bias_m`), off otherwise.
+    pub radio_fallback: Option<bool>,
     /// Limit the closing velocity to what braking stops within the gap. Default: on for the
     /// kinematic vehicle, off for the fixed wing.
     pub stop_closing: Option<bool>,

@@ -257,3 +257,25 @@ fn relative_sensing_keeps_a_wandering_position_fix_out_of_coasting_tracks() {
     let world = batch(&biased(false), 20);
     assert_eq!(world.pass_fraction, 0.0);
 }
+
+#[test]
+fn with_biased_fixes_a_deep_formation_leaves_radio_reports_to_uavs_that_see_nobody() {
+    // Each UAV's fix has a 3 m σ bias of its own; onboard sensors measure neighbours relative
+    // to the UAV, but the navigator's broadcast (which derived tables make it send) is its own
+    // biased fix: mixed with onboard observations it moves the rear ranks by ~4 m. With the
+    // biases in the file the radio counts only for a UAV that hears nobody onboard
+    // (`controller.radio_fallback`, METHOD §8).
+    let v12 = |fallback: &str| {
+        let text = format!(
+            "name = \"v12-bias\"\nduration_s = 90.0\n[formation.shape]\nkind = \"v\"\nuavs = 12\nspacing_m = 70.0\n\
+             [path]\nkind = \"waypoints\"\nspeed_kmh = 220.0\nturn_radius_m = 2500.0\ntransition_s = 15.0\n\
+             points_m = [[2000.0, 0.0, 0.0], [4000.0, -400.0, 20.0], [7000.0, -400.0, 20.0]]\n\
+             [noise]\ngnss_bias_m = 3.0\n[sensing]\nrelative = true\ndropout = 0.2\n[controller]\n{fallback}\n"
+        );
+        proxform_scenario::load::parse(&text, "v12.toml").expect("valid")
+    };
+    let default = v12("");
+    assert!(default.controller().radio_fallback, "the biases set it");
+    assert!(batch(&default, 40).pass_fraction >= 0.95);
+    assert_eq!(batch(&v12("radio_fallback = false"), 10).pass_fraction, 0.0);
+}

@@ -388,7 +388,7 @@ impl ProximityController {
             if o.source == ObservationSource::Close {
                 continue; // collision avoidance's alone
             }
-            if out_of_frame(params, tracks, o, now_s) {
+            if out_of_frame(params, tracks, o, observations, now_s) {
                 continue;
             }
             if observations[..k].iter().any(|p| p.id == o.id && p.source != ObservationSource::Close) {
@@ -414,7 +414,9 @@ impl ProximityController {
             let Some(id) = tracks.coasting(s, now_s, params.coast_s) else { continue };
             if id == me
                 || observations.iter().any(|o| {
-                    o.id == id && o.source != ObservationSource::Close && !out_of_frame(params, tracks, o, now_s)
+                    o.id == id
+                        && o.source != ObservationSource::Close
+                        && !out_of_frame(params, tracks, o, observations, now_s)
                 })
             {
                 continue;
@@ -543,7 +545,9 @@ impl ProximityController {
         for r in 0..dependency.refs().len() {
             let (id, c) = dependency.refs()[r];
             let (f_x_j, f, x_j) = match observations.iter().position(|o| {
-                o.id == id && o.source != ObservationSource::Close && !out_of_frame(params, tracks, o, now_s)
+                o.id == id
+                    && o.source != ObservationSource::Close
+                    && !out_of_frame(params, tracks, o, observations, now_s)
             }) {
                 Some(k) => {
                     if nearest.iter().any(|a| a.0 == k as u32) {
@@ -591,12 +595,26 @@ impl ProximityController {
 
 /// With relative sensing, whether radio report `o` is left out: its neighbour was last heard by
 /// the UAV's own sensors within `coast_s`, so its track is in the UAV's own frame (onboard
-/// observations are placed in the world with the UAV's own measured state) while the report
-/// is in its sender's (its own measured state): mixed in, it would move the neighbour by the
-/// two position fixes' difference. The track coasts over the missed detection instead.
+/// observations are placed in the world with the UAV's own measured state) while the report is
+/// in its sender's (the sender's own measured state): mixed in, it would move the neighbour by
+/// the two position fixes' difference. The track coasts over the missed detection instead.
+/// With `radio_fallback`, every radio report is left out while the UAV hears anyone onboard
+/// (with independent 3 m σ biases the fixes differ by ~4 m): the radio then counts only for a
+/// UAV that perceives nobody onboard, whose frame it then is.
 #[inline]
-fn out_of_frame(params: &ControllerParams, tracks: &NeighbourTracks, o: &Observation, now_s: f64) -> bool {
-    params.relative_sensing && o.source == ObservationSource::Radio && tracks.heard_onboard(o.id, now_s, params.coast_s)
+fn out_of_frame(
+    params: &ControllerParams,
+    tracks: &NeighbourTracks,
+    o: &Observation,
+    observations: &[Observation],
+    now_s: f64,
+) -> bool {
+    params.relative_sensing
+        && o.source == ObservationSource::Radio
+        && (tracks.heard_onboard(o.id, now_s, params.coast_s)
+            || params.radio_fallback
+                && (observations.iter().any(|p| p.source == ObservationSource::Onboard)
+                    || tracks.any_heard_onboard(now_s, params.coast_s)))
 }
 
 /// Step 4: `O_i − X_hold` with `O_i = (1 − λ)·X̄_i + λ·X̂ᴰ_i` (O_i = X̄_i when no main reference

@@ -63,6 +63,13 @@ pub struct ControllerParams {
     /// measurement's error, so that a track coasting from an earlier period and the UAV's own
     /// state share its position-fix error (METHOD §8). Default off.
     pub relative_sensing: bool,
+    /// With relative sensing, radio reports count only for a UAV that has heard nobody by its
+    /// own sensors within `coast_s` (a joiner homing, a UAV whose sensors see no one): the
+    /// senders' position fixes differ from this UAV's by more than the formation allows (each
+    /// UAV's fix has a bias of its own), and a report in its sender's frame mixed with onboard
+    /// observations in this UAV's would move the estimate by that difference. Off, only the
+    /// reports of neighbours heard onboard are left out. Default off.
+    pub radio_fallback: bool,
     /// Smoothing time (s, > 0) of the formation's turn acceleration ω̇ that a vehicle lagging
     /// its setpoints leads its slot's tangential acceleration by (METHOD §5, the multirotor).
     /// Default 0.3 s.
@@ -256,6 +263,7 @@ impl Default for ControllerParams {
             turn_feedforward: false,
             plan_forward: true,
             relative_sensing: false,
+            radio_fallback: false,
             turn_trend_s: 0.3,
             own_filter_gain: 1.0,
             separation_m: None,

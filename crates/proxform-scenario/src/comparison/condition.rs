@@ -95,10 +95,10 @@ impl Condition {
 
     /// The checked scenario of this condition flown by `method`.
     pub fn scenario(&self, base: &ScenarioSpec, method: &MethodEntry) -> Result<Scenario, CompareError> {
-        Scenario::try_from(self.apply(base, method)).map_err(|source| CompareError::Scenario {
+        Scenario::try_from(self.apply(base, method)).map_err(|problem| CompareError::Scenario {
             condition: self.name.clone(),
             method: method.name.clone(),
-            source,
+            problem,
         })
     }
 }

@@ -29,14 +29,14 @@ pub enum CompareError {
     #[error(transparent)]
     File(#[from] LoadError),
     /// A condition made the base scenario invalid.
-    #[error("condition '{condition}', method '{method}': {source}")]
+    #[error("condition '{condition}', method '{method}': {problem}")]
     Scenario {
         /// The condition's name.
         condition: String,
         /// The method's name.
         method: String,
-        /// The scenario's complaint.
-        source: SpecError,
+        /// The scenario's complaint (shown in the message, not as a cause: it would print twice).
+        problem: SpecError,
     },
 }
 

@@ -184,7 +184,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             *velocity_sigma_mps = noise.velocity_mps.max(1e-4);
         }
         let (dropout, reference_dropout, relative_sensing) = world::sensing(&spec.sensing)?;
-        let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, n)?;
+        let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, duration_s, n)?;
         let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable, &vehicle)?;
         let faults = world::faults(&spec.fault, n)?;
@@ -280,6 +280,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         };
         params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
         params.relative_sensing = relative_sensing;
+        // Each UAV's fix biased on its own: a radio report is in a frame ~√2 biases away.
+        let biased = gnss_bias.as_ref().is_some_and(|b| b.sigma_m > 0.0);
+        params.radio_fallback = spec.controller.radio_fallback.unwrap_or(relative_sensing && biased);
         if paper && spec.controller.plan_forward.is_none() {
             params.plan_forward = false;
         }
@@ -317,17 +320,32 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 "does nothing in a world frame, which does not turn (formation.frame = \"course\" or \"heading\")",
             ));
         }
-        if !setup.params().plan_forward && (radio.delay_steps > 0 || radio.relay_navigator) {
+        if !setup.params().plan_forward && senders > 0 && (radio.delay_steps > 0 || radio.relay_navigator) {
             warnings.push(err(
-                "controller.plan_forward",
+                if spec.controller.plan_forward.is_none() { "controller.method" } else { "controller.plan_forward" },
                 format!(
-                    "false (the paper's prediction, also with method = \"paper\") with radio reports that arrive old \
-                     ({}): their tracks' rates carry them over the delay, which feeds each follower's corrections back \
-                     amplified (METHOD §3, \"Reports brought forward\"); with plan_forward = true they are brought \
-                     forward as the mission plan moves",
+                    "{} with radio reports that arrive old ({}): their tracks' rates carry them over the delay, which \
+                     feeds each follower's corrections back amplified (METHOD §3, \"Reports brought forward\"); with \
+                     plan_forward = true they are brought forward as the mission plan moves",
+                    if spec.controller.plan_forward.is_none() {
+                        "\"paper\" carries reports by their tracks' rates (plan_forward = false, the paper's prediction)"
+                    } else {
+                        "false (the paper's prediction)"
+                    },
                     if radio.delay_steps > 0 { "radio.delay_s" } else { "radio.relay_navigator" }
                 ),
             ));
+        }
+        if biased && !relative_sensing {
+            warnings.push(err(
+                "noise.gnss_bias_m",
+                "without sensing.relative = true: neighbours are observed where they truly are while each UAV's own \
+                 fix carries its bias, so every follower flies off its slot by its own bias (METHOD §8); onboard \
+                 sensors measure neighbours relative to the UAV, which sensing.relative models",
+            ));
+        }
+        if spec.controller.radio_fallback == Some(true) && !relative_sensing {
+            warnings.push(err("controller.radio_fallback", "does nothing without sensing.relative = true"));
         }
         if fixed_wing && formation.frame == proxform_core::FormationFrame::Heading && !wind.is_calm() {
             warnings.push(err(

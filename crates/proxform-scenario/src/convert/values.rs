@@ -117,7 +117,9 @@ pub const MAX_SPEED_KMH: f64 = 3000.0;
 
 /// A value no larger in magnitude than `max` (`unit` and `meaning` explain the bound).
 pub fn within(key: &str, v: f64, max: f64, unit: &str, meaning: &str) -> Result<f64, SpecError> {
-    if v.abs() <= max {
+    if v.is_nan() {
+        Err(err(key, "is not a number"))
+    } else if v.abs() <= max {
         Ok(v)
     } else {
         Err(err(key, format!("{} {unit} is beyond ±{} {unit}: {meaning}", show(v), show(max))))

@@ -166,7 +166,7 @@ pub fn network(n: &crate::spec::NetworkSpec) -> Result<crate::scenario::NetworkF
 }
 
 /// The radio and its beacons.
-pub fn radio(r: &RadioSpec, dt_s: f64, n: usize) -> Result<(RadioModel, Vec<UavId>), SpecError> {
+pub fn radio(r: &RadioSpec, dt_s: f64, duration_s: f64, n: usize) -> Result<(RadioModel, Vec<UavId>), SpecError> {
     let beacons = match &r.beacons {
         Some(b) => b.iter().map(|&id| uav("radio.beacons", id, n)).collect::<Result<_, _>>()?,
         None => Vec::new(),
@@ -182,11 +182,17 @@ pub fn radio(r: &RadioSpec, dt_s: f64, n: usize) -> Result<(RadioModel, Vec<UavI
     if let Some(v) = r.delay_s {
         let v = non_negative("radio.delay_s", v)?;
         let steps = (v / dt_s).round();
-        if (v / dt_s - steps).abs() > 1e-6 || steps > 10_000.0 {
+        if v >= duration_s || steps > 10_000.0 {
             return Err(err(
                 "radio.delay_s",
-                format!("{v} s is not a multiple of dt_s = {dt_s} s (at most 10000 periods)"),
+                format!(
+                    "{v} s is not shorter than the flight ({duration_s} s) or than 10000 periods: no report would \
+                     arrive in time to be used"
+                ),
             ));
+        }
+        if (v / dt_s - steps).abs() > 1e-6 {
+            return Err(err("radio.delay_s", format!("{v} s is not a multiple of dt_s = {dt_s} s")));
         }
         m.delay_steps = steps as u32;
     }
