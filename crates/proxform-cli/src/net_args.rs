@@ -37,6 +37,12 @@ pub struct NetArgs {
     /// The swarm's name (keys proxform/v1/<swarm>/…) [default: proxform-<process id>].
     #[arg(long)]
     pub swarm: Option<String>,
+    /// Serve every UAV as a MAVLink system (system id = UAV number, a PX4 in local NED whose
+    /// north is the formation's initial course) sending to 127.0.0.1:PORT + i − 1, as PX4
+    /// SITL's instances send to 14540 + i; an outside controller that switches a follower to
+    /// OFFBOARD and streams velocity setpoints flies it. Needs `--clock realtime`.
+    #[arg(long, requires = "distributed")]
+    pub mavlink_port: Option<u16>,
     /// The agent binary [default: proxform-agent beside this program].
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

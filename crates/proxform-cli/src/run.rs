@@ -121,6 +121,21 @@ fn distributed(
             d.stats.late_steps, d.stats.steps
         );
     }
+    if let Some(m) = &d.stats.mavlink {
+        let flown: Vec<String> =
+            m.uavs.iter().filter(|u| u.1 > 0).map(|u| format!("UAV{} {} steps", u.0, u.1)).collect();
+        let (mut bad, mut refused) = (0, 0);
+        for (_, _, link, r) in &m.uavs {
+            bad += link.bad_crc + link.unknown + link.malformed;
+            refused += r.foreign + r.invalid + r.commands;
+        }
+        eprintln!(
+            "mavlink: {} UAV(s) served; flown by outside setpoints: {}; {bad} frame(s) undecodable, {refused} \
+             message(s) refused (another system's, invalid values, commands not carried out)",
+            m.uavs.len(),
+            if flown.is_empty() { "none".to_string() } else { flown.join(", ") }
+        );
+    }
     if !d.usage.is_empty() {
         let n = d.usage.len() as f64;
         let cpu = d.usage.iter().map(|u| u.0).sum::<f64>() / n;

@@ -8,12 +8,15 @@
 //! - [`vehicle`]: what an agent sees of its UAV (its own state and observations in, a command
 //!   out): the network world implements it here; a MAVLink autopilot bridge would next.
 //! - [`agent`]: the loop that steps the core's [`proxform_core::Agent`] over a vehicle.
+//! - [`mavlink`]: MAVLink 2 to an autopilot (or a simulated vehicle): frames, the UDP link,
+//!   modes, the vehicle's side and the companion's side with its safety policy.
 //!
 //! This crate reads the same checked [`proxform_scenario::Scenario`] as the simulator but never
 //! links the simulator: an agent knows only its own measured state and what reaches it.
 
 pub mod agent;
 pub mod keys;
+pub mod mavlink;
 pub mod transport;
 pub mod vehicle;
 pub mod wire;

@@ -6,9 +6,12 @@
 //! flight, byte for byte.
 
 mod children;
+mod mavlink;
 mod world;
 
+use std::cell::RefCell;
 use std::path::PathBuf;
+use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -92,6 +95,13 @@ pub fn run(
     let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
     let mode = if args.clock == "realtime" { ClockMode::RealTime } else { ClockMode::Lockstep };
     let mut net = NetAgents::new(session, swarm, scenario, (mode, deadline, seed))?;
+    let mavlink = match args.mavlink_port {
+        Some(_) if mode != ClockMode::RealTime => {
+            bail!("--mavlink-port: MAVLink vehicles fly in real time (add --clock realtime)")
+        }
+        Some(port) => Some(Rc::new(RefCell::new(mavlink::MavlinkSwarm::new(scenario, port)?))),
+        None => None,
+    };
     let nav = scenario.navigator().0 + 1;
     let followers: Vec<u32> = (1..=scenario.len() as u32).filter(|u| *u != nav).collect();
 
@@ -141,14 +151,27 @@ pub fn run(
         std::thread::sleep(Duration::from_millis(20));
     }
     let flight = Instant::now();
-    let result = run_batch_with_agents(
-        scenario,
-        options,
-        (seed, runs),
-        record,
-        (progress, &INTERRUPTED),
-        (&mut net, &mut telemetry),
-    );
+    let result = match &mavlink {
+        Some(swarm) => run_batch_with_agents(
+            scenario,
+            options,
+            (seed, runs),
+            record,
+            (progress, &INTERRUPTED),
+            (
+                &mut mavlink::WithMavlink { agents: &mut net, swarm: swarm.clone() },
+                &mut (&mut telemetry, mavlink::MavlinkTelemetry(swarm.clone())),
+            ),
+        ),
+        None => run_batch_with_agents(
+            scenario,
+            options,
+            (seed, runs),
+            record,
+            (progress, &INTERRUPTED),
+            (&mut net, &mut telemetry),
+        ),
+    };
     let wall_s = flight.elapsed().as_secs_f64();
     let usage = children.usage();
     // Whatever happened: tell the agents, give them a moment, end the rest by id.
@@ -157,6 +180,7 @@ pub fn run(
     children.finish(Duration::from_secs(2));
     let mut stats = net.stats.clone();
     stats.dropped = net.dropped;
+    stats.mavlink = mavlink.map(|m| m.borrow().stats());
     net.into_session().close();
     match result {
         Some(result) => Ok(Distributed { result, stats, processes, usage, wall_s }),

@@ -40,6 +40,8 @@ pub struct NetStats {
     pub steps: u64,
     /// Messages lost to the scenario's `[network]` faults.
     pub dropped: u64,
+    /// The UAVs' MAVLink systems, when served.
+    pub mavlink: Option<super::mavlink::MavlinkStats>,
 }
 
 /// Followers whose agents answer over the network.

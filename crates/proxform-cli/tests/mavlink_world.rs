@@ -1,0 +1,148 @@
+//! The world's UAVs as MAVLink systems (`--mavlink-port`): an outside offboard controller (the
+//! companion side of `proxform_net::mavlink`, over loopback UDP) finds UAV 3, reads where it is
+//! (the positions of trajectories.csv, to the centimetre), switches it to OFFBOARD and flies it
+//! by velocity setpoints 3 m/s east of its own velocity, then stops: the report names the
+//! steps it flew, UAV 3 leaves its slot meanwhile, and with the setpoints gone it falls back
+//! to HOLD and its agent's decisions. The world and its agents are ended by their ids.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use proxform_net::mavlink::autopilot::Autopilot;
+use proxform_net::mavlink::frame::Frame;
+use proxform_net::mavlink::link::Link;
+use proxform_net::mavlink::modes::Mode;
+
+/// Kills a child by its id when dropped (a failing test leaves nothing running).
+struct Reap(Option<std::process::Child>);
+
+impl Drop for Reap {
+    fn drop(&mut self) {
+        if let Some(c) = &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+/// A base port whose next six UDP ports are free now.
+fn free_ports() -> u16 {
+    for _ in 0..50 {
+        let s = std::net::UdpSocket::bind("127.0.0.1:0").expect("a port");
+        let base = s.local_addr().expect("bound").port();
+        if base > 60_000 {
+            continue;
+        }
+        drop(s);
+        if (0..6).all(|i| std::net::UdpSocket::bind(("127.0.0.1", base + i)).is_ok()) {
+            return base;
+        }
+    }
+    panic!("no six free UDP ports");
+}
+
+#[test]
+fn an_outside_offboard_controller_flies_a_simulated_uav_and_hands_it_back() {
+    let base = free_ports();
+    let dir = std::env::temp_dir().join(format!("proxform-mavlink-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    // UAV 3 (system 3) sends to base + 2: listen there before the world starts.
+    let link = Link::open(format!("udpin:127.0.0.1:{}", base + 2).parse().expect("endpoint"), 255, 190).expect("bound");
+    let mut ap = Autopilot::new(link, Some(3));
+    let mut world = Reap(Some(
+        Command::new(env!("CARGO_BIN_EXE_proxform"))
+            .args(["run", "--distributed", "--clock", "realtime", "--duration-s", "14", "--seed", "5"])
+            .args(["--mavlink-port", &base.to_string(), "--no-figures", "-q", "--out"])
+            .arg(&dir)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("proxform runs"),
+    ));
+    let frame = Frame::default();
+    let mut seen: Vec<[f64; 3]> = Vec::new();
+    let start = Instant::now();
+    // Until the flight is seen (the agents start first), at most 60 s.
+    while start.elapsed() < Duration::from_secs(60) {
+        ap.poll(Duration::from_millis(50)).expect("io");
+        if let Some((s, _)) = ap.state(&frame, Instant::now()) {
+            seen.push([s[0], s[1], s[2]]);
+            if seen.len() > 20 {
+                break;
+            }
+        }
+    }
+    assert!(seen.len() > 20, "UAV 3 said nothing in 60 s");
+    assert_eq!(ap.mode(), Some(Mode::Hold));
+    // Three seconds of setpoints 3 m/s east of its own velocity; OFFBOARD asked once they stream.
+    let fly = Instant::now();
+    let mut asked = false;
+    while fly.elapsed() < Duration::from_secs(3) {
+        ap.poll(Duration::from_millis(20)).expect("io");
+        let Some((ned, _)) = ap.ned(Instant::now()) else { continue };
+        let v = ned.velocity;
+        assert!(ap.send_velocity([v[0], v[1] + 3.0, v[2]], ned.attitude[2], 0).expect("io"));
+        if !asked && fly.elapsed() > Duration::from_millis(300) {
+            ap.request(Mode::Offboard).expect("sent");
+            asked = true;
+        }
+    }
+    assert_eq!(ap.mode(), Some(Mode::Offboard), "the vehicle took OFFBOARD");
+    // Silence: back to HOLD within a second and a half.
+    let quiet = Instant::now();
+    while ap.mode() != Some(Mode::Hold) && quiet.elapsed() < Duration::from_secs(3) {
+        ap.poll(Duration::from_millis(50)).expect("io");
+    }
+    assert_eq!(ap.mode(), Some(Mode::Hold));
+    let out = world.0.take().expect("the world").wait_with_output_bounded(Duration::from_secs(60));
+    let stderr = String::from_utf8_lossy(&out);
+    assert!(stderr.contains("mavlink: 6 UAV(s) served; flown by outside setpoints: UAV3 "), "{stderr}");
+    assert!(stderr.contains("0 frame(s) undecodable, 0 message(s) refused"), "{stderr}");
+    // Where UAV 3 said it was is where trajectories.csv has it (to the centimetre).
+    let rows = trajectory(&dir.join("trajectories.csv"), 3);
+    for p in seen.iter().skip(5) {
+        let d = rows.iter().map(|r| ((r[0] - p[0]).powi(2) + (r[1] - p[1]).powi(2) + (r[2] - p[2]).powi(2)).sqrt());
+        let nearest = d.fold(f64::INFINITY, f64::min);
+        assert!(nearest < 0.01, "UAV 3 said {p:?}, {nearest} m from every row of trajectories.csv");
+    }
+    // Flown 3 m/s across for seconds, UAV 3 left its slot (its y error is metres).
+    let summary = std::fs::read_to_string(dir.join("summary.json")).expect("summary");
+    let s: serde_json::Value = serde_json::from_str(&summary).expect("json");
+    let k = s["per_uav"].as_array().expect("per UAV").iter().position(|u| u == 3).expect("UAV 3");
+    let y = s["per_uav_worst"][k]["y_m"].as_f64().expect("y");
+    assert!(y > 2.0, "UAV 3's worst y error {y} m");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Positions (x, y, z) of `uav` in a trajectories.csv.
+fn trajectory(path: &Path, uav: u32) -> Vec<[f64; 3]> {
+    let text = std::fs::read_to_string(path).expect("trajectories.csv");
+    text.lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f.get(1)?.parse::<u32>().ok()? == uav)
+                .then(|| [f[2], f[3], f[4]].map(|v| v.parse::<f64>().expect("a number")))
+        })
+        .collect()
+}
+
+trait Bounded {
+    fn wait_with_output_bounded(self, limit: Duration) -> Vec<u8>;
+}
+
+impl Bounded for std::process::Child {
+    /// Its stderr once it exits, killing it after `limit`.
+    fn wait_with_output_bounded(mut self, limit: Duration) -> Vec<u8> {
+        let start = Instant::now();
+        while start.elapsed() < limit {
+            if self.try_wait().expect("wait").is_some() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        let _ = self.kill();
+        self.wait_with_output().expect("output").stderr
+    }
+}
