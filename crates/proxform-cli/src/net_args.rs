@@ -43,6 +43,10 @@ pub struct NetArgs {
     /// OFFBOARD and streams velocity setpoints flies it. Needs `--clock realtime`.
     #[arg(long, requires = "distributed")]
     pub mavlink_port: Option<u16>,
+    /// The agents started here fly their UAVs through these MAVLink systems (own state from
+    /// the autopilot, setpoints in OFFBOARD), one UAV per agent process.
+    #[arg(long, requires = "mavlink_port")]
+    pub agents_mavlink: bool,
     /// The agent binary [default: proxform-agent beside this program].
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

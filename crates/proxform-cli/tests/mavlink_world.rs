@@ -28,6 +28,11 @@ impl Drop for Reap {
 
 /// A base port whose next six UDP ports are free now.
 fn free_ports() -> u16 {
+    free_ports_for(6)
+}
+
+/// A base port whose next `n` UDP ports are free now.
+fn free_ports_for(n: u16) -> u16 {
     for _ in 0..50 {
         let s = std::net::UdpSocket::bind("127.0.0.1:0").expect("a port");
         let base = s.local_addr().expect("bound").port();
@@ -35,11 +40,11 @@ fn free_ports() -> u16 {
             continue;
         }
         drop(s);
-        if (0..6).all(|i| std::net::UdpSocket::bind(("127.0.0.1", base + i)).is_ok()) {
+        if (0..n).all(|i| std::net::UdpSocket::bind(("127.0.0.1", base + i)).is_ok()) {
             return base;
         }
     }
-    panic!("no six free UDP ports");
+    panic!("no {n} free UDP ports");
 }
 
 #[test]
@@ -145,4 +150,62 @@ impl Bounded for std::process::Child {
         let _ = self.kill();
         self.wait_with_output().expect("output").stderr
     }
+}
+
+#[test]
+fn proxform_agents_fly_a_multirotor_formation_through_its_mavlink_vehicles() {
+    // Every follower's agent reads its own state from its UAV's MAVLink system and flies it
+    // by velocity and yaw setpoints in OFFBOARD (`--agents-mavlink`); the formation is kept as
+    // in-process, within the allowable errors.
+    let scenario = concat!(env!("CARGO_MANIFEST_DIR"), "/../proxform-scenario/scenarios/multirotor-v12-circuit.toml");
+    let base = free_ports_for(12);
+    let dir = std::env::temp_dir().join(format!("proxform-mavlink-agents-{}", std::process::id()));
+    let local = std::env::temp_dir().join(format!("proxform-mavlink-local-{}", std::process::id()));
+    let common = ["--duration-s", "15", "--seed", "2", "--no-figures", "--no-trajectories", "-q", "--out"];
+    let o = Command::new(env!("CARGO_BIN_EXE_proxform")).arg("run").arg(scenario).args(common).arg(&local).output();
+    assert!(o.expect("runs").status.success());
+    let world = Command::new(env!("CARGO_BIN_EXE_proxform"))
+        .arg("run")
+        .arg(scenario)
+        .args(["--distributed", "--clock", "realtime", "--agents-mavlink", "--mavlink-port", &base.to_string()])
+        .args(common)
+        .arg(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("proxform runs");
+    let stderr = String::from_utf8_lossy(&world.wait_with_output_bounded(Duration::from_secs(120))).to_string();
+    let flown: Vec<u64> = (2..=12)
+        .map(|u| {
+            let tag = format!("UAV{u} ");
+            let at = stderr.find(&tag).unwrap_or_else(|| panic!("UAV {u} not flown by setpoints: {stderr}"));
+            stderr[at + tag.len()..].split(' ').next().and_then(|n| n.parse().ok()).expect("steps")
+        })
+        .collect();
+    assert!(flown.iter().all(|&k| k >= 140), "steps flown on setpoints {flown:?} of 150: {stderr}");
+    let worst = |d: &Path| -> serde_json::Value {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).expect("summary")).expect("json");
+        assert_eq!(s["pass_fraction"].as_f64(), Some(1.0), "{}", d.display());
+        s["worst_abs_error"].clone()
+    };
+    let (net, inproc) = (worst(&dir), worst(&local));
+    for axis in ["x_m", "y_m", "z_m"] {
+        let (a, b) = (net[axis].as_f64().expect("error"), inproc[axis].as_f64().expect("error"));
+        assert!(a <= 1.5 * b + 0.05, "{axis}: {a} m over MAVLink against {b} m in-process");
+    }
+    let _ = (std::fs::remove_dir_all(dir), std::fs::remove_dir_all(local));
+}
+
+#[test]
+fn agents_over_mavlink_refuse_a_vehicle_that_velocity_setpoints_do_not_fly() {
+    let o = Command::new(env!("CARGO_BIN_EXE_proxform"))
+        .args(["run", "--distributed", "--clock", "realtime", "--agents-mavlink", "--mavlink-port", "30000"])
+        .args(["--no-figures", "-q", "--out"])
+        .arg(std::env::temp_dir().join(format!("proxform-mavlink-refused-{}", std::process::id())))
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("fly a multirotor scenario"), "{stderr}");
 }

@@ -6,7 +6,8 @@
 //! - [`transport`]: a Zenoh session on the given endpoints (multicast scouting off), with the
 //!   publishers and subscribers of an agent or a world.
 //! - [`vehicle`]: what an agent sees of its UAV (its own state and observations in, a command
-//!   out): the network world implements it here; a MAVLink autopilot bridge would next.
+//!   out): the network world implements it here, an autopilot over MAVLink in
+//!   [`mavlink::vehicle`].
 //! - [`agent`]: the loop that steps the core's [`proxform_core::Agent`] over a vehicle.
 //! - [`mavlink`]: MAVLink 2 to an autopilot (or a simulated vehicle): frames, the UDP link,
 //!   modes, the vehicle's side and the companion's side with its safety policy.

@@ -1,8 +1,8 @@
 //! What an agent sees of the UAVs it runs: each update period, a UAV's own measured state and
 //! what it perceived and heard ([`SenseMsg`]) in; its decision ([`CommandMsg`]) out. The
-//! network world implements it here ([`NetVehicle`]); a MAVLink autopilot bridge (own state
-//! from the autopilot, detections from the UAV's sensors and radio, the command as a setpoint)
-//! implements the same trait.
+//! network world implements it here ([`NetVehicle`]); a MAVLink autopilot
+//! ([`crate::mavlink::vehicle::MavlinkVehicle`]: own state from the autopilot, the command as a
+//! setpoint) implements the same trait.
 
 use std::time::Duration;
 

@@ -102,16 +102,22 @@ impl MavlinkSwarm {
     fn decision(&mut self, i: usize, own: &State9) -> Option<Decision> {
         let t = self.start.elapsed().as_secs_f64();
         let s = self.vehicles.get_mut(i)?.served.setpoint(t)?;
-        let [vx, vy, vz] = self.frame.velocity_xyz(s.velocity_ned);
+        let v = self.frame.velocity_xyz(s.velocity_ned);
+        let beta = s.yaw.map(|y| self.frame.yaw(y));
+        self.offboard_steps[i] += 1;
+        // A vehicle flown by velocity setpoints (the multirotor) takes them as its input.
+        if let Some(u) = self.setup.vehicle().input_for_setpoint(own, v, beta) {
+            return Some(Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, u));
+        }
+        let [vx, vy, vz] = v;
         let dt = self.setup.params().dt_s;
         let held = self.setup.vehicle().hold(own, dt);
         let mut target = held;
         (target[state::VX], target[state::VY], target[state::VZ]) = (vx, vy, vz);
-        if let Some(yaw) = s.yaw {
-            target[state::BETA] = self.frame.yaw(yaw);
+        if let Some(beta) = beta {
+            target[state::BETA] = beta;
         }
         let r = state::difference(&held, &target);
-        self.offboard_steps[i] += 1;
         Some(Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, self.setup.input_toward(own, &r)))
     }
 

@@ -112,6 +112,15 @@ pub fn run(
     let _remove = RemoveOnDrop(spec_file.clone());
 
     let mut children = Children::default();
+    if args.agents_mavlink && (args.external_agents || args.agents_per_process != 1) {
+        bail!("--agents-mavlink: one UAV per agent process, started here (not with --external-agents)");
+    }
+    if args.agents_mavlink && !scenario.vehicle().takes_velocity_setpoints() {
+        bail!(
+            "--agents-mavlink: this scenario's vehicle steers its attitude with its inputs too, which a MAVLink \
+             velocity setpoint does not carry: fly a multirotor scenario (vehicle.model = \"multirotor\")"
+        );
+    }
     if !args.external_agents {
         let bin = agent_bin(args)?;
         for group in followers.chunks(args.agents_per_process as usize) {
@@ -129,6 +138,15 @@ pub fn run(
                 .arg("10")
                 .arg("--exit-with-parent")
                 .stdin(std::process::Stdio::null());
+            if let (true, Some(base)) = (args.agents_mavlink, args.mavlink_port) {
+                let uav = group[0];
+                // UAV i's system sends to base + i − 1 (checked to fit when the systems opened).
+                let port = u32::from(base) + uav - 1;
+                cmd.arg("--mavlink")
+                    .arg(format!("udpin:127.0.0.1:{port}"))
+                    .arg("--mavlink-system")
+                    .arg(uav.to_string());
+            }
             children.spawn(cmd, format!("agent of UAV(s) {}", list.join(",")))?;
         }
     } else {

@@ -165,6 +165,48 @@ impl VehicleModel {
         }
     }
 
+    /// The velocity (world frame, m/s) and yaw β (rad) an autopilot is given for input `u` at
+    /// `x` over a period `dt` (a MAVLink velocity setpoint): the multirotor's are its setpoints
+    /// (`v + u_v`, `β + u_ψ`); the other vehicles' are the velocity and yaw they reach with `u`
+    /// after the period. [`Self::input_for_setpoint`] is its inverse for the multirotor.
+    pub fn velocity_setpoint(&self, x: &State9, u: &Input, dt: f64) -> ([f64; 3], f64) {
+        use crate::state::{BETA, VX};
+        match self {
+            VehicleModel::Multirotor(_) => {
+                ([x[VX] + u[0], x[VX + 1] + u[1], x[VX + 2] + u[2]], crate::angle::wrap_pi(x[BETA] + u[3]))
+            }
+            _ => {
+                let next = self.propagate(x, u, dt);
+                ([next[VX], next[VX + 1], next[VX + 2]], next[BETA])
+            }
+        }
+    }
+
+    /// Whether the vehicle is flown by velocity and yaw setpoints (its inputs are nothing else):
+    /// the multirotor.
+    pub fn takes_velocity_setpoints(&self) -> bool {
+        matches!(self, VehicleModel::Multirotor(_))
+    }
+
+    /// The input that gives an autopilot the velocity setpoint `v` (world frame, m/s) and yaw
+    /// `yaw` (β, rad; None: keep the present one) at `x`, where the vehicle is flown by such
+    /// setpoints (the multirotor; None for the others, whose inputs steer their attitude too:
+    /// a velocity and a yaw do not say what they do).
+    pub fn input_for_setpoint(&self, x: &State9, v: [f64; 3], yaw: Option<f64>) -> Option<Input> {
+        use crate::state::{BETA, VX};
+        match self {
+            VehicleModel::Multirotor(_) => {
+                let mut u = Input::zeros();
+                for k in 0..3 {
+                    u[k] = v[k] - x[VX + k];
+                }
+                u[3] = yaw.map_or(0.0, |y| crate::angle::wrap_pi(y - x[BETA]));
+                Some(u)
+            }
+            _ => None,
+        }
+    }
+
     /// The plant in calm air: the true state after `dt` under the (already perturbed) input `u`.
     #[inline]
     pub fn propagate(&self, x: &State9, u: &Input, dt: f64) -> State9 {

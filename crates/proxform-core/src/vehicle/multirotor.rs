@@ -372,6 +372,24 @@ mod tests {
         State9::from_column_slice(&[0.0, 0.0, 50.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     }
 
+    #[test]
+    fn a_velocity_setpoint_is_its_input_both_ways() {
+        let v = crate::vehicle::VehicleModel::Multirotor(MultirotorModel::default());
+        assert!(v.takes_velocity_setpoints());
+        let mut x = hover();
+        (x[VX], x[BETA]) = (3.0, 3.0);
+        let u = u4([1.0, -2.0, 0.5, 0.4]);
+        let (sp, yaw) = v.velocity_setpoint(&x, &u, 0.1);
+        assert_eq!(sp, [4.0, -2.0, 0.5]);
+        assert_relative_eq!(yaw, wrap_pi(3.4), epsilon = 1e-12);
+        let back = v.input_for_setpoint(&x, sp, Some(yaw)).expect("a multirotor takes setpoints");
+        assert_relative_eq!((back - u).amax(), 0.0, epsilon = 1e-12);
+        // Without a yaw it keeps its heading.
+        assert_eq!(v.input_for_setpoint(&x, sp, None).expect("setpoint")[3], 0.0);
+        let kinematic = crate::vehicle::VehicleModel::Kinematic(Default::default());
+        assert!(!kinematic.takes_velocity_setpoints() && kinematic.input_for_setpoint(&x, sp, None).is_none());
+    }
+
     fn fly(m: &MultirotorModel, mut x: State9, u: Input, seconds: f64, w: [f64; 3]) -> State9 {
         let dt = 0.1;
         // The setpoint stays: each period asks for the same absolute velocity and yaw.

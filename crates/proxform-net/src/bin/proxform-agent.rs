@@ -14,6 +14,10 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use proxform_net::agent::{serve, Ended, Host, Timing};
 use proxform_net::keys::Swarm;
+use proxform_net::mavlink::autopilot::Autopilot;
+use proxform_net::mavlink::frame::Frame;
+use proxform_net::mavlink::link::{Endpoint, Link};
+use proxform_net::mavlink::vehicle::MavlinkVehicle;
 use proxform_net::transport::{Role, Session};
 use proxform_net::vehicle::NetVehicle;
 use proxform_scenario::{builtin, load, Scenario};
@@ -46,6 +50,19 @@ struct Args {
     /// Wait this long for the router at start (s).
     #[arg(long, default_value_t = 10.0)]
     wait_s: f64,
+    /// Fly the UAV (one) through its autopilot over MAVLink: `udpin:HOST:PORT` (listen where
+    /// the autopilot sends, as PX4's offboard port 14540) or `udpout:HOST:PORT`. Its own state
+    /// comes from the autopilot; each decision goes to it as a velocity and yaw setpoint in
+    /// OFFBOARD (docs/mavlink.md).
+    #[arg(long)]
+    mavlink: Option<String>,
+    /// The autopilot's system id [default: the first autopilot heard].
+    #[arg(long, requires = "mavlink")]
+    mavlink_system: Option<u8>,
+    /// The direction of the formation's x axis (its initial course) in the autopilot's local
+    /// NED frame, degrees clockwise from north; the method's origin is NED's.
+    #[arg(long, default_value_t = 0.0, requires = "mavlink")]
+    course_deg: f64,
     /// Exit when the process that started this one exits (Linux; a launcher's agents never
     /// outlive it, even when it is killed).
     #[arg(long)]
@@ -100,19 +117,46 @@ fn run(args: Args) -> Result<Ended> {
         None => bail!("name the UAV to run: --uav N or --uavs 2,3,4"),
     };
     let sc = Arc::new(scenario(&args.scenario)?);
-    let mut host = Host::new(sc, &uavs)?;
+    let mut host = Host::new(sc.clone(), &uavs)?;
     let swarm = Swarm::new(&args.swarm)?;
     let timing = Timing { idle_exit: seconds("idle-exit-s", args.idle_exit_s)?, ..Timing::default() };
     let role = Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)? };
     let session = Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?;
-    let mut vehicle = NetVehicle::new(session, swarm, &uavs)?;
-    let ended = serve(&mut host, &mut vehicle, timing)?;
-    if host.dropped + host.refused + vehicle.garbage > 0 {
-        eprintln!(
-            "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable messages",
-            host.dropped, host.refused, vehicle.garbage
-        );
+    let vehicle = NetVehicle::new(session, swarm, &uavs)?;
+    let Some(endpoint) = &args.mavlink else {
+        let mut vehicle = vehicle;
+        let ended = serve(&mut host, &mut vehicle, timing)?;
+        if host.dropped + host.refused + vehicle.garbage > 0 {
+            eprintln!(
+                "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable messages",
+                host.dropped, host.refused, vehicle.garbage
+            );
+        }
+        return Ok(ended);
+    };
+    if uavs.len() != 1 {
+        bail!("--mavlink: one UAV per autopilot (--uav N)");
     }
+    if !(args.course_deg.is_finite() && args.course_deg.abs() <= 360.0) {
+        bail!("--course-deg: {} is not an angle from -360 to 360 degrees", args.course_deg);
+    }
+    let endpoint: Endpoint = endpoint.parse()?;
+    // The companion's system id is the UAV's; component 191 (an onboard computer).
+    let link = Link::open(endpoint, uavs[0].min(255) as u8, 191)?;
+    let autopilot = Autopilot::new(link, args.mavlink_system);
+    let frame = Frame { origin_ned: [0.0; 3], course_rad: args.course_deg.to_radians() };
+    let mut vehicle = MavlinkVehicle::new(vehicle, autopilot, frame, (sc.vehicle().clone(), sc.dt_s()));
+    let ended = serve(&mut host, &mut vehicle, timing)?;
+    let s = vehicle.autopilot().link().stats;
+    eprintln!(
+        "proxform-agent {uavs:?} over MAVLink: {} setpoints sent, HOLD asked {} time(s){}; {} frames undecodable, \
+         {} messages from other systems",
+        vehicle.setpoints,
+        vehicle.holds.0,
+        vehicle.holds.1.map(|w| format!(" (last: {w})")).unwrap_or_default(),
+        s.bad_crc + s.unknown + s.malformed,
+        vehicle.autopilot().foreign
+    );
     Ok(ended)
 }
 

@@ -22,7 +22,7 @@ use super::link::Link;
 use super::modes::{Flavour, Mode};
 
 /// The type mask of a velocity and yaw setpoint: position, acceleration and yaw rate ignored.
-const VELOCITY_AND_YAW: u16 = 0b1101_1100_0111;
+const VELOCITY_AND_YAW: u16 = 0b1001_1100_0111;
 
 /// What the companion knows of its autopilot.
 pub struct Autopilot {

@@ -9,6 +9,7 @@ pub mod frame;
 pub mod link;
 pub mod modes;
 pub mod served;
+pub mod vehicle;
 
 /// The messages of the common dialect, as the `mavlink` crate generates them.
 pub use ::mavlink::dialects::common as messages;

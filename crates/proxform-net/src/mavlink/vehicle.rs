@@ -1,0 +1,151 @@
+//! An agent's UAV behind a MAVLink autopilot ([`MavlinkVehicle`], `proxform-agent --mavlink`):
+//! its own state comes from the autopilot (LOCAL_POSITION_NED and ATTITUDE in the method's
+//! frame), what it perceived and heard from its sensing over the network as before, and each
+//! decision goes to the autopilot as the vehicle model's velocity and yaw setpoint for it
+//! ([`VehicleModel::velocity_setpoint`]; SET_POSITION_TARGET_LOCAL_NED), with OFFBOARD asked
+//! while it is not in it.
+//! The safety policy ([`Safety`]) asks for HOLD instead when the autopilot's position is stale
+//! or no update came for its timeout; the decision also goes to the world as before (a world
+//! flies a UAV on its MAVLink setpoints while it is in OFFBOARD).
+
+use std::time::{Duration, Instant};
+
+use proxform_core::VehicleModel;
+
+use super::autopilot::{Autopilot, Safety, Verdict};
+use super::frame::Frame;
+use super::modes::Mode;
+use crate::transport::TransportError;
+use crate::vehicle::{Event, NetVehicle, Vehicle};
+use crate::wire::{CommandMsg, Presence, StateMsg};
+
+/// How often a mode is asked for again while the autopilot is not in it.
+const ASK_EVERY: Duration = Duration::from_millis(500);
+
+/// A UAV whose sensing arrives over the network and whose own state and commands go through
+/// its autopilot.
+pub struct MavlinkVehicle {
+    net: NetVehicle,
+    autopilot: Autopilot,
+    frame: Frame,
+    model: VehicleModel,
+    dt_s: f64,
+    safety: Safety,
+    last_update: Option<Instant>,
+    asked: Option<(Mode, Instant)>,
+    beat: Option<Instant>,
+    boot: Instant,
+    /// Setpoints sent.
+    pub setpoints: u64,
+    /// Times HOLD was asked by the safety policy, and the last reason.
+    pub holds: (u64, Option<&'static str>),
+}
+
+fn io(e: std::io::Error) -> TransportError {
+    TransportError::Io(format!("MAVLink: {e}"))
+}
+
+impl MavlinkVehicle {
+    /// The UAV of `net` (one) behind `autopilot`, in `frame`, flying `model` at period `dt_s`.
+    pub fn new(net: NetVehicle, autopilot: Autopilot, frame: Frame, (model, dt_s): (VehicleModel, f64)) -> Self {
+        Self {
+            net,
+            autopilot,
+            frame,
+            model,
+            dt_s,
+            safety: Safety::default(),
+            last_update: None,
+            asked: None,
+            beat: None,
+            boot: Instant::now(),
+            setpoints: 0,
+            holds: (0, None),
+        }
+    }
+
+    /// The autopilot (its link's counters, its mode).
+    pub fn autopilot(&self) -> &Autopilot {
+        &self.autopilot
+    }
+
+    /// The safety policy's verdict now.
+    fn verdict(&self, now: Instant) -> Verdict {
+        let own = self.autopilot.ned(now).map(|(_, age)| age.as_secs_f64());
+        let update = self.last_update.map(|t| now.duration_since(t).as_secs_f64());
+        self.safety.verdict(own, update)
+    }
+
+    /// Asks for `mode` unless the autopilot is in it or it was asked lately.
+    fn ask(&mut self, mode: Mode, now: Instant) -> Result<(), TransportError> {
+        let recent = self.asked.is_some_and(|(m, t)| m == mode && now.duration_since(t) < ASK_EVERY);
+        if self.autopilot.mode() != Some(mode) && !recent {
+            self.autopilot.request(mode).map_err(io)?;
+            self.asked = Some((mode, now));
+        }
+        Ok(())
+    }
+
+    /// HOLD when the policy says so (once it has flown: a UAV never put in OFFBOARD is left as
+    /// it is).
+    fn guard(&mut self, now: Instant) -> Result<(), TransportError> {
+        if let Verdict::Hold(why) = self.verdict(now) {
+            if self.autopilot.mode() == Some(Mode::Offboard) || self.asked.is_some_and(|a| a.0 == Mode::Offboard) {
+                if self.autopilot.mode() != Some(Mode::Hold) {
+                    self.holds = (self.holds.0 + 1, Some(why));
+                }
+                self.ask(Mode::Hold, now)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Vehicle for MavlinkVehicle {
+    fn next(&mut self, timeout: Duration) -> Result<Event, TransportError> {
+        self.autopilot.poll(Duration::ZERO).map_err(io)?;
+        let event = self.net.next(timeout)?;
+        self.autopilot.poll(Duration::ZERO).map_err(io)?;
+        let now = Instant::now();
+        if self.beat.is_none_or(|b| now.duration_since(b) >= Duration::from_secs(1)) {
+            self.autopilot.heartbeat().map_err(io)?;
+            self.beat = Some(now);
+        }
+        match event {
+            Event::Sense(mut s) => {
+                self.last_update = Some(now);
+                // The own state is the autopilot's, when it is fresh.
+                if let Some((own, age)) = self.autopilot.state(&self.frame, now) {
+                    if age.as_secs_f64() <= self.safety.position_timeout_s {
+                        s.own = own;
+                    }
+                }
+                Ok(Event::Sense(s))
+            }
+            other => {
+                self.guard(now)?;
+                Ok(other)
+            }
+        }
+    }
+
+    fn command(&mut self, command: &CommandMsg, state: &StateMsg) -> Result<(), TransportError> {
+        let now = Instant::now();
+        if self.verdict(now) == Verdict::Fly {
+            let (v, beta) = self.model.velocity_setpoint(&state.state, &command.decision.input, self.dt_s);
+            let (v, yaw) = (self.frame.velocity_ned(v), self.frame.yaw(beta));
+            let ms = now.duration_since(self.boot).as_millis() as u32;
+            if self.autopilot.send_velocity(v, yaw, ms).map_err(io)? {
+                self.setpoints += 1;
+                self.ask(Mode::Offboard, now)?;
+            }
+        } else {
+            self.guard(now)?;
+        }
+        self.net.command(command, state)
+    }
+
+    fn announce(&mut self, presence: Presence) -> Result<(), TransportError> {
+        self.net.announce(presence)
+    }
+}
