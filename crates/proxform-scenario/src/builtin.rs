@@ -96,6 +96,9 @@ pub fn swarm_spec(n: usize) -> ScenarioSpec {
     s.path.yaw_amplitude_deg = Some(5.0);
     s.path.roll_amplitude_deg = Some(10.0);
     s.controller.sensing_range_m = Some(range);
+    // Both engines fly it alike (`proxform bench` compares them): the fast engine does not run
+    // the own-sensor check, so the built-in states it off at every size.
+    s.controller.own_gate_m = Some(0.0);
     s.allowable.x_m = Some(5.0);
     s.allowable.y_m = Some(5.0);
     s.allowable.z_m = Some(5.0);
@@ -208,6 +211,7 @@ mod tests {
         assert!(paper.beacons().is_empty());
         assert!(!paper.controller().plan_forward);
         assert!(paper.controller().isolation_gate.is_none());
+        assert_eq!((default.controller().own_gate_m, paper.controller().own_gate_m), (Some(3.0), None));
         // Keys the file sets win.
         assert!(v("method = \"paper\"\nplan_forward = true").controller().plan_forward);
         let e = crate::load::parse(

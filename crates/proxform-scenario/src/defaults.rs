@@ -35,6 +35,11 @@ pub const AVOID_PER_SAFETY: f64 = 1.25;
 /// it drags the UAV that leans (METHOD §8, "Forming from scattered starts"). Unset otherwise.
 pub const ISOLATION_GATE_OFF_SLOTS: f64 = 1.0;
 
+/// The own-sensor check's gate (m) when `controller.own_gate_m` is unset (METHOD §8): a reading
+/// of the UAV's own position this far from its prediction is refused. Unset with
+/// `method = "paper"` and where the fast engine flies the scenario (it does not run the check).
+pub const OWN_GATE_M: f64 = 3.0;
+
 /// Position noise 1σ (m).
 pub const NOISE_POSITION_M: f64 = 0.02;
 /// Velocity noise 1σ (km/h): 0.05 m/s.

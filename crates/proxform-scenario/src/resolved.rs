@@ -296,8 +296,17 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
             ("controller", "isolation_gate", "whether UAVs start or fly off their slots"),
             notes,
         ),
-        own_gate_m: Some(p.own_gate_m.unwrap_or(0.0)),
-        own_gate_growth_mps: p.own_gate_m.map(|_| p.own_gate_growth_mps),
+        own_gate_m: follows(
+            set.own_gate_m,
+            p.own_gate_m.unwrap_or(0.0),
+            ("controller", "own_gate_m", "the method and the engine"),
+            notes,
+        ),
+        own_gate_growth_mps: if set.own_gate_m.is_some() {
+            p.own_gate_m.map(|_| p.own_gate_growth_mps)
+        } else {
+            set.own_gate_growth_mps
+        },
         method: Some(if crate::convert::paper_method(set) { crate::convert::PAPER } else { method.label() }.into()),
         gains,
         thresholds: Some(ThresholdsSpec {

@@ -279,3 +279,22 @@ fn with_biased_fixes_a_deep_formation_leaves_radio_reports_to_uavs_that_see_nobo
     assert!(batch(&default, 40).pass_fraction >= 0.95);
     assert_eq!(batch(&v12("radio_fallback = false"), 10).pass_fraction, 0.0);
 }
+
+#[test]
+fn at_the_defaults_a_stuck_sensor_leaves_the_other_uavs_in_place() {
+    // fault-triangle10 without the robust keys it writes: the defaults alone (the navigator in
+    // the derived tables, the own-sensor check) keep the healthy followers within their errors.
+    let defaults = |own_gate_m: Option<f64>| {
+        scenario("fault-triangle10.toml", |s| {
+            s.formation.dependencies.as_mut().expect("derived tables").navigator_degree = None;
+            s.controller.isolation_gate = None;
+            s.controller.own_gate_m = own_gate_m;
+        })
+    };
+    let d = defaults(None);
+    assert_eq!(d.controller().own_gate_m, Some(3.0));
+    let f = batch(&d, 60).sensor_faults.expect("sensor faults");
+    assert!(f.healthy_pass_fraction >= 0.98, "{f:?}");
+    let off = batch(&defaults(Some(0.0)), 20).sensor_faults.expect("sensor faults");
+    assert!(off.healthy_pass_fraction <= 0.1, "{off:?}");
+}

@@ -104,7 +104,7 @@ pub fn params(c: &ControllerSpec, dt_s: f64, vehicle: &VehicleModel) -> Result<C
     }
     if let Some(v) = c.own_gate_growth_mps {
         p.own_gate_growth_mps = non_negative("controller.own_gate_growth_mps", v)?;
-        if p.own_gate_m.is_none() {
+        if c.own_gate_m.is_some() && p.own_gate_m.is_none() {
             return Err(err("controller.own_gate_growth_mps", "applies with controller.own_gate_m > 0 only"));
         }
     }

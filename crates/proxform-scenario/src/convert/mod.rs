@@ -286,6 +286,16 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if paper && spec.controller.plan_forward.is_none() {
             params.plan_forward = false;
         }
+        // The own-sensor check by default (METHOD §8), but for the paper's method and where the
+        // fast engine flies the scenario (it does not run the check).
+        let fast = match engine {
+            crate::scenario::EngineChoice::Fast => true,
+            crate::scenario::EngineChoice::Auto => n >= crate::scenario::EngineChoice::AUTO_FAST_FROM,
+            crate::scenario::EngineChoice::Reference => false,
+        };
+        if spec.controller.own_gate_m.is_none() && !paper && !fast {
+            params.own_gate_m = Some(defaults::OWN_GATE_M);
+        }
         // Every UAV knows the mission: reports are brought forward with the navigator's plan
         // (METHOD §3, "Reports brought forward").
         let s0 = initial[navigator.index()];
