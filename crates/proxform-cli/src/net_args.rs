@@ -41,7 +41,7 @@ pub struct NetArgs {
     /// north is the formation's initial course) sending to 127.0.0.1:PORT + i − 1, as PX4
     /// SITL's instances send to 14540 + i; an outside controller that switches a follower to
     /// OFFBOARD and streams velocity setpoints flies it. Needs `--clock realtime`.
-    #[arg(long, requires = "distributed")]
+    #[arg(long, requires = "distributed", value_parser = clap::value_parser!(u16).range(1..))]
     pub mavlink_port: Option<u16>,
     /// The agents started here fly their UAVs through these MAVLink systems (own state from
     /// the autopilot, setpoints in OFFBOARD), one UAV per agent process.

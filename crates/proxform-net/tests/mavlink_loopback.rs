@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use proxform_core::state;
 use proxform_net::mavlink::autopilot::{Autopilot, Safety, Verdict};
 use proxform_net::mavlink::frame::{Frame, GeoOrigin, Ned};
-use proxform_net::mavlink::link::Link;
+use proxform_net::mavlink::link::{Endpoint, Link};
 use proxform_net::mavlink::modes::{Flavour, Mode};
 use proxform_net::mavlink::served::{Refused, Served};
 
@@ -61,7 +61,7 @@ fn vehicle(link: Link, stop: Arc<AtomicBool>, silent: Arc<AtomicBool>) -> std::t
 
 #[test]
 fn a_companion_flies_a_vehicle_by_velocity_and_holds_when_it_goes_silent() {
-    let mut vehicle_link = Link::open("udpin:127.0.0.1:0".parse().expect("endpoint"), 7, 1).expect("bound");
+    let mut vehicle_link = Link::open(Endpoint::In(([127, 0, 0, 1], 0).into()), 7, 1).expect("bound");
     let port = vehicle_link.local_addr().expect("address").port();
     let companion = Link::open(format!("udpout:127.0.0.1:{port}").parse().expect("endpoint"), 7, 191).expect("bound");
     let mut ap = Autopilot::new(companion, None);

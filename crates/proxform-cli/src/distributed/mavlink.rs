@@ -67,11 +67,15 @@ impl MavlinkSwarm {
             proxform_core::VehicleModel::FixedWing(_) => proxform_net::mavlink::messages::MavType::MAV_TYPE_FIXED_WING,
             _ => proxform_net::mavlink::messages::MavType::MAV_TYPE_QUADROTOR,
         };
+        let navigator = scenario.navigator().index();
         let vehicles = (0..n)
             .map(|i| {
                 let endpoint = Endpoint::Out(([127, 0, 0, 1], base_port + i as u16).into());
                 let link = Link::open(endpoint, i as u8 + 1, 1).context("cannot open a MAVLink port")?;
-                Ok(Vehicle { served: Served::new(i as u8 + 1, flavour, mav_type), link })
+                let served = Served::new(i as u8 + 1, flavour, mav_type);
+                // The navigator flies its mission: no outside controller flies it (yet).
+                let served = if i == navigator { served.without_offboard() } else { served };
+                Ok(Vehicle { served, link })
             })
             .collect::<Result<_>>()?;
         Ok(Self {

@@ -57,7 +57,7 @@ struct Args {
     #[arg(long)]
     mavlink: Option<String>,
     /// The autopilot's system id [default: the first autopilot heard].
-    #[arg(long, requires = "mavlink")]
+    #[arg(long, requires = "mavlink", value_parser = clap::value_parser!(u8).range(1..))]
     mavlink_system: Option<u8>,
     /// The direction of the formation's x axis (its initial course) in the autopilot's local
     /// NED frame, degrees clockwise from north; the method's origin is NED's.
@@ -117,13 +117,32 @@ fn run(args: Args) -> Result<Ended> {
         None => bail!("name the UAV to run: --uav N or --uavs 2,3,4"),
     };
     let sc = Arc::new(scenario(&args.scenario)?);
+    // The MAVLink options are checked before anything is opened.
+    let mavlink = match &args.mavlink {
+        None => None,
+        Some(endpoint) => {
+            if uavs.len() != 1 {
+                bail!("--mavlink: one UAV per autopilot (--uav N)");
+            }
+            if !(args.course_deg.is_finite() && args.course_deg.abs() <= 360.0) {
+                bail!("--course-deg: not an angle from -360 to 360 degrees");
+            }
+            if !sc.vehicle().takes_velocity_setpoints() {
+                bail!(
+                    "--mavlink: this scenario's vehicle steers its attitude with its inputs too, which a MAVLink \
+                     velocity setpoint does not carry: fly a multirotor scenario (vehicle.model = \"multirotor\")"
+                );
+            }
+            Some(endpoint.parse::<Endpoint>()?)
+        }
+    };
     let mut host = Host::new(sc.clone(), &uavs)?;
     let swarm = Swarm::new(&args.swarm)?;
     let timing = Timing { idle_exit: seconds("idle-exit-s", args.idle_exit_s)?, ..Timing::default() };
     let role = Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)? };
     let session = Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?;
     let vehicle = NetVehicle::new(session, swarm, &uavs)?;
-    let Some(endpoint) = &args.mavlink else {
+    let Some(endpoint) = mavlink else {
         let mut vehicle = vehicle;
         let ended = serve(&mut host, &mut vehicle, timing)?;
         if host.dropped + host.refused + vehicle.garbage > 0 {
@@ -134,13 +153,6 @@ fn run(args: Args) -> Result<Ended> {
         }
         return Ok(ended);
     };
-    if uavs.len() != 1 {
-        bail!("--mavlink: one UAV per autopilot (--uav N)");
-    }
-    if !(args.course_deg.is_finite() && args.course_deg.abs() <= 360.0) {
-        bail!("--course-deg: {} is not an angle from -360 to 360 degrees", args.course_deg);
-    }
-    let endpoint: Endpoint = endpoint.parse()?;
     // The companion's system id is the UAV's; component 191 (an onboard computer).
     let link = Link::open(endpoint, uavs[0].min(255) as u8, 191)?;
     let autopilot = Autopilot::new(link, args.mavlink_system);

@@ -14,15 +14,18 @@ use mavlink::{MavHeader, Message as _};
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {
     /// The endpoint is not `udpin:HOST:PORT` or `udpout:HOST:PORT`.
-    #[error("MAVLink endpoint \"{0}\": expected udpin:HOST:PORT (listen) or udpout:HOST:PORT (send to)")]
+    #[error(
+        "MAVLink endpoint \"{0}\": expected udpin:HOST:PORT (listen) or udpout:HOST:PORT (send to), a host that \
+         resolves and a port from 1 to 65535"
+    )]
     Endpoint(String),
     /// The socket failed.
-    #[error("MAVLink endpoint {endpoint}: {source}")]
+    #[error("MAVLink endpoint {endpoint}: {problem}")]
     Io {
         /// The endpoint.
         endpoint: String,
-        /// What the system said.
-        source: std::io::Error,
+        /// What the system said (in the message, not as a cause: it would print twice).
+        problem: std::io::Error,
     },
 }
 
@@ -44,6 +47,10 @@ impl std::str::FromStr for Endpoint {
         // `udpin://HOST:PORT`, as MAVSDK writes it, too.
         let addr = addr.strip_prefix("//").unwrap_or(addr);
         let addr = addr.to_socket_addrs().map_err(|_| bad())?.next().ok_or_else(bad)?;
+        // Port 0 would be one the system picks, where no autopilot sends or listens.
+        if addr.port() == 0 {
+            return Err(bad());
+        }
         match kind {
             "udpin" => Ok(Self::In(addr)),
             "udpout" => Ok(Self::Out(addr)),
@@ -143,7 +150,7 @@ pub struct Link {
 impl Link {
     /// Opens `endpoint`, sending as system `system_id`, component `component_id`.
     pub fn open(endpoint: Endpoint, system_id: u8, component_id: u8) -> Result<Self, LinkError> {
-        let io = |source| LinkError::Io { endpoint: format!("{endpoint:?}"), source };
+        let io = |problem| LinkError::Io { endpoint: format!("{endpoint:?}"), problem };
         let (socket, peer) = match endpoint {
             Endpoint::In(a) => (UdpSocket::bind(a).map_err(io)?, None),
             Endpoint::Out(a) => {
@@ -278,7 +285,14 @@ mod tests {
             Some(Endpoint::In(([127, 0, 0, 1], 14540).into()))
         );
         assert!(matches!("udpout://127.0.0.1:14550".parse::<Endpoint>(), Ok(Endpoint::Out(_))));
-        for bad in ["tcp:1.2.3.4:5", "udpin:999.1.1.1:5", "udpin:127.0.0.1", "serial", "udpout:127.0.0.1:99999"] {
+        for bad in [
+            "tcp:1.2.3.4:5",
+            "udpin:999.1.1.1:5",
+            "udpin:127.0.0.1",
+            "serial",
+            "udpout:127.0.0.1:99999",
+            "udpin:127.0.0.1:0",
+        ] {
             let e = bad.parse::<Endpoint>().expect_err(bad);
             assert!(e.to_string().contains("expected udpin:HOST:PORT"), "{e}");
         }
@@ -286,7 +300,7 @@ mod tests {
 
     #[test]
     fn two_links_talk_over_loopback() {
-        let mut vehicle = Link::open("udpin:127.0.0.1:0".parse().expect("endpoint"), 2, 1).expect("bound");
+        let mut vehicle = Link::open(Endpoint::In(([127, 0, 0, 1], 0).into()), 2, 1).expect("bound");
         let port = vehicle.local_addr().expect("address").port();
         let mut companion =
             Link::open(format!("udpout:127.0.0.1:{port}").parse().expect("endpoint"), 255, 190).expect("bound");

@@ -51,6 +51,8 @@ pub struct Served {
     armed: bool,
     mode: Mode,
     setpoint: Option<Setpoint>,
+    /// Whether an outside controller may fly it (OFFBOARD).
+    offboard: bool,
     /// What it refused.
     pub refused: Refused,
     /// Setpoints accepted.
@@ -67,9 +69,17 @@ impl Served {
             armed: true,
             mode: Mode::Hold,
             setpoint: None,
+            offboard: true,
             refused: Refused::default(),
             setpoints: 0,
         }
+    }
+
+    /// A vehicle that never takes OFFBOARD (asked, it answers DENIED): one whose flight
+    /// someone else decides (the navigator flies its mission).
+    pub fn without_offboard(mut self) -> Self {
+        self.offboard = false;
+        self
     }
 
     /// The mode it flies in.
@@ -122,7 +132,9 @@ impl Served {
                 let result = match c.command {
                     MavCmd::MAV_CMD_DO_SET_MODE => match self.flavour.mode_of_params(c.param2, c.param3) {
                         // OFFBOARD only with a setpoint stream running (as PX4 requires).
-                        Some(Mode::Offboard) if self.setpoint.is_none_or(|s| now_s - s.at_s > SETPOINT_LOSS_S) => {
+                        Some(Mode::Offboard)
+                            if !self.offboard || self.setpoint.is_none_or(|s| now_s - s.at_s > SETPOINT_LOSS_S) =>
+                        {
                             MavResult::MAV_RESULT_DENIED
                         }
                         Some(mode) => {
@@ -304,6 +316,11 @@ mod tests {
         }
         v.handle(&from(), &global, 0.1);
         assert_eq!(v.refused, Refused { foreign: 2, invalid: 3, commands: 0 });
+        // A vehicle that flies its own mission refuses OFFBOARD even with setpoints streaming.
+        let mut nav = Served::new(1, Flavour::Px4, MavType::MAV_TYPE_QUADROTOR).without_offboard();
+        nav.handle(&from(), &velocity(1, [1.0, 0.0, 0.0]), 0.0);
+        assert_eq!(result(nav.handle(&from(), &set_mode(1, Mode::Offboard), 0.0)), MavResult::MAV_RESULT_DENIED);
+        assert_eq!(nav.setpoint(0.1), None);
         assert_eq!(v.setpoint(0.2).expect("still offboard").velocity_ned, [1.0, 0.0, 0.0]);
         assert_eq!(v.mode(), Mode::Offboard);
     }

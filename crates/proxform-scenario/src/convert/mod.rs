@@ -354,7 +354,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
                  sensors measure neighbours relative to the UAV, which sensing.relative models",
             ));
         }
-        if spec.controller.radio_fallback == Some(true) && !relative_sensing {
+        if spec.controller.radio_fallback.is_some() && !relative_sensing {
             warnings.push(err("controller.radio_fallback", "does nothing without sensing.relative = true"));
         }
         if fixed_wing && formation.frame == proxform_core::FormationFrame::Heading && !wind.is_calm() {
