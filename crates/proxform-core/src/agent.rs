@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use crate::assignment::{relabel, Reassignment};
-use crate::controller::{ControllerSetup, Decision};
+use crate::controller::{ControllerSetup, Decision, Outcome};
 use crate::dependency::DependencySet;
 use crate::error::ConfigError;
 use crate::formation::Formation;
@@ -17,7 +17,7 @@ use crate::method::{FormationController, Method};
 use crate::observation::{Observation, UavId};
 use crate::schedule::FormationSchedule;
 use crate::state::{self, State9};
-use crate::vehicle::VehicleModel;
+use crate::vehicle::{Setpoint, VehicleModel};
 
 /// What every agent of a formation shares: the method, the navigator (the baselines' leader),
 /// the controller setup, the formation and every UAV's dependency table.
@@ -111,6 +111,9 @@ pub struct Agent {
     /// the input it chose (None before the first step, and when neither the own-state filter
     /// nor the own-sensor check is on; boxed so that agents without them stay small).
     own_prediction: Option<Box<OwnPrediction>>,
+    /// The setpoint its autopilot flies, for a vehicle flown by setpoints (None before the
+    /// first adjustment, and for the other vehicles; boxed so that their agents stay small).
+    setpoint: Option<Box<Setpoint>>,
 }
 
 /// What an agent needs to switch formation: the schedule, the next stage, and what its
@@ -128,11 +131,29 @@ struct Changes {
     setup: Arc<ControllerSetup>,
 }
 
+/// How long the own-sensor check's settled position takes to follow the position readings
+/// (s). A reading frozen in place (a stuck sensor) falls behind it by about the UAV's speed
+/// times this, so at 1.5 m/s and above by more than a 3 m gate; noise and a position-fix bias
+/// wandering over tens of seconds move it by far less.
+pub const OWN_SETTLE_S: f64 = 2.0;
+
 /// What the UAV expects of its own state, and for how long it has flown on that alone.
 #[derive(Debug, Clone, Copy)]
 struct OwnPrediction {
     /// The model applied to the last estimate and the input chosen.
     next: State9,
+    /// Where the position readings have settled (m): moved each period by the velocity
+    /// readings (trapezoid rule) and pulled toward an accepted position reading over
+    /// [`OWN_SETTLE_S`] (set to it when it is the first accepted after refusals); moved as
+    /// the prediction moves while readings are refused. Each reading
+    /// is checked against it as against `next`, so that its position must also agree with
+    /// where its velocity says the UAV went, not only with the last reading: readings frozen in
+    /// place agree with the last one (the prediction is made from it) while the UAV flies on.
+    settled: [f64; 3],
+    /// The velocity of the estimate the UAV decided on last period (m/s).
+    velocity: [f64; 3],
+    /// How far the prediction moved the UAV from that estimate (m).
+    moved: [f64; 3],
     /// Time since a measurement of its own state was last accepted (s).
     unaccepted_s: f64,
 }
@@ -165,7 +186,7 @@ impl Agent {
             deps,
         )?;
         let changes = (!setup.schedule.is_empty()).then(|| Changes::new(setup, id));
-        Ok(Self { controller, changes, own_prediction: None })
+        Ok(Self { controller, changes, own_prediction: None, setpoint: None })
     }
 
     /// Switches to the formation in force at `now_s`: the controller is set up afresh for its
@@ -239,14 +260,30 @@ impl Agent {
         let mut suspect = false;
         let own = match self.own_prediction.as_deref_mut() {
             Some(pred) => {
-                let innovation = (state::position(own_measured) - state::position(&pred.next)).norm();
-                if gate.is_some_and(|g| innovation.is_nan() || innovation > g + growth * pred.unaccepted_s) {
+                let at = state::position(own_measured);
+                let innovation = (at - state::position(&pred.next)).norm();
+                let settled: [f64; 3] = std::array::from_fn(|k| {
+                    pred.settled[k] + 0.5 * dt * (pred.velocity[k] + own_measured[state::VX + k])
+                });
+                let unsettled = (at - nalgebra::Vector3::from(settled)).norm();
+                let bound = |g: f64| g + growth * pred.unaccepted_s;
+                let refused = |d: f64| d.is_nan() || gate.is_some_and(|g| d > bound(g));
+                if gate.is_some() && (refused(innovation) || refused(unsettled)) {
                     // The measurement disagrees with where the UAV knows it flew: fly on that.
                     suspect = true;
                     pred.unaccepted_s += dt;
+                    for k in 0..3 {
+                        pred.settled[k] += pred.moved[k];
+                    }
                     pred.next
                 } else {
+                    // Accepted again after refusals (within the widened gate, a lasting
+                    // offset included): the readings settle where they are now.
+                    let pull = if pred.unaccepted_s > 0.0 { 1.0 } else { (dt / OWN_SETTLE_S).min(1.0) };
                     pred.unaccepted_s = 0.0;
+                    for k in 0..3 {
+                        pred.settled[k] = settled[k] + pull * (at[k] - settled[k]);
+                    }
                     if gain < 1.0 {
                         // Position and velocity are filtered; attitude, measured far more finely
                         // than its tolerances, is taken as measured (filtering it would only
@@ -265,26 +302,49 @@ impl Agent {
         };
         let mut decision = self.controller.step(now_s, &own, heard);
         decision.own_suspect = suspect;
+        let vehicle = self.controller.setup().vehicle();
+        if vehicle.takes_velocity_setpoints() {
+            // An adjustment is a new setpoint, chosen at the state the UAV believes it has;
+            // otherwise the autopilot flies on the last one.
+            if matches!(decision.outcome, Outcome::Adjusted { .. }) {
+                let sp = vehicle.setpoint(&own, &decision.input, dt);
+                self.setpoint = sp.map(Box::new);
+            }
+            decision.setpoint = self.setpoint.as_deref().copied();
+        }
         if gain < 1.0 || gate.is_some() {
             let setup = self.controller.setup();
-            let next = setup.vehicle().propagate(&own, &decision.input, setup.params().dt_s);
+            // What the vehicle flies: its setpoint where it is flown by one.
+            let input = match &decision.setpoint {
+                Some(sp) => setup.vehicle().input_flying(&own, sp).unwrap_or(decision.input),
+                None => decision.input,
+            };
+            let next = setup.vehicle().propagate(&own, &input, setup.params().dt_s);
+            let velocity = [own[state::VX], own[state::VX + 1], own[state::VX + 2]];
+            let moved = std::array::from_fn(|k| next[state::X + k] - own[state::X + k]);
             match &mut self.own_prediction {
-                Some(p) => p.next = next,
-                None => self.own_prediction = Some(Box::new(OwnPrediction { next, unaccepted_s: 0.0 })),
+                Some(p) => (p.next, p.velocity, p.moved) = (next, velocity, moved),
+                None => {
+                    let settled = [own[state::X], own[state::X + 1], own[state::X + 2]];
+                    let p = OwnPrediction { next, settled, velocity, moved, unaccepted_s: 0.0 };
+                    self.own_prediction = Some(Box::new(p));
+                }
             }
         }
         decision
     }
 
-    /// Forgets the own-state prediction (after inputs that were not applied, such as a
-    /// warm-up's).
+    /// Forgets the own-state prediction and the setpoint (after inputs that were not applied,
+    /// such as a warm-up's).
     pub fn forget_own_estimate(&mut self) {
         self.own_prediction = None;
+        self.setpoint = None;
     }
 
     /// What this UAV knows of the navigator at `now_s`, to forward (its state at its last
-    /// measurement and that measurement's age, s): see `radio.relay_navigator`.
-    pub fn navigator_report(&self, now_s: f64) -> Option<(State9, f64)> {
+    /// measurement and that measurement's age, s; with relative sensing, relative to its own
+    /// fix): see `radio.relay_navigator`.
+    pub fn navigator_report(&self, now_s: f64) -> Option<crate::NavigatorReport> {
         self.controller.navigator_report(now_s)
     }
 
@@ -303,6 +363,7 @@ impl Agent {
         self.controller.heap_bytes()
             + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<OwnPrediction>())
             + self.changes.as_ref().map_or(0, |_| std::mem::size_of::<Changes>())
+            + self.setpoint.as_ref().map_or(0, |_| std::mem::size_of::<Setpoint>())
     }
 }
 
@@ -357,6 +418,102 @@ mod tests {
         // `coast_s`, nothing is left: alone.
         assert!(matches!(agent.step(0.6, &off, &[]).outcome, Outcome::Adjusted { .. }));
         assert_eq!(agent.step(2.0, &off, &[]).outcome, Outcome::Alone);
+    }
+
+    /// Two UAVs of `vehicle` 100 m apart side by side in a world frame, flying +x at `speed`,
+    /// with the own-sensor check at `gate` (m).
+    fn pair(vehicle: VehicleModel, speed: f64, gate: Option<f64>) -> (AgentSetup, State9, impl Fn(f64) -> Observation) {
+        let params = ControllerParams { own_gate_m: gate, ..ControllerParams::default() };
+        let controller = ControllerSetup::new(params, vehicle).expect("valid");
+        let slots = vec![FormationSlot::at(0.0, 0.0, 0.0), FormationSlot::at(0.0, 100.0, 0.0)];
+        let formation = Arc::new(Formation::new(slots, FormationFrame::World).expect("finite"));
+        let deps =
+            vec![DependencySet::default(), DependencySet::new(UavId(1), 2, vec![(UavId(0), 1.0)]).expect("valid")];
+        let setup = AgentSetup::new(Method::Proximity, UavId(0), controller, formation, deps).expect("valid");
+        let mut own = State9::zeros();
+        own[Y] = 100.0;
+        own[VX] = speed;
+        let leader = move |t: f64| {
+            let mut s = State9::zeros();
+            s[0] = speed * t;
+            s[VX] = speed;
+            Observation { id: UavId(0), state: s, age_s: 0.0, source: ObservationSource::Onboard }
+        };
+        (setup, own, leader)
+    }
+
+    #[test]
+    fn a_reading_frozen_in_place_is_refused_though_each_period_it_is_near_the_last() {
+        // A multirotor at 10 m/s: a frozen reading is 1 m a period from the prediction made
+        // from the last one, within the 3 m gate; it falls behind where the readings had
+        // settled by about 10 m/s × OWN_SETTLE_S, and is refused within half a second.
+        let (setup, own, leader) = pair(VehicleModel::Multirotor(crate::MultirotorModel::default()), 10.0, Some(3.0));
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        let at = |t: f64| {
+            let mut s = own;
+            s[0] = 10.0 * t;
+            s
+        };
+        for k in 0..50 {
+            let t = k as f64 * 0.1;
+            assert!(!agent.step(t, &at(t), &[leader(t)]).own_suspect, "healthy readings at {t} s");
+        }
+        let frozen = at(4.9);
+        let refused_from = (50..70).find(|k| {
+            let t = *k as f64 * 0.1;
+            agent.step(t, &frozen, &[leader(t)]).own_suspect
+        });
+        assert!(refused_from.is_some_and(|k| k <= 55), "refused from step {refused_from:?}");
+        // Refused to the end of the fault, then the live readings agree with the prediction.
+        for k in refused_from.unwrap_or(70) + 1..100 {
+            let t = k as f64 * 0.1;
+            assert!(agent.step(t, &frozen, &[leader(t)]).own_suspect, "frozen reading at {t} s");
+        }
+        let back = (100..120).find(|k| {
+            let t = *k as f64 * 0.1;
+            !agent.step(t, &at(t), &[leader(t)]).own_suspect
+        });
+        assert_eq!(back, Some(100), "live readings accepted again at once");
+    }
+
+    #[test]
+    fn a_multirotor_flies_the_setpoint_it_chose_at_the_state_it_believed() {
+        let (setup, own, leader) = pair(VehicleModel::Multirotor(crate::MultirotorModel::default()), 10.0, None);
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        // In its slot it holds, and has been given no setpoint: the autopilot holds its own.
+        let d = agent.step(0.0, &own, &[leader(0.0)]);
+        assert_eq!((d.outcome, d.setpoint), (Outcome::Held, None));
+        // One 5 m off to the left adjusts: the setpoint is what it believed plus its input.
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        let mut off = own;
+        off[Y] += 5.0;
+        let d = agent.step(0.0, &off, &[leader(0.0)]);
+        assert!(matches!(d.outcome, Outcome::Adjusted { .. }), "{d:?}");
+        let sp = d.setpoint.expect("an adjustment gives a setpoint");
+        assert_eq!(sp.velocity_mps, [off[VX] + d.input[0], off[VX + 1] + d.input[1], off[VX + 2] + d.input[2]]);
+        assert!(sp.velocity_mps[1] < 0.0, "toward its slot: {sp:?}");
+        // A period that holds keeps the autopilot on that setpoint, whatever the state now.
+        let mut in_slot = own;
+        in_slot[0] = 1.0;
+        let later = agent.step(0.1, &in_slot, &[leader(0.1)]);
+        assert_eq!((later.outcome, later.setpoint), (Outcome::Held, Some(sp)));
+        // The kinematic vehicle's inputs act on the state it has: no setpoint.
+        let (setup, own, leader) = pair(VehicleModel::Kinematic(KinematicModel::default()), 70.0, None);
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        let mut off = own;
+        off[Y] += 5.0;
+        assert_eq!(agent.step(0.0, &off, &[leader(0.0)]).setpoint, None);
+        // A warm-up's setpoint is forgotten with the own estimate.
+        let (setup, own, leader) = pair(VehicleModel::Multirotor(crate::MultirotorModel::default()), 10.0, None);
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        let mut off = own;
+        off[Y] += 5.0;
+        assert!(agent.step(0.0, &off, &[leader(0.0)]).setpoint.is_some());
+        agent.forget_own_estimate();
+        let mut in_slot = own;
+        in_slot[0] = 1.0;
+        let d = agent.step(0.1, &in_slot, &[leader(0.1)]);
+        assert_eq!((d.outcome, d.setpoint), (Outcome::Held, None));
     }
 
     #[test]

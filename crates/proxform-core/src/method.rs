@@ -143,7 +143,7 @@ impl FormationController {
 
     /// What the UAV knows of the navigator to forward over the radio (the proximity method's
     /// track of it; the baselines forward nothing).
-    pub fn navigator_report(&self, now_s: f64) -> Option<(State9, f64)> {
+    pub fn navigator_report(&self, now_s: f64) -> Option<crate::NavigatorReport> {
         match self {
             Self::Proximity(c) => c.navigator_report(now_s),
             _ => None,

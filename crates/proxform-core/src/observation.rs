@@ -35,6 +35,25 @@ pub enum ObservationSource {
     /// avoidance's watch radius, beyond the nearest of each azimuth area): for collision
     /// avoidance only; the formation controller neither sorts it into areas nor tracks it.
     Close,
+    /// With relative sensing, a UAV placed by the observer's own sensors from a relay: the
+    /// position a neighbour reported of it relative to itself ([`NavigatorReport`]), added to
+    /// the observer's onboard observation of that neighbour (its velocity and attitude are the
+    /// neighbour's track of it). In the observer's own frame, as
+    /// an onboard observation is, though not limited by the sensing range.
+    Relayed,
+}
+
+/// What a UAV knows of the navigator, to forward to the others (`radio.relay_navigator`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavigatorReport {
+    /// Its state: the reporter's track of it. With `relative`, its position is relative to
+    /// the reporter's own position fix at the same moment (each UAV's fix has its own error:
+    /// a relative position is free of it, and the receiver adds its own view of the reporter).
+    pub state: State9,
+    /// How old that state is at the time of the report (s).
+    pub age_s: f64,
+    /// Whether the position is relative to the reporter.
+    pub relative: bool,
 }
 
 /// One observed state of a neighbour.

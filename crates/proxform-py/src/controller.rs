@@ -148,6 +148,12 @@ pub struct PyDecision {
     /// (scenario key `controller.own_gate_m`).
     #[pyo3(get)]
     own_suspect: bool,
+    /// For the multirotor, what its autopilot flies from now on: [vx, vy, vz] (world frame,
+    /// m/s) and yaw β (rad), absolute (chosen at the state the UAV was given when it adjusted;
+    /// the last one while it holds); None before its first adjustment and for the other
+    /// vehicles.
+    #[pyo3(get)]
+    setpoint: Option<[f64; 4]>,
 }
 
 impl From<Decision> for PyDecision {
@@ -166,6 +172,7 @@ impl From<Decision> for PyDecision {
             main_refs: d.main_refs,
             isolated: d.isolated,
             own_suspect: d.own_suspect,
+            setpoint: d.setpoint.map(|s| [s.velocity_mps[0], s.velocity_mps[1], s.velocity_mps[2], s.yaw_rad]),
         }
     }
 }

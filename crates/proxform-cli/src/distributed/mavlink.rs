@@ -109,9 +109,12 @@ impl MavlinkSwarm {
         let v = self.frame.velocity_xyz(s.velocity_ned);
         let beta = s.yaw.map(|y| self.frame.yaw(y));
         self.offboard_steps[i] += 1;
-        // A vehicle flown by velocity setpoints (the multirotor) takes them as its input.
+        // A vehicle flown by velocity setpoints (the multirotor) flies them as they are.
         if let Some(u) = self.setup.vehicle().input_for_setpoint(own, v, beta) {
-            return Some(Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, u));
+            let yaw_rad = beta.unwrap_or(own[state::BETA]);
+            let mut d = Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, u);
+            d.setpoint = Some(proxform_core::Setpoint { velocity_mps: v, yaw_rad });
+            return Some(d);
         }
         let [vx, vy, vz] = v;
         let dt = self.setup.params().dt_s;

@@ -1,6 +1,7 @@
 //! What one update period decided: held, adjusted (with the input) or alone.
 
 use crate::state::Input;
+use crate::vehicle::Setpoint;
 
 /// What the controller decided in one update period.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,6 +45,13 @@ pub struct Decision {
     /// The UAV did not trust its own measurement this period and flew on its own prediction
     /// (`ControllerParams::own_gate_m`; always false without it).
     pub own_suspect: bool,
+    /// For a vehicle flown by velocity and yaw setpoints (the multirotor), what its autopilot
+    /// flies from now on: the input applied to the state the agent believed it had when it
+    /// adjusted, the last such setpoint while it holds (an autopilot keeps flying its last
+    /// setpoint), None before its first (the autopilot holds the velocity and yaw it has). The
+    /// world applies it to the true state, a MAVLink agent sends it. Always None for the other
+    /// vehicles, whose inputs act on the state they have.
+    pub setpoint: Option<Setpoint>,
 }
 
 impl Decision {
@@ -55,6 +63,6 @@ impl Decision {
     /// A decision that reports no areas, references or isolation (the baselines', a held
     /// placeholder's).
     pub fn without_areas(outcome: Outcome, input: Input) -> Self {
-        Decision { outcome, input, occupied_areas: 0, main_refs: 0, isolated: 0, own_suspect: false }
+        Decision { outcome, input, occupied_areas: 0, main_refs: 0, isolated: 0, own_suspect: false, setpoint: None }
     }
 }

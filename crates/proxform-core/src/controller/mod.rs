@@ -32,7 +32,7 @@ use fusion::{Fusion, Implied};
 
 use crate::error::ConfigError;
 use crate::formation::{Formation, FormationSlot};
-use crate::observation::{Observation, ObservationSource, UavId};
+use crate::observation::{NavigatorReport, Observation, ObservationSource, UavId};
 use crate::predictor::NeighbourTracks;
 use crate::state::{self, State9, VX, X};
 use crate::vehicle::VehicleModel;
@@ -250,11 +250,27 @@ impl ProximityController {
         self
     }
 
-    /// What this UAV knows of the navigator at `now` (its track: the filtered state at its
-    /// last measurement, and that measurement's age in s), to forward over the radio
-    /// (`radio.relay_navigator`); None when the navigator is not named or not tracked.
-    pub fn navigator_report(&self, now: f64) -> Option<(State9, f64)> {
-        self.tracks.report(self.navigator?, now)
+    /// What this UAV knows of the navigator at `now`, to forward over the radio
+    /// (`radio.relay_navigator`): its track (the filtered state at its last measurement, and
+    /// that measurement's age in s). With relative sensing its tracks are in the frame of its
+    /// own last fix: the position is less the UAV's own at that measurement (its last fix
+    /// carried there at the fix's velocity). None when the navigator is not named or not
+    /// tracked (or, relative, before a fix).
+    pub fn navigator_report(&self, now: f64) -> Option<NavigatorReport> {
+        let navigator = self.navigator?;
+        if !self.setup.params.relative_sensing {
+            let (state, age_s) = self.tracks.report(navigator, now)?;
+            return Some(NavigatorReport { state, age_s, relative: false });
+        }
+        // The track at its last measurement, less the UAV's own position then (its last fix,
+        // in whose frame its tracks are, carried there at the fix's velocity).
+        let fix = self.own_frame.as_deref()?;
+        let (mut state, age_s) = self.tracks.report(navigator, now)?;
+        let h = (now - age_s) - fix.t;
+        for k in 0..3 {
+            state[X + k] -= fix.pos[k] + fix.vel[k] * h;
+        }
+        Some(NavigatorReport { state, age_s, relative: true })
     }
 
     /// A controller with its own [`ControllerSetup`] (convenient for a single UAV).
@@ -336,8 +352,15 @@ impl ProximityController {
         let x_hold_minus_o = -o_i;
         let envelope = &params.envelope;
         let (occupied_areas, main_refs, isolated) = (est.n_bar, est.main_refs, est.isolated);
-        let decide =
-            |outcome, input| Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect: false };
+        let decide = |outcome, input| Decision {
+            outcome,
+            input,
+            occupied_areas,
+            main_refs,
+            isolated,
+            own_suspect: false,
+            setpoint: None,
+        };
         if envelope.contains(&x_hold_minus_o) {
             return decide(Outcome::Held, state::Input::zeros());
         }
@@ -391,7 +414,13 @@ impl ProximityController {
             if out_of_frame(params, tracks, o, observations, now_s) {
                 continue;
             }
-            if observations[..k].iter().any(|p| p.id == o.id && p.source != ObservationSource::Close) {
+            // (A report left out of the frame stands for nothing: a later one of the same UAV,
+            // a relay placed in the frame, takes the place.)
+            if observations[..k].iter().any(|p| {
+                p.id == o.id
+                    && p.source != ObservationSource::Close
+                    && !out_of_frame(params, tracks, p, observations, now_s)
+            }) {
                 tracks.predict(o, now_s, params.dt_s);
                 continue;
             }
@@ -478,13 +507,21 @@ impl ProximityController {
         let heading_rate = !matches!(setup.vehicle, VehicleModel::FixedWing(_));
         let nav_omega = match (params.turn_feedforward && heading_rate, navigator) {
             (true, Some(n)) => {
-                observations.iter().find(|o| o.id == n && o.source != ObservationSource::Close).and_then(|o| {
-                    // From its track's last measurement before this report (not yet fed) to
-                    // this report's: a delayed report is as old as the radio made it.
-                    let (before, age) = tracks.report(n, now_s)?;
-                    let span = age - o.age_s;
-                    (span > crate::predictor::SAME_INSTANT_S).then(|| setup.vehicle.turn_rate(&before, &o.state, span))
-                })
+                observations
+                    .iter()
+                    .find(|o| {
+                        o.id == n
+                            && o.source != ObservationSource::Close
+                            && !out_of_frame(params, tracks, o, observations, now_s)
+                    })
+                    .and_then(|o| {
+                        // From its track's last measurement before this report (not yet fed) to
+                        // this report's: a delayed report is as old as the radio made it.
+                        let (before, age) = tracks.report(n, now_s)?;
+                        let span = age - o.age_s;
+                        (span > crate::predictor::SAME_INSTANT_S)
+                            .then(|| setup.vehicle.turn_rate(&before, &o.state, span))
+                    })
             }
             _ => None,
         };

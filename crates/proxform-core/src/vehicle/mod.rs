@@ -19,6 +19,17 @@ use crate::state::{Input, State9};
 /// Standard gravity (m/s²).
 pub const G: f64 = 9.80665;
 
+/// What an autopilot flown by velocity and yaw setpoints is told to fly (a MAVLink velocity
+/// setpoint): absolute, so that it means the same whatever the autopilot's own estimate of its
+/// state, and whatever the companion believed when it chose it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setpoint {
+    /// Velocity over the ground (world frame, m/s).
+    pub velocity_mps: [f64; 3],
+    /// Yaw β (rad, within ±π).
+    pub yaw_rad: f64,
+}
+
 /// The vehicle models proxform knows. An enum rather than a trait object: the controller's
 /// inner loop stays monomorphic and the models stay plain data.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -186,6 +197,22 @@ impl VehicleModel {
     /// the multirotor.
     pub fn takes_velocity_setpoints(&self) -> bool {
         matches!(self, VehicleModel::Multirotor(_))
+    }
+
+    /// The setpoint that input `u` chosen at the believed state `x` asks for, where the vehicle
+    /// is flown by setpoints (the multirotor; None for the others).
+    pub fn setpoint(&self, x: &State9, u: &Input, dt: f64) -> Option<Setpoint> {
+        self.takes_velocity_setpoints().then(|| {
+            let (velocity_mps, yaw_rad) = self.velocity_setpoint(x, u, dt);
+            Setpoint { velocity_mps, yaw_rad }
+        })
+    }
+
+    /// The plant's input at the true state `x` that flies setpoint `sp` (the multirotor's
+    /// inputs are increments on the state it has; None for the vehicles not flown by
+    /// setpoints).
+    pub fn input_flying(&self, x: &State9, sp: &Setpoint) -> Option<Input> {
+        self.input_for_setpoint(x, sp.velocity_mps, Some(sp.yaw_rad))
     }
 
     /// The input that gives an autopilot the velocity setpoint `v` (world frame, m/s) and yaw

@@ -3,9 +3,11 @@
 //!
 //! Inputs `u = [Δvx, Δvy, Δvz, Δψ]`: over one update period the autopilot is given the
 //! velocity setpoint `v_sp = v(t) + u_v` (world frame, over the ground, m/s) and the yaw
-//! setpoint `ψ_sp = ψ(t) + u_ψ` (rad). No new input (`u = 0`) asks it to hold the velocity and
-//! yaw it has. The autopilot's inner loop tracks the setpoints through the air, integrated in
-//! sub-steps of at most [`SUBSTEP_S`]:
+//! setpoint `ψ_sp = ψ(t) + u_ψ` (rad), `v(t)` and `ψ(t)` those of the state the model is
+//! given. The agent chooses `u` at the state it believes it has and flies the absolute
+//! setpoint that makes ([`super::Setpoint`], `Decision::setpoint`); the plant takes it as the
+//! input at the true state ([`super::VehicleModel::input_flying`]). The autopilot's inner loop
+//! tracks the setpoints through the air, integrated in sub-steps of at most [`SUBSTEP_S`]:
 //!
 //! - desired acceleration `a_d = (v_sp − v)/τ_v`, its horizontal part at most `a_max`, its
 //!   vertical part at most `a_z,max`;

@@ -1,8 +1,9 @@
 //! An agent's UAV behind a MAVLink autopilot ([`MavlinkVehicle`], `proxform-agent --mavlink`):
 //! its own state comes from the autopilot (LOCAL_POSITION_NED and ATTITUDE in the method's
 //! frame), what it perceived and heard from its sensing over the network as before, and each
-//! decision goes to the autopilot as the vehicle model's velocity and yaw setpoint for it
-//! ([`VehicleModel::velocity_setpoint`]; SET_POSITION_TARGET_LOCAL_NED), with OFFBOARD asked
+//! decision goes to the autopilot as its velocity and yaw setpoint (the decision's
+//! [`proxform_core::Setpoint`], absolute, chosen at the state the agent believed it had;
+//! SET_POSITION_TARGET_LOCAL_NED), with OFFBOARD asked
 //! while it is not in it.
 //! The safety policy ([`Safety`]) asks for HOLD instead when the autopilot's position is stale
 //! or no update came for its timeout; the decision also goes to the world as before (a world
@@ -132,7 +133,11 @@ impl Vehicle for MavlinkVehicle {
     fn command(&mut self, command: &CommandMsg, state: &StateMsg) -> Result<(), TransportError> {
         let now = Instant::now();
         if self.verdict(now) == Verdict::Fly {
-            let (v, beta) = self.model.velocity_setpoint(&state.state, &command.decision.input, self.dt_s);
+            // The agent's setpoint (absolute); before its first, the state it was given held.
+            let (v, beta) = match command.decision.setpoint {
+                Some(sp) => (sp.velocity_mps, sp.yaw_rad),
+                None => self.model.velocity_setpoint(&state.state, &command.decision.input, self.dt_s),
+            };
             let (v, yaw) = (self.frame.velocity_ned(v), self.frame.yaw(beta));
             let ms = now.duration_since(self.boot).as_millis() as u32;
             if self.autopilot.send_velocity(v, yaw, ms).map_err(io)? {

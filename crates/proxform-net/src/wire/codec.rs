@@ -5,7 +5,7 @@
 //! wrong (length, magic, version, kind, counts, enumerations) and never panics.
 
 use proxform_core::state::{Input, State9, P};
-use proxform_core::{Decision, Observation, ObservationSource, Outcome, UavId};
+use proxform_core::{Decision, Observation, ObservationSource, Outcome, Setpoint, UavId};
 
 use super::{
     outcome_code, ClockMode, ClockMsg, CommandMsg, MemberMsg, Message, Phase, Presence, SenseMsg, StateMsg,
@@ -194,6 +194,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
                     ObservationSource::Onboard => 0,
                     ObservationSource::Radio => 1,
                     ObservationSource::Close => 2,
+                    ObservationSource::Relayed => 3,
                 });
                 w.pad(3);
                 w.f64(o.age_s);
@@ -202,7 +203,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
             w.0
         }
         Message::Command(c) => {
-            let mut w = Writer::new(kind::COMMAND, 96);
+            let mut w = Writer::new(kind::COMMAND, 136);
             let d = &c.decision;
             w.u32(c.uav);
             w.u32(c.run);
@@ -221,6 +222,13 @@ pub fn encode(m: &Message) -> Vec<u8> {
             for u in d.input.iter() {
                 w.f64(*u);
             }
+            w.u8(u8::from(d.setpoint.is_some()));
+            w.pad(7);
+            let sp = d.setpoint.unwrap_or(Setpoint { velocity_mps: [0.0; 3], yaw_rad: 0.0 });
+            for v in sp.velocity_mps {
+                w.f64(v);
+            }
+            w.f64(sp.yaw_rad);
             w.0
         }
         Message::Clock(c) => {
@@ -290,6 +298,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
                     0 => ObservationSource::Onboard,
                     1 => ObservationSource::Radio,
                     2 => ObservationSource::Close,
+                    3 => ObservationSource::Relayed,
                     v => return Err(DecodeError::Field { field: "observation source", value: v.into() }),
                 };
                 r.skip(3)?;
@@ -318,7 +327,16 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             for j in 0..input.len() {
                 input[j] = r.f64()?;
             }
-            let decision = Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect };
+            let has_setpoint = match r.u8()? {
+                0 => false,
+                1 => true,
+                v => return Err(DecodeError::Field { field: "setpoint flag", value: v.into() }),
+            };
+            r.skip(7)?;
+            let velocity_mps = [r.f64()?, r.f64()?, r.f64()?];
+            let yaw_rad = r.f64()?;
+            let setpoint = has_setpoint.then_some(Setpoint { velocity_mps, yaw_rad });
+            let decision = Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect, setpoint };
             Message::Command(CommandMsg { uav, run, k, t_s, age_s, decision })
         }
         kind::CLOCK => {
@@ -387,7 +405,7 @@ mod tests {
                 k: 9,
                 t_s: 0.9,
                 own: state(3.0),
-                heard: vec![obs(4, ObservationSource::Close)],
+                heard: vec![obs(4, ObservationSource::Close), obs(6, ObservationSource::Relayed)],
             }),
             Message::Sense(SenseMsg {
                 uav: 7,
@@ -411,6 +429,7 @@ mod tests {
                     main_refs: 2,
                     isolated: 1,
                     own_suspect: true,
+                    setpoint: Some(Setpoint { velocity_mps: [20.0, -1.5, 0.25], yaw_rad: -3.0 }),
                 },
             }),
             Message::Command(CommandMsg { uav: 5, run: 1, k: 4, t_s: 0.4, age_s: 0.0, decision: Decision::alone() }),
@@ -436,7 +455,7 @@ mod tests {
         }
         // Layouts as docs/wire.md gives them.
         let lens: Vec<usize> = samples().iter().map(|m| encode(m).len()).collect();
-        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + OBSERVATION_BYTES, 112, 104, 104, 48, 20]);
+        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 144, 144, 48, 20]);
         // NaN payloads and signed zeros survive (bits, not values).
         let odd = Message::State(StateMsg {
             uav: 1,

@@ -243,8 +243,13 @@ pub fn dependencies(
         .collect()
 }
 
-/// Warnings for UAVs whose main references never lead, however far followed, to the navigator:
-/// they lean only on each other (or on nobody) and can drift away together.
+/// Whether some slot lies farther from the navigator's than `sensing_range_m` (the navigator's
+/// own view cannot reach it in formation).
+pub fn beyond_sensing_of_navigator(slots: &[FormationSlot], navigator: UavId, sensing_range_m: f64) -> bool {
+    let Some(nav) = slots.get(navigator.index()) else { return false };
+    slots.iter().any(|s| (s.offset_m - nav.offset_m).norm() > sensing_range_m)
+}
+
 /// A warning naming the followers the navigator's state cannot reach: slots beyond both the
 /// radio's range and the sensing range of the navigator's slot, or, when every UAV relays
 /// (`relay_navigator`), of every slot the navigator's state reaches hop by hop. With
@@ -295,6 +300,8 @@ pub fn beyond_the_navigators_radio(
     ))
 }
 
+/// Warnings for UAVs whose main references never lead, however far followed, to the navigator:
+/// they lean only on each other (or on nobody) and can drift away together.
 pub fn drifting_groups(deps: &[DependencySet], navigator: UavId, f: &FormationSpec) -> Vec<SpecError> {
     let n = deps.len();
     // Who leans on whom, reversed: from the navigator, follow the UAVs that name each UAV

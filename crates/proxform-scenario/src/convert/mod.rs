@@ -201,6 +201,29 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         let method = controller::method(&spec.controller)?;
+        // With relative sensing and biased fixes the rear ranks beyond the navigator's sensing
+        // range cannot take its broadcast (its own fix, in its frame): the navigator reaches
+        // them relayed, each relay placed by the receiver's own view of its sender (METHOD §8).
+        // Not for the paper's method, nor a predictor that keeps no tracks to relay from.
+        let biased = gnss_bias.as_ref().is_some_and(|b| b.sigma_m > 0.0);
+        let tracked = !matches!(params.predictor, proxform_core::PredictorKind::ConstantVelocity);
+        if spec.radio.relay_navigator.is_none()
+            && relative_sensing
+            && biased
+            && !paper
+            && tracked
+            && n <= MAX_BROADCAST_ALL_UAVS
+            && matches!(method, proxform_core::Method::Proximity)
+            && formation::beyond_sensing_of_navigator(&formation.slots, navigator, params.areas.sensing_range_m)
+        {
+            radio.relay_navigator = true;
+        }
+        if spec.radio.relay_navigator == Some(true) && !tracked {
+            return Err(err(
+                "radio.relay_navigator",
+                "the constant-velocity predictor keeps no tracks to relay the navigator from (controller.predictor)",
+            ));
+        }
         // Derived tables that lean on the navigator hear it over the radio where it is out of
         // sensing range: the navigator broadcasts, unless the file names the beacons without it
         // (then a warning says who cannot hear it).
@@ -281,7 +304,6 @@ impl TryFrom<ScenarioSpec> for Scenario {
         params.avoid_m = Some(params.avoid_m.unwrap_or(avoid_default));
         params.relative_sensing = relative_sensing;
         // Each UAV's fix biased on its own: a radio report is in a frame ~√2 biases away.
-        let biased = gnss_bias.as_ref().is_some_and(|b| b.sigma_m > 0.0);
         params.radio_fallback = spec.controller.radio_fallback.unwrap_or(relative_sensing && biased);
         if paper && spec.controller.plan_forward.is_none() {
             params.plan_forward = false;

@@ -60,6 +60,9 @@ pub struct Message {
     pub age_s: f64,
     /// The sender's true position then (for the radio's range).
     pub at: [f64; 3],
+    /// A relay whose position is relative to its sender (relative sensing): a receiver places
+    /// it from its own onboard observation of the sender.
+    pub relative: bool,
 }
 
 impl Message {
@@ -91,7 +94,14 @@ pub fn compose(
             .map(beacon)
             .chain((0..all).filter(|j| !beacons.iter().any(|b| beacon(b) == *j)))
             .filter(|&j| j < n)
-            .map(|j| Message { sender: j as u32, about: j as u32, state: State9::zeros(), age_s: 0.0, at: [0.0; 3] }),
+            .map(|j| Message {
+                sender: j as u32,
+                about: j as u32,
+                state: State9::zeros(),
+                age_s: 0.0,
+                at: [0.0; 3],
+                relative: false,
+            }),
     );
     crate::parallel::for_each_mut(out, parallel, |_, m| {
         let j = m.sender as usize;
@@ -103,8 +113,9 @@ pub fn compose(
 
 /// Appends to `out` the relays of this step (`radio.relay_navigator`): every active follower
 /// whose agent knows the leader (the navigator, or its successor `leader`) forwards that
-/// knowledge (its track's state and age at `t`). Nothing without relaying, or when the
-/// agents run outside the engine.
+/// knowledge (its track's state and age at `t`; with relative sensing, its position relative
+/// to the sender's own fix). Nothing without relaying, or when the agents run outside the
+/// engine.
 pub fn relays(
     sc: &Scenario,
     states: &[State9],
@@ -119,14 +130,15 @@ pub fn relays(
     let nav = leader.0;
     for (j, agent) in agents.iter().enumerate() {
         let Some(agent) = agent.as_ref().filter(|_| active.get(j).copied().unwrap_or(false)) else { continue };
-        if let Some((state, age_s)) = agent.navigator_report(t) {
+        if let Some(r) = agent.navigator_report(t) {
             let s = &states[j];
             out.push(Message {
                 sender: j as u32,
                 about: nav,
-                state,
-                age_s,
+                state: r.state,
+                age_s: r.age_s,
                 at: [s[state::X], s[state::Y], s[state::Z]],
+                relative: r.relative,
             });
         }
     }

@@ -268,8 +268,16 @@ impl StepContext<'_> {
             if relative && i != nav {
                 let error = state::difference(&own, truth);
                 for o in s.heard[s.spans[b].clone()].iter_mut() {
-                    if matches!(o.source, ObservationSource::Onboard | ObservationSource::Close) {
-                        o.state += error;
+                    match o.source {
+                        ObservationSource::Onboard | ObservationSource::Close => o.state += error,
+                        // Placed from an onboard observation: its position (velocity and
+                        // attitude are the relay's).
+                        ObservationSource::Relayed => {
+                            for k in state::X..state::X + 3 {
+                                o.state[k] += error[k];
+                            }
+                        }
+                        ObservationSource::Radio => {}
                     }
                 }
             }
@@ -297,18 +305,34 @@ impl StepContext<'_> {
         let s = &mut *blk.scratch;
         s.applied.clear();
         for (b, d) in s.decisions.iter().enumerate() {
-            let commanded = match d {
-                Some(d) if self.options.adjustment_enabled => d.input,
-                _ => Input::zeros(),
-            };
+            let truth = &self.scene.states[first + b];
+            let commanded = self.plant_input(truth, d.as_ref());
             let adjusted = d.is_some_and(|d| matches!(d.outcome, Outcome::Adjusted { .. }));
             let applied = if adjusted && sc.actuation_error() > 0.0 {
                 let mut rng = self.key.rng((first + b) as u64, Source::Actuation);
-                commanded.map(|u| u * (1.0 + sc.actuation_error() * rng.random_range(-1.0..=1.0)))
+                let mut error = || sc.actuation_error() * rng.random_range(-1.0..=1.0);
+                match d.and_then(|d| d.setpoint.map(|_| d.input)) {
+                    // The error scales the change the agent asked for, on top of its setpoint.
+                    Some(asked) if self.options.adjustment_enabled => commanded + asked.map(|u| u * error()),
+                    _ => commanded.map(|u| u * (1.0 + error())),
+                }
             } else {
                 commanded
             };
             s.applied.push(applied);
+        }
+    }
+
+    /// The input the plant is given at its true state `truth` for decision `d`: none without a
+    /// decision or with adjustment off; for a vehicle flown by setpoints, what flies the
+    /// decision's setpoint from the state the UAV has (whatever its agent believed); else the
+    /// decision's input.
+    fn plant_input(&self, truth: &State9, d: Option<&Decision>) -> Input {
+        match d {
+            Some(d) if self.options.adjustment_enabled => {
+                d.setpoint.and_then(|sp| self.scenario.vehicle().input_flying(truth, &sp)).unwrap_or(d.input)
+            }
+            _ => Input::zeros(),
         }
     }
 
@@ -355,7 +379,7 @@ impl StepContext<'_> {
                 continue;
             };
             let applied = s.applied[b];
-            let commanded = if self.options.adjustment_enabled { decision.input } else { Input::zeros() };
+            let commanded = self.plant_input(me, Some(&decision));
             // The model error is zero when the input was applied as commanded: the plant is
             // then propagated once.
             let exact = applied == commanded;

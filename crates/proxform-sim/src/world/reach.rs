@@ -85,6 +85,7 @@ mod tests {
                 state: State9::zeros(),
                 age_s: 0.0,
                 at: [2000.0 * next(), 2000.0 * next(), 100.0 * next()],
+                relative: false,
             })
             .collect();
         let range = 150.0;

@@ -203,7 +203,12 @@ impl ProximitySensor {
                 let m = &messages[k];
                 let j = m.sender as usize;
                 let about = m.about as usize;
-                let seen = !link.fuse && out[start..].iter().any(|o| o.id.index() == about);
+                // (A relative relay is in the receiver's frame: only its own view of the UAV
+                // makes it redundant, not a report in another's frame.)
+                let seen = !link.fuse
+                    && out[start..]
+                        .iter()
+                        .any(|o| o.id.index() == about && (!m.relative || o.source == ObservationSource::Onboard));
                 if j == i || about == i || j >= n || about >= n || !link.active[j] || seen {
                     return;
                 }
@@ -213,7 +218,10 @@ impl ProximitySensor {
                     return;
                 }
                 if m.is_relay() {
-                    if relayed.is_none_or(|r| m.age_s < r.age_s) {
+                    // A relative relay can be placed only from the receiver's own view of its
+                    // sender, in this period.
+                    let placeable = !m.relative || onboard_of(&out[start..], m.sender).is_some();
+                    if placeable && relayed.is_none_or(|r| m.age_s < r.age_s) {
                         relayed = Some(m);
                     }
                     return;
@@ -227,14 +235,29 @@ impl ProximitySensor {
             });
             if let Some(m) = relayed {
                 let age_s = link.delay_s + m.age_s;
-                let fresher = out[start..].iter().any(|o| o.id.0 == m.about && o.age_s <= age_s);
-                if !fresher {
-                    out.push(Observation {
-                        id: UavId(m.about),
-                        state: m.state,
-                        age_s,
-                        source: ObservationSource::Radio,
-                    });
+                match onboard_of(&out[start..], m.sender).filter(|_| m.relative) {
+                    // Relative: where the receiver sees the sender (moved back to the moment the
+                    // relay describes), plus the relay's position. In the receiver's frame, so
+                    // the navigator's own broadcast (in its frame) neither stands for it nor
+                    // hides it.
+                    Some(seen) => {
+                        let mut state = m.state;
+                        for k in 0..3 {
+                            state[state::X + k] += seen[state::X + k] - seen[state::VX + k] * age_s;
+                        }
+                        out.push(Observation { id: UavId(m.about), state, age_s, source: ObservationSource::Relayed });
+                    }
+                    None => {
+                        let fresher = out[start..].iter().any(|o| o.id.0 == m.about && o.age_s <= age_s);
+                        if !fresher {
+                            out.push(Observation {
+                                id: UavId(m.about),
+                                state: m.state,
+                                age_s,
+                                source: ObservationSource::Radio,
+                            });
+                        }
+                    }
                 }
             }
         }
@@ -300,6 +323,11 @@ pub struct Link<'a> {
 
 /// Draws whether an observation survives a dropout of probability `p`.
 #[inline]
+/// The state of UAV `sender` as `perceived` onboard in this period, if it was.
+fn onboard_of(perceived: &[Observation], sender: u32) -> Option<State9> {
+    perceived.iter().find(|o| o.id.0 == sender && o.source == ObservationSource::Onboard).map(|o| o.state)
+}
+
 fn kept(p: f64, rng: &mut StepRng) -> bool {
     p <= 0.0 || ((rng.next_u64() >> 11) as f64) / ((1u64 << 53) as f64) >= p
 }
@@ -463,6 +491,7 @@ mod tests {
             state: states[j],
             age_s: 0.0,
             at: [states[j][0], states[j][1], 0.0],
+            relative: false,
         };
         let heard = perceive(&states, &deps, 0.0, &[message(1), message(4)]);
         let radio: Vec<u32> = heard.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
@@ -492,6 +521,7 @@ mod tests {
                 state,
                 age_s,
                 at: [states[sender][0], states[sender][1], 0.0],
+                relative: false,
             }
         };
         let of_4 = |heard: &[Observation]| -> Vec<(f64, f64)> {
@@ -501,11 +531,62 @@ mod tests {
         assert_eq!(of_4(&heard), vec![(0.1, 0.1)], "{heard:?}");
         assert!(heard.iter().filter(|o| o.id.0 == 4).all(|o| o.source == ObservationSource::Radio));
         // UAV 4's own message is fresher: the relays add nothing.
-        let own = Message { sender: 4, about: 4, state: states[4], age_s: 0.0, at: [states[4][0], states[4][1], 0.0] };
+        let own = Message {
+            sender: 4,
+            about: 4,
+            state: states[4],
+            age_s: 0.0,
+            at: [states[4][0], states[4][1], 0.0],
+            relative: false,
+        };
         assert_eq!(of_4(&perceive(&states, &deps, 0.0, &[own, relay(3, 4, 0.1)])), vec![(0.0, 0.0)]);
         // A relay about a UAV seen onboard, or about the receiver itself, adds nothing.
         let heard = perceive(&states, &deps, 0.0, &[relay(3, 1, 0.2), relay(3, 0, 0.2)]);
         assert_eq!(heard.len(), 3, "{heard:?}");
         assert!(heard.iter().all(|o| o.source == ObservationSource::Onboard));
+    }
+
+    #[test]
+    fn a_relative_relay_is_placed_by_the_receivers_own_view_of_its_sender() {
+        let (states, deps) = setup();
+        // UAV 3 (seen onboard by UAV 0) says where UAV 4 is relative to itself, as it was
+        // 0.1 s ago; UAV 4's own broadcast is in its own frame.
+        let offset = [30.0, -5.0, 2.0];
+        let mut relative = states[4];
+        for k in 0..3 {
+            relative[k] = offset[k];
+        }
+        let relay = |sender: usize, age_s: f64| Message {
+            sender: sender as u32,
+            about: 4,
+            state: relative,
+            age_s,
+            at: [states[sender][0], states[sender][1], 0.0],
+            relative: true,
+        };
+        let own = Message {
+            sender: 4,
+            about: 4,
+            state: states[4],
+            age_s: 0.0,
+            at: [states[4][0], states[4][1], 0.0],
+            relative: false,
+        };
+        let heard = perceive(&states, &deps, 0.0, &[own, relay(3, 0.1)]);
+        let placed: Vec<&Observation> = heard.iter().filter(|o| o.source == ObservationSource::Relayed).collect();
+        assert_eq!(placed.len(), 1, "{heard:?}");
+        let (o, seen) = (placed[0], states[3]);
+        assert_eq!((o.id, o.age_s), (UavId(4), 0.1));
+        for k in 0..3 {
+            // Where UAV 0 sees UAV 3, moved back over the relay's age, plus the offset.
+            let want = seen[k] - seen[state::VX + k] * 0.1 + offset[k];
+            assert!((o.state[k] - want).abs() < 1e-9, "axis {k}: {} against {want}", o.state[k]);
+        }
+        // The broadcast is heard beside it (the controller leaves out what is not in its frame).
+        assert!(heard.iter().any(|o| o.id.0 == 4 && o.source == ObservationSource::Radio));
+        // From a sender the receiver does not see onboard (every detection lost), a relative
+        // relay cannot be placed and is not heard.
+        let unseen = perceive(&states, &deps, 1.0, &[relay(3, 0.1)]);
+        assert!(unseen.is_empty(), "{unseen:?}");
     }
 }
