@@ -105,9 +105,17 @@ fn distributed(
         proxform_sim::measure::stats::quantile_of(&mut rt, 0.99) * 1e3,
     );
     eprintln!(
-        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} lost \
-         to [network] faults; round trip median {:.3} ms, p99 {:.3} ms",
-        d.processes, d.stats.answered, d.stats.missing, d.stats.late, d.stats.garbage, d.stats.dropped, median, p99
+        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} refused \
+         (a non-finite number; held), {} lost to [network] faults; round trip median {:.3} ms, p99 {:.3} ms",
+        d.processes,
+        d.stats.answered,
+        d.stats.missing,
+        d.stats.late,
+        d.stats.garbage,
+        d.stats.refused,
+        d.stats.dropped,
+        median,
+        p99
     );
     if d.stats.steps > 0 {
         let mut ages = d.stats.ages_s.clone();

@@ -106,6 +106,44 @@ fn a_silent_agent_holds_its_course_and_the_others_still_decide() {
     assert!(fused.len() > 6 * 50);
 }
 
+/// Agents of which one answers with non-finite or huge numbers (a broken or hostile sender).
+struct Poisoned {
+    inner: LocalAgents,
+    uav: u32,
+    value: f64,
+}
+
+impl Agents for Poisoned {
+    fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        self.inner.decide(request, out);
+        for (j, u) in request.sensed.uavs.iter().enumerate() {
+            if u.0 == self.uav {
+                out[j].input[1] = self.value;
+                out[j].outcome = proxform_core::Outcome::Adjusted { normalised_sq: 1.0 };
+            }
+        }
+    }
+}
+
+#[test]
+fn a_decision_with_a_non_finite_number_is_never_applied() {
+    let sc = scenario(paper_spec().with(|s| s.duration_s = Some(20.0)));
+    for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let agents = Poisoned { inner: LocalAgents::new(&sc), uav: 2, value };
+        let mut sim = Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents));
+        let start = sim.states()[2];
+        for _ in 0..50 {
+            sim.step();
+        }
+        // UAV3 held its course (as a UAV whose agent does not answer), its state finite.
+        let now = sim.states()[2];
+        assert!(now.iter().all(|v| v.is_finite()), "{value}: {now:?}");
+        assert_eq!(&now.as_slice()[3..], &start.as_slice()[3..], "{value}");
+    }
+    assert!(!Decision { input: proxform_core::Input::repeat(f64::NAN), ..holding() }.is_finite());
+    assert!(holding().is_finite());
+}
+
 /// Agents of which one is gone for a while.
 struct Away {
     inner: LocalAgents,

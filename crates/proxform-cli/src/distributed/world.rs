@@ -29,6 +29,8 @@ pub struct NetStats {
     pub late: u64,
     /// Undecodable messages.
     pub garbage: u64,
+    /// Decisions refused for a non-finite number (held instead; also counted as missing).
+    pub refused: u64,
     /// Round trips (send of a step's first sense message to each answer), seconds.
     pub round_trips_s: Vec<f64>,
     /// How old each update was when its agent stepped (s; real time only).
@@ -305,6 +307,12 @@ impl Agents for NetAgents {
                     // A delayed answer arrives `delay_s` later: too late if past the deadline.
                     let delayed =
                         real_time && Instant::now() + Duration::from_secs_f64(self.faults.0.delay_s) > deadline;
+                    // A decision with a non-finite number is never applied: it is not an answer
+                    // (the UAV holds unless a valid one comes in time).
+                    if !c.decision.is_finite() {
+                        self.stats.refused += 1;
+                        continue;
+                    }
                     let lost = self.lost(request, c.uav, 1) || delayed;
                     if lost {
                         waiting -= 1;

@@ -55,6 +55,18 @@ pub struct Decision {
 }
 
 impl Decision {
+    /// Whether every number in it is finite (a decision from outside the process may not be:
+    /// a non-finite one is refused, never applied).
+    pub fn is_finite(&self) -> bool {
+        let sq = match self.outcome {
+            Outcome::Adjusted { normalised_sq } => normalised_sq,
+            _ => 0.0,
+        };
+        sq.is_finite()
+            && self.input.iter().all(|u| u.is_finite())
+            && self.setpoint.is_none_or(|s| s.yaw_rad.is_finite() && s.velocity_mps.iter().all(|v| v.is_finite()))
+    }
+
     /// Nothing perceived: fly on (METHOD §6 step 8, §8).
     pub fn alone() -> Self {
         Self::without_areas(Outcome::Alone, Input::zeros())

@@ -548,7 +548,9 @@ impl Outside<'_> {
         self.agents.decide(&request, &mut self.decisions);
         self.by_uav.iter_mut().for_each(|d| *d = None);
         for (j, u) in self.sensed.uavs.iter().enumerate() {
-            self.by_uav[u.index()] = Some(self.decisions.get(j).copied().unwrap_or_else(holding));
+            // A decision with a non-finite number in it is never applied: the UAV holds.
+            let d = self.decisions.get(j).copied().filter(Decision::is_finite);
+            self.by_uav[u.index()] = Some(d.unwrap_or_else(holding));
         }
     }
 }
