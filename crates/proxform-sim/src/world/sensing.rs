@@ -369,6 +369,18 @@ mod tests {
         (states, deps)
     }
 
+    /// UAV `j`'s broadcast of its own (true) state.
+    fn broadcast(states: &[State9], j: usize) -> Message {
+        Message {
+            sender: j as u32,
+            about: j as u32,
+            state: states[j],
+            age_s: 0.0,
+            at: [states[j][0], states[j][1], 0.0],
+            relative: false,
+        }
+    }
+
     fn perceive(states: &[State9], deps: &[DependencySet], dropout: f64, messages: &[Message]) -> Vec<Observation> {
         perceive_fusing(states, deps, dropout, messages, false)
     }
@@ -485,14 +497,7 @@ mod tests {
         assert!(seen.iter().all(|o| o.source == ObservationSource::Onboard && o.state == states[o.id.index()]));
         // A radio message of a UAV seen onboard is not counted twice; one of a UAV out of
         // range is heard.
-        let message = |j: usize| Message {
-            sender: j as u32,
-            about: j as u32,
-            state: states[j],
-            age_s: 0.0,
-            at: [states[j][0], states[j][1], 0.0],
-            relative: false,
-        };
+        let message = |j: usize| broadcast(&states, j);
         let heard = perceive(&states, &deps, 0.0, &[message(1), message(4)]);
         let radio: Vec<u32> = heard.iter().filter(|o| o.source == ObservationSource::Radio).map(|o| o.id.0).collect();
         assert_eq!(radio, vec![4]);
@@ -531,14 +536,7 @@ mod tests {
         assert_eq!(of_4(&heard), vec![(0.1, 0.1)], "{heard:?}");
         assert!(heard.iter().filter(|o| o.id.0 == 4).all(|o| o.source == ObservationSource::Radio));
         // UAV 4's own message is fresher: the relays add nothing.
-        let own = Message {
-            sender: 4,
-            about: 4,
-            state: states[4],
-            age_s: 0.0,
-            at: [states[4][0], states[4][1], 0.0],
-            relative: false,
-        };
+        let own = broadcast(&states, 4);
         assert_eq!(of_4(&perceive(&states, &deps, 0.0, &[own, relay(3, 4, 0.1)])), vec![(0.0, 0.0)]);
         // A relay about a UAV seen onboard, or about the receiver itself, adds nothing.
         let heard = perceive(&states, &deps, 0.0, &[relay(3, 1, 0.2), relay(3, 0, 0.2)]);
@@ -564,14 +562,7 @@ mod tests {
             at: [states[sender][0], states[sender][1], 0.0],
             relative: true,
         };
-        let own = Message {
-            sender: 4,
-            about: 4,
-            state: states[4],
-            age_s: 0.0,
-            at: [states[4][0], states[4][1], 0.0],
-            relative: false,
-        };
+        let own = broadcast(&states, 4);
         let heard = perceive(&states, &deps, 0.0, &[own, relay(3, 0.1)]);
         let placed: Vec<&Observation> = heard.iter().filter(|o| o.source == ObservationSource::Relayed).collect();
         assert_eq!(placed.len(), 1, "{heard:?}");
