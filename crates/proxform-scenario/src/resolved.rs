@@ -76,7 +76,7 @@ fn next_float(x: f64, up: bool) -> f64 {
 }
 
 /// Values left to follow other keys: (section, key, value, what it follows), printed as comments.
-type Derived = Vec<(&'static str, &'static str, f64, &'static str)>;
+type Derived = Vec<(&'static str, &'static str, String, &'static str)>;
 
 /// The spec's own value of a key that follows others, noting the resolved value when unset.
 fn follows(
@@ -86,7 +86,23 @@ fn follows(
     notes: &mut Derived,
 ) -> Option<f64> {
     if set.is_none() {
-        notes.push((section, key, resolved, why));
+        // Twelve significant digits: a derived value computed in SI need not have a short
+        // decimal, and a comment is read, not loaded.
+        let shown: f64 = format!("{resolved:.11e}").parse().unwrap_or(resolved);
+        notes.push((section, key, format!("{shown:?}"), why));
+    }
+    set
+}
+
+/// [`follows`] for a switch.
+fn follows_flag(
+    set: Option<bool>,
+    resolved: bool,
+    (section, key, why): (&'static str, &'static str, &'static str),
+    notes: &mut Derived,
+) -> Option<bool> {
+    if set.is_none() {
+        notes.push((section, key, resolved.to_string(), why));
     }
     set
 }
@@ -123,7 +139,7 @@ fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
             ),
             relative: Some(sc.relative_sensing()),
         },
-        radio: radio(sc),
+        radio: radio(sc, &mut notes),
         network: NetworkSpec { loss: Some(sc.network().loss), delay_s: Some(sc.network().delay_s) },
         wind: wind(sc),
         allowable: allowable(sc, &mut notes),
@@ -143,10 +159,7 @@ pub fn to_toml(sc: &Scenario) -> Result<String, toml::ser::Error> {
         out.push('\n');
         let section = line.strip_prefix('[').and_then(|l| l.strip_suffix(']'));
         for (_, key, value, why) in notes.iter().filter(|n| Some(n.0) == section) {
-            // Twelve significant digits: a derived value computed in SI need not have a short
-            // decimal, and a comment is read, not loaded.
-            let shown: f64 = format!("{value:.11e}").parse().unwrap_or(*value);
-            out.push_str(&format!("# {key} = {shown:?}    # unset: follows {why}\n"));
+            out.push_str(&format!("# {key} = {value}    # unset: follows {why}\n"));
         }
     }
     Ok(out)
@@ -273,8 +286,12 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         coast_decay_s: Some(p.coast_decay_s),
         turn_feedforward: Some(p.turn_feedforward),
         plan_forward: Some(p.plan_forward),
-        // Follows sensing.relative and noise.gnss_bias_m unless the file sets it.
-        radio_fallback: set.radio_fallback,
+        radio_fallback: follows_flag(
+            set.radio_fallback,
+            p.radio_fallback,
+            ("controller", "radio_fallback", "sensing.relative and noise.gnss_bias_m"),
+            notes,
+        ),
         stop_closing: Some(p.stop_closing),
         own_filter_gain: Some(p.own_filter_gain),
         separation_m: follows(
@@ -434,7 +451,7 @@ fn initial(sc: &Scenario, notes: &mut Derived) -> InitialSpec {
     }
 }
 
-fn radio(sc: &Scenario) -> RadioSpec {
+fn radio(sc: &Scenario, notes: &mut Derived) -> RadioSpec {
     let r = sc.radio();
     RadioSpec {
         beacons: Some(sc.beacons().iter().map(|b| b.0 + 1).collect()),
@@ -445,7 +462,12 @@ fn radio(sc: &Scenario) -> RadioSpec {
         burst_p_good_to_bad: r.burst.map(|b| b.p_good_to_bad),
         burst_p_bad_to_good: r.burst.map(|b| b.p_bad_to_good),
         burst_loss_bad: r.burst.map(|b| b.loss_bad),
-        relay_navigator: Some(r.relay_navigator),
+        relay_navigator: follows_flag(
+            sc.spec.radio.relay_navigator,
+            r.relay_navigator,
+            ("radio", "relay_navigator", "sensing.relative, noise.gnss_bias_m and the formation's depth"),
+            notes,
+        ),
     }
 }
 
@@ -581,5 +603,28 @@ mod tests {
             let twice = to_toml(&again).expect("serialises");
             assert_eq!(printed.lines().count(), twice.lines().count());
         }
+    }
+
+    #[test]
+    fn switches_that_follow_other_keys_stay_derived_when_printed() {
+        // A deep V with biased fixes and relative sensing: the relays and the radio fallback
+        // follow the bias. Printed, they are comments; the printed file without its bias
+        // turns both off, as the original would.
+        let text = "name = \"deep\"\n[formation.shape]\nkind = \"v\"\nuavs = 12\nspacing_m = 80.0\n\
+                    [noise]\ngnss_bias_m = 3.0\n[sensing]\nrelative = true\n";
+        let sc = crate::load::parse(text, "deep.toml").expect("valid");
+        assert!(sc.radio().relay_navigator && sc.controller().radio_fallback);
+        let printed = to_toml(&sc).expect("serialises");
+        for key in ["relay_navigator", "radio_fallback"] {
+            assert!(printed.contains(&format!("# {key} = true    # unset: follows")), "{key}: {printed}");
+            assert!(!printed.lines().any(|l| l.starts_with(&format!("{key} ="))), "{key} written as a value");
+        }
+        let unbiased = printed.replace("gnss_bias_m = 3.0", "gnss_bias_m = 0.0");
+        let again = crate::load::parse(&unbiased, "printed.toml").expect("loads");
+        assert!(!again.radio().relay_navigator && !again.controller().radio_fallback);
+        // Set in the file, they are written as set.
+        let set = format!("{text}[radio]\nrelay_navigator = false\n");
+        let printed = to_toml(&crate::load::parse(&set, "set.toml").expect("valid")).expect("serialises");
+        assert!(printed.lines().any(|l| l == "relay_navigator = false"), "{printed}");
     }
 }
