@@ -154,6 +154,8 @@ struct OwnPrediction {
     velocity: [f64; 3],
     /// How far the prediction moved the UAV from that estimate (m).
     moved: [f64; 3],
+    /// The last reading (a reading repeated bit for bit while the UAV moves is stale).
+    last: State9,
     /// Time since a measurement of its own state was last accepted (s).
     unaccepted_s: f64,
 }
@@ -262,13 +264,18 @@ impl Agent {
             Some(pred) => {
                 let at = state::position(own_measured);
                 let innovation = (at - state::position(&pred.next)).norm();
+                // No sensor with noise repeats a reading to the bit, nor a noise-free one of a
+                // UAV that moves: a repeated reading is stale.
+                let moving = pred.velocity.iter().map(|v| v * v).sum::<f64>().sqrt() * dt > 1e-6;
+                let stale = moving && own_measured == &pred.last;
+                pred.last = *own_measured;
                 let settled: [f64; 3] = std::array::from_fn(|k| {
                     pred.settled[k] + 0.5 * dt * (pred.velocity[k] + own_measured[state::VX + k])
                 });
                 let unsettled = (at - nalgebra::Vector3::from(settled)).norm();
                 let bound = |g: f64| g + growth * pred.unaccepted_s;
                 let refused = |d: f64| d.is_nan() || gate.is_some_and(|g| d > bound(g));
-                if gate.is_some() && (refused(innovation) || refused(unsettled)) {
+                if gate.is_some() && (stale || refused(innovation) || refused(unsettled)) {
                     // The measurement disagrees with where the UAV knows it flew: fly on that.
                     suspect = true;
                     pred.unaccepted_s += dt;
@@ -326,7 +333,7 @@ impl Agent {
                 Some(p) => (p.next, p.velocity, p.moved) = (next, velocity, moved),
                 None => {
                     let settled = [own[state::X], own[state::X + 1], own[state::X + 2]];
-                    let p = OwnPrediction { next, settled, velocity, moved, unaccepted_s: 0.0 };
+                    let p = OwnPrediction { next, settled, velocity, moved, last: *own_measured, unaccepted_s: 0.0 };
                     self.own_prediction = Some(Box::new(p));
                 }
             }
@@ -474,6 +481,37 @@ mod tests {
             !agent.step(t, &at(t), &[leader(t)]).own_suspect
         });
         assert_eq!(back, Some(100), "live readings accepted again at once");
+    }
+
+    #[test]
+    fn a_reading_repeated_to_the_bit_while_the_uav_moves_is_stale() {
+        // At 0.5 m/s a frozen reading would stay within the gate of both the prediction and
+        // the settled position for long; repeated exactly, it is refused at once.
+        let (setup, own, leader) = pair(VehicleModel::Multirotor(crate::MultirotorModel::default()), 0.5, Some(3.0));
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        let at = |t: f64| {
+            let mut s = own;
+            s[0] = 0.5 * t;
+            s
+        };
+        for k in 0..10 {
+            let t = k as f64 * 0.1;
+            assert!(!agent.step(t, &at(t), &[leader(t)]).own_suspect, "live at {t} s");
+        }
+        let frozen = at(0.9);
+        for k in 10..20 {
+            let t = k as f64 * 0.1;
+            assert!(agent.step(t, &frozen, &[leader(t)]).own_suspect, "stale at {t} s");
+        }
+        assert!(!agent.step(2.0, &at(2.0), &[leader(2.0)]).own_suspect, "live again");
+        // A UAV that does not move may read the same twice (a hover without noise).
+        let (setup, mut still, leader) =
+            pair(VehicleModel::Multirotor(crate::MultirotorModel::default()), 0.0, Some(3.0));
+        still[VX] = 0.0;
+        let mut agent = Agent::new(&setup, UavId(1)).expect("a follower");
+        for k in 0..10 {
+            assert!(!agent.step(k as f64 * 0.1, &still, &[leader(0.0)]).own_suspect);
+        }
     }
 
     #[test]

@@ -218,6 +218,20 @@ impl TryFrom<ScenarioSpec> for Scenario {
         {
             radio.relay_navigator = true;
         }
+        let relay_warning = (spec.radio.relay_navigator.is_none()
+            && relative_sensing
+            && biased
+            && !paper
+            && !tracked
+            && formation::beyond_sensing_of_navigator(&formation.slots, navigator, params.areas.sensing_range_m))
+        .then(|| {
+            err(
+                "controller.predictor",
+                "\"constant_velocity\" keeps no tracks to relay the navigator from: with biased fixes and relative \
+                 sensing, followers beyond the navigator's sensing range cannot take its broadcast (its own fix) and \
+                 lean on their neighbours alone (METHOD §8, relays with relative sensing)",
+            )
+        });
         if spec.radio.relay_navigator == Some(true) && !tracked {
             return Err(err(
                 "radio.relay_navigator",
@@ -368,6 +382,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ),
             ));
         }
+        warnings.extend(relay_warning);
         if biased && !relative_sensing {
             warnings.push(err(
                 "noise.gnss_bias_m",
