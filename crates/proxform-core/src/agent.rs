@@ -314,8 +314,11 @@ impl Agent {
             // An adjustment is a new setpoint, chosen at the state the UAV believes it has;
             // otherwise the autopilot flies on the last one.
             if matches!(decision.outcome, Outcome::Adjusted { .. }) {
-                let sp = vehicle.setpoint(&own, &decision.input, dt);
-                self.setpoint = sp.map(Box::new);
+                // (The box is allocated once and reused.)
+                match (vehicle.setpoint(&own, &decision.input, dt), self.setpoint.as_deref_mut()) {
+                    (Some(sp), Some(kept)) => *kept = sp,
+                    (sp, _) => self.setpoint = sp.map(Box::new),
+                }
             }
             decision.setpoint = self.setpoint.as_deref().copied();
         }
