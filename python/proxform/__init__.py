@@ -9,6 +9,11 @@ as the ``proxform`` command line:
 - ``proxform.run(scenario, seed=1, runs=1, threads=0)``: seeded runs; the result's
   ``summary`` is the dict of ``summary.json``, ``runs`` and ``trajectories`` are tables of
   numpy columns (``.to_pandas()`` when pandas is installed).
+- ``proxform.run(..., first_run=K)`` and ``proxform.merge(results)``: shards of one batch
+  (on Dask, Ray or a Slurm array) merged into the summary one batch would have had; results
+  and scenarios pickle exactly.
+- ``proxform.sweep(scenario, {"controller.lambda": [0.5, 0.8]}, runs=50)``: a grid over
+  scenario keys, one row per cell (a pandas DataFrame), as ``proxform sweep``.
 - ``proxform.compare(...)``: methods side by side under the same conditions.
 - ``proxform.Controller(scenario, uav)`` and ``proxform.Controllers(scenario)``: the controller
   alone, stepped by another simulator.
@@ -19,10 +24,11 @@ frame x forward, y left, z up; UAVs are numbered from 1.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import sys
-from typing import Any, Callable, Mapping, Optional, Union
+from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -30,6 +36,7 @@ from ._proxform import (
     Controller,
     Controllers,
     Decision,
+    Runs,
     Scenario,
     ScenarioError,
     __version__,
@@ -45,13 +52,16 @@ __all__ = [
     "Controllers",
     "Decision",
     "Result",
+    "Runs",
     "Scenario",
     "ScenarioError",
     "Table",
     "builtin_names",
     "compare",
     "load",
+    "merge",
     "run",
+    "sweep",
     "__version__",
 ]
 
@@ -86,13 +96,23 @@ def load(source: ScenarioLike, *, uavs: Optional[int] = None) -> Scenario:
 class Result:
     """A batch of runs: ``summary`` (the dict of ``summary.json``), ``runs`` (one row per run,
     the columns of ``runs.csv``), ``trajectories`` (the first run, the columns of
-    ``trajectories.csv``; None when not asked for) and the ``scenario``."""
+    ``trajectories.csv``; None when not asked for), the ``scenario`` and ``shard`` (the runs'
+    exact results, which :func:`merge` merges with other shards of the same batch). A result
+    pickles (for Dask, Ray, multiprocessing) and unpickles to equal values."""
 
-    def __init__(self, scenario: Scenario, summary: dict, runs: Table, trajectories: Optional[Table]):
+    def __init__(
+        self,
+        scenario: Scenario,
+        summary: dict,
+        runs: Table,
+        trajectories: Optional[Table],
+        shard: Optional[Runs] = None,
+    ):
         self.scenario = scenario
         self.summary = summary
         self.runs = runs
         self.trajectories = trajectories
+        self.shard = shard
 
     @property
     def pass_fraction(self) -> float:
@@ -150,10 +170,12 @@ def run(
     trajectories: bool = True,
     adjust: bool = True,
     progress: Progress = None,
+    first_run: int = 0,
 ) -> Result:
     """Runs ``runs`` seeded flights of ``scenario`` (run r uses random streams keyed by
     (seed, r), as ``proxform run --seed S --runs N``; the results do not depend on
     ``threads``, 0 meaning every core). The GIL is released while it runs; Ctrl-C stops it.
+    ``first_run=K`` runs K to K+runs-1 (a shard, as ``--first-run K``; see :func:`merge`).
 
     ``progress``: True for a tqdm bar (a line on stderr without tqdm), or a callable
     ``(done, total)``, called on the calling thread. ``adjust=False`` discards every input
@@ -162,12 +184,103 @@ def run(
     sc = load(scenario)
     cb, close = _progress(progress, "runs" if runs > 1 else "steps")
     try:
-        summary, table, traj = _proxform.run(
-            sc, seed=seed, runs=runs, threads=threads, trajectories=trajectories, adjust=adjust, progress=cb
+        summary, table, traj, shard = _proxform.run(
+            sc,
+            seed=seed,
+            runs=runs,
+            threads=threads,
+            trajectories=trajectories,
+            adjust=adjust,
+            progress=cb,
+            first_run=first_run,
         )
     finally:
         close()
-    return Result(sc, json.loads(summary), Table(table), Table(traj) if traj is not None else None)
+    return Result(sc, json.loads(summary), Table(table), Table(traj) if traj is not None else None, shard)
+
+
+def merge(results: Sequence[Union[Result, Runs]], *, names: Optional[Sequence[str]] = None) -> Result:
+    """Shards of one batch (results of :func:`run` with the same scenario, seed and options,
+    from ``first_run`` values that tile consecutive runs, in any order) merged into the result
+    one batch of all their runs would have had: the same ``summary`` and ``runs``, to the bit
+    (``trajectories`` None). Raises ValueError naming the shards that do not fit (``names``,
+    by default "shard 1", "shard 2", ...)."""
+    shards: list[Runs] = []
+    scenario: Optional[Scenario] = None
+    for k, r in enumerate(results):
+        if isinstance(r, Result):
+            if r.shard is None:
+                raise ValueError(f"results[{k}] holds no exact runs (it was not made by proxform.run)")
+            scenario = scenario or r.scenario
+            shards.append(r.shard)
+        elif isinstance(r, Runs):
+            shards.append(r)
+        else:
+            raise TypeError(f"results[{k}]: expected a proxform.Result or proxform.Runs, not {type(r).__name__}")
+    merged = _proxform.merge_runs(shards, list(names) if names is not None else None)
+    summary = json.loads(merged.summary_json())
+    if scenario is None:
+        scenario = merged.scenario()
+    return Result(scenario, summary, Table(merged.columns()), None, merged)
+
+
+def _nested(cell: Mapping[str, Any]) -> dict:
+    """Dotted keys (``controller.lambda``) as the nested dict :meth:`Scenario.with_values` takes."""
+    out: dict = {}
+    for key, value in cell.items():
+        parts = key.split(".")
+        if not all(parts):
+            raise ValueError(f"grid: {key!r} is not a key (names joined by dots, e.g. 'controller.lambda')")
+        d = out
+        for p in parts[:-1]:
+            d = d.setdefault(p, {})
+            if not isinstance(d, dict):
+                raise ValueError(f"grid: {key!r} sets a key inside a value given by another key")
+        d[parts[-1]] = value
+    return out
+
+
+def sweep(
+    scenario: ScenarioLike,
+    grid: Mapping[str, Sequence[Any]],
+    *,
+    seed: int = 1,
+    runs: int = 1,
+    threads: int = 0,
+    progress: Progress = None,
+) -> Any:
+    """A grid over scenario keys, as ``proxform sweep``: every combination of ``grid``'s
+    values (``{"controller.lambda": [0.5, 0.8], "sensing.dropout": [0, 0.3]}``; the first key
+    varying slowest), each cell checked like a file before anything runs, then ``runs`` seeded
+    runs of each from ``seed``. Returns a pandas DataFrame, one row per cell: ``cell`` (from
+    1), the keys, and the columns of ``sweep.csv``."""
+    import pandas as pd
+
+    sc = load(scenario)
+    keys = list(grid)
+    for k in keys:
+        if isinstance(grid[k], (str, bytes)) or not isinstance(grid[k], Sequence) or len(grid[k]) == 0:
+            raise ValueError(f"grid[{k!r}]: give a non-empty list of values")
+    combos = list(itertools.product(*(grid[k] for k in keys)))
+    cells = []
+    for combo in combos:
+        cell = dict(zip(keys, combo))
+        try:
+            cells.append((cell, sc.with_values(_nested(cell))))
+        except ScenarioError as e:
+            label = " ".join(f"{k}={v}" for k, v in cell.items())
+            raise ScenarioError(f"cell {label}: {e}") from e
+    cb, close = _progress(progress, "runs")
+    rows = []
+    try:
+        for n, (cell, cs) in enumerate(cells):
+            done = n * runs
+            tick = (lambda d, t, done=done: cb(done + (d if runs > 1 else 0), runs * len(cells))) if cb else None
+            _, _, _, shard = _proxform.run(cs, seed=seed, runs=runs, threads=threads, trajectories=False, progress=tick)
+            rows.append({"cell": n + 1, **cell, **shard.row()})
+    finally:
+        close()
+    return pd.DataFrame(rows)
 
 
 class Comparison:

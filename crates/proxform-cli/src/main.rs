@@ -1,5 +1,6 @@
 //! The `proxform` command-line tool.
 
+mod batch;
 mod bench;
 mod compare;
 #[cfg(feature = "net")]
@@ -7,11 +8,13 @@ mod distributed;
 mod figures;
 mod files;
 mod memory;
+mod merge;
 mod net_args;
 mod output;
 mod report;
 mod run;
 mod scenarios;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 
@@ -27,6 +30,10 @@ struct Cli {
 enum Command {
     /// Run a scenario (by default the paper's six-UAV experiment) over one or more seeds.
     Run(run::RunArgs),
+    /// Merge shards of one batch (`run --first-run K`) into the outputs of one batch.
+    Merge(merge::MergeArgs),
+    /// Run a grid of scenario values (`--set key=v1,v2`), a batch per cell, into one table.
+    Sweep(sweep::SweepArgs),
     /// Compare formation control methods under radio loss, delay, noise and faults.
     Compare(compare::CompareArgs),
     /// List the built-in scenarios.
@@ -71,6 +78,8 @@ fn main() -> std::process::ExitCode {
         }
         Command::Agent { args } => agent(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Merge(args) => merge::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Scenarios => scenarios::list(),
         Command::Init(args) => scenarios::init(&args),

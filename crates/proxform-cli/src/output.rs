@@ -15,62 +15,97 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
     serde_json::to_writer_pretty(BufWriter::new(f), summary).with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// Writes one row per run: the figures a paper tabulates or plots across seeds.
-pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
-    let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut w = csv::Writer::from_writer(BufWriter::new(f));
-    const AXES: [&str; 6] = ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"];
-    let mut header: Vec<String> = ["seed", "run", "pass", "judged_steps"].iter().map(|s| s.to_string()).collect();
-    header.extend(AXES.iter().map(|a| format!("max_err_{a}")));
-    header.extend(AXES.iter().map(|a| format!("rms_err_{a}")));
-    header.extend(
-        [
-            "min_separation_m",
-            "close_pairs",
-            "adjustments_per_uav_minute",
-            "held_fraction",
-            "within_allowable_fraction",
-            "control_effort",
-            "radio_sent_per_uav_s",
-            "radio_used_per_uav_s",
-            "order_mean",
-            "order_min",
-            "connectivity_min",
-            "alone_s_per_uav",
-            "path_deviation_m",
-        ]
-        .iter()
-        .map(|s| s.to_string()),
-    );
-    // Fault and isolation columns only for the runs that have them.
-    let faults = runs.first().is_some_and(|r| r.sensor_faults.is_some());
-    let isolation = runs.first().is_some_and(|r| r.isolation.is_some());
-    let forming = runs.first().is_some_and(|r| r.forming.is_some());
-    let transitions = runs.iter().any(|r| r.transitions.is_some());
-    let flown = runs.first().is_some_and(|r| r.flown.is_some());
-    if faults {
-        header.extend(["healthy_pass", "rejoin_s"].map(String::from));
+/// Which optional column groups `runs.csv` has: those of the parts the batch's first run has
+/// (every run of a scenario has them alike), and the transitions' when any run has them.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunColumns {
+    faults: bool,
+    forming: bool,
+    transitions: bool,
+    flown: bool,
+    isolation: bool,
+}
+
+impl RunColumns {
+    /// The columns of a batch whose first run is `first`; `transitions` when some run changed
+    /// formation.
+    pub fn of(first: &RunSummary, transitions: bool) -> Self {
+        Self {
+            faults: first.sensor_faults.is_some(),
+            forming: first.forming.is_some(),
+            transitions,
+            flown: first.flown.is_some(),
+            isolation: first.isolation.is_some(),
+        }
     }
-    if forming {
-        header.extend(["time_to_form_s", "transient_error_ratio", "settled_error_ratio"].map(String::from));
-    }
-    if transitions {
-        header.extend(["transition_s", "transition_error_ratio", "transition_closest_m"].map(String::from));
-    }
-    if flown {
-        header.extend(["path_length_m_per_uav", "delta_v_mps_per_uav", "work_j_per_kg_per_uav"].map(String::from));
-    }
-    if isolation {
+}
+
+/// `runs.csv`, one row per run in run order: the figures a paper tabulates or plots across
+/// seeds, written as the rows come (a batch of any size in bounded memory).
+pub struct RunsCsv {
+    path: std::path::PathBuf,
+    w: csv::Writer<BufWriter<File>>,
+    seed: u64,
+    columns: RunColumns,
+}
+
+impl RunsCsv {
+    /// Creates the file and writes its header.
+    pub fn create(path: &Path, seed: u64, columns: RunColumns) -> Result<Self> {
+        let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let mut w = csv::Writer::from_writer(BufWriter::new(f));
+        const AXES: [&str; 6] = ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"];
+        let mut header: Vec<String> = ["seed", "run", "pass", "judged_steps"].iter().map(|s| s.to_string()).collect();
+        header.extend(AXES.iter().map(|a| format!("max_err_{a}")));
+        header.extend(AXES.iter().map(|a| format!("rms_err_{a}")));
         header.extend(
-            ["isolating_s_per_uav", "isolated_per_uav_s", "own_suspect_s_per_uav", "own_suspect_episodes"]
-                .map(String::from),
+            [
+                "min_separation_m",
+                "close_pairs",
+                "adjustments_per_uav_minute",
+                "held_fraction",
+                "within_allowable_fraction",
+                "control_effort",
+                "radio_sent_per_uav_s",
+                "radio_used_per_uav_s",
+                "order_mean",
+                "order_min",
+                "connectivity_min",
+                "alone_s_per_uav",
+                "path_deviation_m",
+            ]
+            .iter()
+            .map(|s| s.to_string()),
         );
+        let c = columns;
+        if c.faults {
+            header.extend(["healthy_pass", "rejoin_s"].map(String::from));
+        }
+        if c.forming {
+            header.extend(["time_to_form_s", "transient_error_ratio", "settled_error_ratio"].map(String::from));
+        }
+        if c.transitions {
+            header.extend(["transition_s", "transition_error_ratio", "transition_closest_m"].map(String::from));
+        }
+        if c.flown {
+            header.extend(["path_length_m_per_uav", "delta_v_mps_per_uav", "work_j_per_kg_per_uav"].map(String::from));
+        }
+        if c.isolation {
+            header.extend(
+                ["isolating_s_per_uav", "isolated_per_uav_s", "own_suspect_s_per_uav", "own_suspect_episodes"]
+                    .map(String::from),
+            );
+        }
+        w.write_record(&header).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(Self { path: path.into(), w, seed, columns })
     }
-    w.write_record(&header)?;
-    // Errors in the report's units: metres, and degrees for the attitudes.
-    for r in runs {
+
+    /// Writes the next run's row (errors in the report's units: metres, and degrees for the
+    /// attitudes).
+    pub fn write(&mut self, r: &RunSummary) -> Result<()> {
+        let c = self.columns;
         let mut rec =
-            vec![seed.to_string(), r.run.to_string(), u8::from(r.pass).to_string(), r.judged_steps.to_string()];
+            vec![self.seed.to_string(), r.run.to_string(), u8::from(r.pass).to_string(), r.judged_steps.to_string()];
         let (max, rms) = (AxisErrors::from_si(r.max_abs_error).as_array(), AxisErrors::from_si(r.rms_error).as_array());
         rec.extend(max.iter().chain(&rms).map(|v| format!("{v:.6}")));
         rec.extend([
@@ -88,35 +123,35 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
             format!("{:.3}", r.alone_s_per_uav),
             format!("{:.6}", r.path_deviation_m),
         ]);
-        if let (true, Some(f)) = (faults, r.sensor_faults) {
+        if let (true, Some(f)) = (c.faults, r.sensor_faults) {
             rec.extend([u8::from(f.healthy_pass).to_string(), format!("{:.3}", f.rejoin_s)]);
         }
-        if let (true, Some(f)) = (forming, r.forming) {
+        if let (true, Some(f)) = (c.forming, r.forming) {
             rec.extend([
                 format!("{:.3}", f.time_to_form_s),
                 format!("{:.4}", f.transient_error_ratio),
                 f.settled_error_ratio.map_or_else(String::new, |v| format!("{v:.4}")),
             ]);
         }
-        if transitions {
+        if c.transitions {
             // Slots re-assigned in flight change the formation in some runs only.
             rec.extend(match r.transitions {
-                Some(c) => [
-                    format!("{:.3}", c.transition_s),
-                    format!("{:.4}", c.transient_error_ratio),
-                    format!("{:.3}", c.closest_m),
+                Some(t) => [
+                    format!("{:.3}", t.transition_s),
+                    format!("{:.4}", t.transient_error_ratio),
+                    format!("{:.3}", t.closest_m),
                 ],
                 None => [String::new(), String::new(), String::new()],
             });
         }
-        if let (true, Some(f)) = (flown, r.flown) {
+        if let (true, Some(f)) = (c.flown, r.flown) {
             rec.extend([
                 format!("{:.1}", f.path_length_m_per_uav),
                 format!("{:.2}", f.delta_v_mps_per_uav),
                 format!("{:.1}", f.work_j_per_kg_per_uav),
             ]);
         }
-        if let (true, Some(i)) = (isolation, r.isolation) {
+        if let (true, Some(i)) = (c.isolation, r.isolation) {
             rec.extend([
                 format!("{:.3}", i.isolating_s_per_uav),
                 format!("{:.6}", i.isolated_per_uav_s),
@@ -124,10 +159,13 @@ pub fn write_runs(path: &Path, seed: u64, runs: &[RunSummary]) -> Result<()> {
                 i.own_suspect_episodes.to_string(),
             ]);
         }
-        w.write_record(&rec)?;
+        self.w.write_record(&rec).with_context(|| format!("cannot write {}", self.path.display()))
     }
-    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+
+    /// Flushes the file.
+    pub fn finish(mut self) -> Result<()> {
+        self.w.flush().with_context(|| format!("cannot write {}", self.path.display()))
+    }
 }
 
 /// `trajectories.csv`, written row by row as the flight goes: one row per recorded UAV per

@@ -4,7 +4,7 @@ use std::io::{self, Write};
 use std::time::Duration;
 
 use proxform_scenario::Scenario;
-use proxform_sim::BatchResult;
+use proxform_sim::Summary;
 
 const AXES: [&str; 6] = ["x m", "y m", "z m", "α °", "β °", "γ °"];
 
@@ -36,21 +36,22 @@ fn rows_shown(s: &proxform_sim::Summary) -> Vec<usize> {
 pub fn print(
     out: &mut impl Write,
     scenario: &Scenario,
-    result: &BatchResult,
-    elapsed: Duration,
-    threads: usize,
+    s: &Summary,
+    timing: Option<(Duration, usize)>,
 ) -> io::Result<()> {
-    let s = &result.summary;
     let allow = s.allowable_error.as_array();
     writeln!(
         out,
-        "proxform run: scenario '{}' ({} UAVs), {} run(s) from seed {}, {:.2} s on {} thread(s)\n",
+        "proxform run: scenario '{}' ({} UAVs), {} run(s){} from seed {}{}\n",
         s.scenario,
         s.uavs,
         s.runs,
+        match s.first_run {
+            0 => String::new(),
+            k => format!(" (runs {k}..={})", k + s.runs.saturating_sub(1)),
+        },
         s.seed,
-        elapsed.as_secs_f64(),
-        threads
+        timing.map_or_else(String::new, |(e, threads)| format!(", {:.2} s on {threads} thread(s)", e.as_secs_f64()))
     )?;
     writeln!(out, "Largest |error| relative to the navigator (METHOD §7), over all runs:")?;
     write!(out, "{:<8}", "UAV")?;
@@ -97,7 +98,7 @@ pub fn print(
     row(out, "RMS measured", &s.rms_error.as_array())?;
     row(out, "eq.17 σ", &s.predicted_sigma.as_array())?;
     writeln!(out)?;
-    let passed = result.runs.iter().filter(|r| r.pass).count();
+    let passed = s.counts.passed;
     writeln!(out, "pass fraction            {} ({passed} of {} runs)", fraction(s.pass_fraction), s.runs)?;
     if s.unjudged_runs > 0 {
         writeln!(
@@ -168,7 +169,7 @@ pub fn print(
         writeln!(out, "flown alone              {:.2} s per follower (nothing perceived)", m.alone_s_per_uav)?;
     }
     if let Some(f) = &s.sensor_faults {
-        let healthy = result.runs.iter().filter(|r| r.sensor_faults.is_some_and(|f| f.healthy_pass)).count();
+        let healthy = s.counts.healthy_passed;
         writeln!(
             out,
             "sensor faults            the other followers within the allowable errors in {} ({healthy} of {} runs); faulty UAVs back within them {} s after the fault (median), {} s (p99), {} s (max)",
@@ -180,7 +181,7 @@ pub fn print(
         )?;
     }
     if let Some(f) = &s.forming {
-        let formed = result.runs.iter().filter(|r| r.forming.is_some_and(|f| f.time_to_form_s.is_finite())).count();
+        let formed = s.counts.formed;
         writeln!(
             out,
             "forming                  formed (every follower within the allowable errors to the end, or to the first change of formation) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable{}",
@@ -195,8 +196,7 @@ pub fn print(
         )?;
         // Formed at all is not formed in time: the criterion's deadline, when there is one.
         if let Some(limit) = scenario.form_within_s() {
-            let in_time =
-                result.runs.iter().filter(|r| r.forming.is_some_and(|f| f.time_to_form_s <= limit + 1e-9)).count();
+            let in_time = s.counts.formed_in_time;
             writeln!(
                 out,
                 "formed in time           by form_within_s = {} s in {in_time} of {} runs (the others do not pass)",
@@ -233,8 +233,10 @@ pub fn print(
             i.isolating_s_per_uav, i.isolated_per_uav_s, i.own_suspect_s_per_uav, i.own_suspect_episodes
         )?;
     }
-    let updates = (s.uavs.saturating_sub(1) * s.runs) as f64 * scenario.steps() as f64;
-    writeln!(out, "agent-updates per second {:.3e}", updates / elapsed.as_secs_f64().max(1e-9))?;
+    if let Some((elapsed, _)) = timing {
+        let updates = (s.uavs.saturating_sub(1) * s.runs) as f64 * scenario.steps() as f64;
+        writeln!(out, "agent-updates per second {:.3e}", updates / elapsed.as_secs_f64().max(1e-9))?;
+    }
     Ok(())
 }
 

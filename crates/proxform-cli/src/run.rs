@@ -12,7 +12,7 @@ use proxform_core::controller::MAX_HORIZON;
 use proxform_core::Method;
 use proxform_scenario::{Scenario, ScenarioSpec};
 use proxform_sim::measure::trajectory::RowSink;
-use proxform_sim::{run_batch, RunOptions, Trajectory};
+use proxform_sim::{RunOptions, Trajectory};
 
 use crate::{figures, output, report};
 
@@ -36,6 +36,18 @@ pub struct RunArgs {
     /// Number of seeded runs, aggregated into one summary.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     runs: u64,
+    /// Index of the batch's first run: the batch is runs K to K+N-1 of the seed, each the same
+    /// as in any other batch (a shard; `proxform merge` makes shards one batch).
+    #[arg(long, default_value_t = 0, value_name = "K", value_parser = clap::value_parser!(u64).range(0..=(1u64 << 52)))]
+    first_run: u64,
+    /// Complete the batch interrupted in the output folder (its runs.journal): the runs done
+    /// are kept, the others flown, and the outputs are those of an uninterrupted batch.
+    #[arg(long)]
+    resume: bool,
+    /// Set a key of the scenario, as in its file: `--set controller.lambda=0.5`,
+    /// `--set radio.delay_s=0.2` (repeatable; TOML values, bare words as text).
+    #[arg(long, value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// Output directory [default: out/<scenario>].
     #[arg(long)]
     out: Option<PathBuf>,
@@ -193,24 +205,31 @@ enum Predictor {
 impl RunArgs {
     /// Writes the command line's overrides into the spec, so that every check applies to
     /// them; returns which key each flag set, to name the flag in an error.
-    fn apply_overrides(&self, spec: &mut ScenarioSpec) -> Vec<(&'static str, &'static str)> {
-        let mut set = Vec::new();
+    fn apply_overrides(&self, spec: &mut ScenarioSpec) -> Result<Vec<(String, String)>> {
+        let mut set: Vec<(String, String)> = Vec::new();
+        for kv in &self.set {
+            let (key, value) = crate::sweep::key_value(kv)?;
+            *spec =
+                proxform_scenario::overrides::set(spec, key, value).map_err(|m| anyhow::anyhow!("--set {kv}: {m}"))?;
+            set.push((key.to_string(), format!("--set {kv}")));
+        }
+        let mut set_flag = |key: &str, flag: &str| set.push((key.to_string(), flag.to_string()));
         let c = &mut spec.controller;
         if let Some(d) = self.duration_s {
             spec.duration_s = Some(d);
-            set.push(("duration_s", "--duration-s"));
+            set_flag("duration_s", "--duration-s");
         }
         if let Some(l) = self.lambda {
             c.lambda = Some(l);
-            set.push(("controller.lambda", "--lambda"));
+            set_flag("controller.lambda", "--lambda");
         }
         if let Some(r) = self.rho {
             c.rho = Some(r);
-            set.push(("controller.rho", "--rho"));
+            set_flag("controller.rho", "--rho");
         }
         if let Some(t) = self.closing_time_s {
             c.closing_time_s = Some(t);
-            set.push(("controller.closing_time_s", "--closing-time-s"));
+            set_flag("controller.closing_time_s", "--closing-time-s");
         }
         if let Some(p) = self.predictor {
             c.predictor = Some(
@@ -225,13 +244,13 @@ impl RunArgs {
         }
         if let Some(h) = self.horizon {
             c.horizon = Some(i64::from(h));
-            set.push(("controller.horizon", "--horizon"));
+            set_flag("controller.horizon", "--horizon");
         }
         if let Some(m) = &self.method {
             c.method = Some(m.clone());
             c.gains = None;
         }
-        set
+        Ok(set)
     }
 }
 
@@ -246,7 +265,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         }
         None => (crate::scenarios::built_in_spec(&args.scenario, args.uavs)?, crate::scenarios::Source::BuiltIn),
     };
-    let overridden = args.apply_overrides(&mut spec);
+    let overridden = args.apply_overrides(&mut spec)?;
     let scenario = match proxform_scenario::Scenario::try_from(spec.clone()) {
         Ok(s) => s,
         Err(e) => match overridden.iter().find(|(key, _)| e.key == *key) {
@@ -292,22 +311,54 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
             None => t,
         }
     });
+    if args.net.distributed && (args.resume || args.first_run > 0) {
+        bail!("--resume and --first-run are not available with --distributed: its agents fly a batch from run 0 to its end");
+    }
+    let batch = (args.seed, args.first_run, args.runs);
+    let header = crate::batch::header(&scenario, options, batch)?;
     let started = Instant::now();
-    let mut result = if args.net.distributed {
+    let mut first_trajectory = if args.net.distributed {
         let d = distributed(&scenario, options, (args.seed, args.runs), record, &|| bar.inc(1), &args.net)?;
         bar.finish_and_clear();
-        d
+        let shard = proxform_sim::Shard { header: header.clone(), runs: d.runs, totals: d.totals };
+        let bytes = shard.to_bytes().map_err(anyhow::Error::msg)?;
+        let path = out.join(crate::batch::JOURNAL);
+        std::fs::write(&path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+        d.first_trajectory
     } else {
-        pool.install(|| run_batch(&scenario, options, args.seed, args.runs, record, &|| bar.inc(1)))
+        let opened = crate::batch::open(&out, &header, args.resume)?;
+        if args.resume {
+            eprintln!(
+                "resuming: {} of {} runs done, flying the other {}",
+                opened.resumed,
+                args.runs,
+                args.runs - opened.resumed
+            );
+            bar.set_length(if args.runs > 1 { args.runs - opened.resumed } else { len });
+        }
+        // A resumed batch whose first run is done flies it again for its trajectory alone.
+        let first_done = opened.done.first().copied().unwrap_or(false);
+        let (record, again) = if first_done { (None, record) } else { (record, None) };
+        let mut traj = pool.install(|| crate::batch::fly_into(&scenario, &header, opened, record, &|| bar.inc(1)))?;
+        if let Some(rec) = again {
+            traj = proxform_sim::batch::runs::run_one_ticking(
+                &scenario,
+                options,
+                (args.seed, args.first_run),
+                Some(rec),
+                &|| {},
+            )
+            .1;
+        }
+        traj
     };
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 
     // Files first: a reader that closes the report early still gets them.
-    output::write_summary(&out.join("summary.json"), &result.summary)?;
-    output::write_runs(&out.join("runs.csv"), args.seed, &result.runs)?;
-    let mut written = vec![out.join("summary.json"), out.join("runs.csv")];
-    if let Some(traj) = &mut result.first_trajectory {
+    let (_, summary) = crate::batch::finish(&[out.join(crate::batch::JOURNAL)], &out, false)?;
+    let mut written = vec![out.join("summary.json"), out.join("runs.csv"), out.join(crate::batch::JOURNAL)];
+    if let Some(traj) = &mut first_trajectory {
         if let Some(mut sink) = traj.take_sink() {
             sink.finish().map_err(anyhow::Error::msg)?;
             written.push(csv);
@@ -317,12 +368,12 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         }
     }
     let mut stdout = std::io::stdout().lock();
-    report::print(&mut stdout, &scenario, &result, elapsed, pool.current_num_threads())?;
+    report::print(&mut stdout, &scenario, &summary, Some((elapsed, pool.current_num_threads())))?;
     writeln!(stdout, "peak memory              {}", crate::memory::mib(crate::memory::peak_rss_bytes()))?;
     let engine = if args.net.distributed { "reference (agents in their own processes)" } else { engine.name() };
     writeln!(stdout, "engine                   {engine}")?;
     writeln!(stdout, "\nwrote {} files to {}", written.len(), out.display())?;
-    Ok(if result.summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    Ok(if summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
 /// `--trajectory-uavs`: UAV numbers (from 1) and ranges `a-b`, comma-separated, as indices,

@@ -6,7 +6,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 pyo3::create_exception!(
-    _proxform,
+    proxform._proxform,
     ScenarioError,
     PyValueError,
     "A scenario or comparison that could not be loaded. Attributes: `key` (the key path, such as \

@@ -16,6 +16,7 @@ mod controller;
 mod errors;
 mod run;
 mod scenario;
+mod shard;
 mod values;
 
 use pyo3::prelude::*;
@@ -25,6 +26,8 @@ use pyo3::prelude::*;
 fn _proxform(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ScenarioError", m.py().get_type::<errors::ScenarioError>())?;
     m.add_class::<scenario::PyScenario>()?;
+    m.add_class::<shard::PyRuns>()?;
+    m.add_function(wrap_pyfunction!(shard::merge_runs, m)?)?;
     m.add_class::<controller::PyController>()?;
     m.add_class::<controller::PyControllers>()?;
     m.add_class::<controller::PyDecision>()?;

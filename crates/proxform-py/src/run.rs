@@ -5,16 +5,22 @@ use std::sync::{Arc, Mutex};
 
 use numpy::PyArray1;
 use proxform_sim::measure::trajectory::RowSink;
-use proxform_sim::{run_batch_stoppable, AxisErrors, RunOptions, RunSummary, Trajectory, TrajectoryRow};
+use proxform_sim::{
+    run_batch_stoppable, AxisErrors, JournalHeader, RunOptions, RunSummary, Shard, Trajectory, TrajectoryRow,
+};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::background;
 use crate::scenario::PyScenario;
+use crate::shard::PyRuns;
 
 /// Most runs in one batch (as the command line allows).
 const MAX_RUNS: u64 = 10_000_000;
+
+/// Largest first run index (as `--first-run` allows).
+const MAX_FIRST_RUN: u64 = 1 << 52;
 
 /// The first run's trajectories, column by column, as `trajectories.csv` holds them (same
 /// names and units: SI and radians for the states, m and degrees for the errors).
@@ -75,7 +81,7 @@ fn trajectory_dict<'py>(py: Python<'py>, c: Columns) -> PyResult<Bound<'py, PyDi
 }
 
 /// The per-run table: the columns of `runs.csv`, at full precision.
-fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&RunSummary) -> f64| PyArray1::from_vec(py, runs.iter().map(f).collect());
     d.set_item("seed", PyArray1::from_vec(py, vec![seed; runs.len()]))?;
@@ -162,7 +168,7 @@ fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) -> PyResult<B
 /// `proxform run --seed S --runs N`); returns (summary as JSON text, per-run columns, the first
 /// run's trajectory columns or None).
 #[pyfunction]
-#[pyo3(signature = (scenario, seed = 1, runs = 1, threads = 0, trajectories = true, adjust = true, progress = None))]
+#[pyo3(signature = (scenario, seed = 1, runs = 1, threads = 0, trajectories = true, adjust = true, progress = None, first_run = 0))]
 #[expect(clippy::too_many_arguments, reason = "one argument per keyword of the Python signature")]
 pub fn run<'py>(
     py: Python<'py>,
@@ -173,9 +179,13 @@ pub fn run<'py>(
     trajectories: bool,
     adjust: bool,
     progress: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(String, Bound<'py, PyDict>, Option<Bound<'py, PyDict>>)> {
+    first_run: u64,
+) -> PyResult<(String, Bound<'py, PyDict>, Option<Bound<'py, PyDict>>, PyRuns)> {
     if !(1..=MAX_RUNS).contains(&runs) {
         return Err(PyValueError::new_err(format!("runs = {runs}: from 1 to {MAX_RUNS}")));
+    }
+    if first_run > MAX_FIRST_RUN {
+        return Err(PyValueError::new_err(format!("first_run = {first_run}: from 0 to 2^52")));
     }
     let sc = scenario.get().inner.clone();
     let options = RunOptions { adjustment_enabled: adjust, ..RunOptions::default() };
@@ -185,13 +195,16 @@ pub fn run<'py>(
     // One tick per run, or per step for a single run.
     let total = if runs > 1 { runs } else { sc.steps() };
     let result = background::run(py, threads, total, progress, move |h| {
-        run_batch_stoppable(&sc, options, seed, runs, record, &|| h.tick(), &h.stop)
+        run_batch_stoppable(&sc, options, (seed, first_run, runs), record, &|| h.tick(), &h.stop)
     })?;
+    let header = JournalHeader::new(scenario.get().inner.as_ref(), options, (seed, first_run, runs))
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot describe the batch: {e}")))?;
     let summary = serde_json::to_string(&result.summary)
         .map_err(|e| PyRuntimeError::new_err(format!("cannot write the summary: {e}")))?;
     let runs_table = runs_dict(py, seed, &result.runs)?;
+    let shard = PyRuns::new(Shard { header, runs: result.runs, totals: result.totals });
     // The trajectory (and its sink) is dropped with the result: the columns are ours alone.
-    drop(result);
+    drop(result.first_trajectory);
     let traj = match trajectories {
         true => {
             let c = Arc::try_unwrap(columns)
@@ -202,5 +215,5 @@ pub fn run<'py>(
         }
         false => None,
     };
-    Ok((summary, runs_table, traj))
+    Ok((summary, runs_table, traj, shard))
 }

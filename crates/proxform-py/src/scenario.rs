@@ -20,7 +20,7 @@ pub struct PyScenario {
 }
 
 impl PyScenario {
-    fn new(inner: Scenario) -> Self {
+    pub(crate) fn new(inner: Scenario) -> Self {
         Self { inner: Arc::new(inner) }
     }
 }
@@ -90,6 +90,16 @@ impl PyScenario {
             .map_err(|e| PyRuntimeError::new_err(format!("cannot write the scenario's spec: {e}")))?;
         values::merge(&mut base, over);
         from_text(py, &toml_text(&base)?, &source, false).map(Self::new)
+    }
+
+    /// Pickled as its spec (the values given, the defaults not frozen), rebuilt by the same
+    /// conversion: the same scenario, to the bit.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        let py = slf.py();
+        let text = toml::to_string(slf.get().inner.spec())
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot write the scenario's spec: {e}")))?;
+        let ctor = py.get_type::<Self>().getattr("from_toml")?;
+        Ok((ctor, (text, slf.get().inner.name().to_string())))
     }
 
     /// The scenario as it runs, every default filled in, as TOML that loads again.

@@ -15,6 +15,7 @@ pub mod defaults;
 pub mod faults;
 pub mod formation;
 pub mod load;
+pub mod overrides;
 pub mod path;
 pub mod placement;
 pub mod radio;

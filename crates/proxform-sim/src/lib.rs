@@ -21,9 +21,11 @@ pub mod parallel;
 pub mod random;
 pub mod world;
 
+pub use batch::aggregate::{Aggregator, RunCounts};
 pub use batch::compare;
+pub use batch::journal::{JournalHeader, Shard};
 pub use batch::runs::{
-    run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FlownSummary,
+    fly_runs, run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FlownSummary,
     FormingSummary, IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
 };
 pub use flight::{engine_for, EngineKind, Flight};

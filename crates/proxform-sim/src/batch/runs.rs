@@ -10,9 +10,9 @@ use rayon::prelude::*;
 
 use proxform_scenario::Scenario;
 
+pub use crate::batch::aggregate::{Aggregator, RunCounts};
 use crate::measure::metrics::{RunMetrics, RunSummary};
 use crate::measure::observer::Observer;
-use crate::measure::stats::quantile_of;
 use crate::measure::trajectory::Trajectory;
 use crate::world::engine::Simulation;
 use crate::world::options::RunOptions;
@@ -65,6 +65,10 @@ pub struct Summary {
     pub runs: u64,
     /// Base seed.
     pub seed: u64,
+    /// Index of the batch's first run (`--first-run`; left out of the JSON when 0): the runs
+    /// are `first_run ..= first_run + runs - 1`.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub first_run: u64,
     /// Fraction of runs in which every follower stayed within every allowable error (a run in
     /// which no follower flew does not pass).
     pub pass_fraction: f64,
@@ -132,6 +136,13 @@ pub struct Summary {
     /// What the followers flew, when the formation forms, changes or may be re-assigned.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub flown: Option<FlownSummary>,
+    /// Counts the report prints beside the fractions (not written to the JSON).
+    #[serde(skip)]
+    pub counts: RunCounts,
+}
+
+fn is_zero(v: &u64) -> bool {
+    *v == 0
 }
 
 /// How the changes of formation of a batch went.
@@ -253,6 +264,8 @@ pub struct BatchResult {
     pub summary: Summary,
     /// The first run's trajectories, when asked for.
     pub first_trajectory: Option<Trajectory>,
+    /// The runs' per-follower totals (their own detail is dropped from `runs`).
+    pub totals: PerUavTotals,
 }
 
 /// Runs one flight and returns its summary (and its trajectory, kept in memory, when
@@ -346,60 +359,84 @@ pub fn run_batch(
     progress: &(dyn Fn() + Sync),
 ) -> BatchResult {
     let never = AtomicBool::new(false);
-    run_batch_stoppable(scenario, options, seed, runs, record_first, progress, &never)
+    run_batch_stoppable(scenario, options, (seed, 0, runs), record_first, progress, &never)
         .expect("a batch nobody stops runs to its end")
 }
 
-/// [`run_batch`] that another thread can stop (a user's interrupt): once `stop` is set, the
-/// flights in progress end at their next step, no new one starts, and the result is None.
+/// Flies the runs `range` of seed `seed` but those `skip` names, on the current rayon pool,
+/// handing each to `done` as it ends (in any order, its per-follower detail still in it).
+/// `record` records the range's first run, if it is flown. `progress` ticks after each run,
+/// or after each step when the range is a single run. Once `stop` is set, the flights in
+/// progress end at their next step, no new one starts and the result is None (what `done`
+/// got is complete runs only); otherwise it is the recorded trajectory, if any.
+pub fn fly_runs(
+    scenario: &Scenario,
+    options: RunOptions,
+    (seed, range): (u64, std::ops::Range<u64>),
+    skip: &(dyn Fn(u64) -> bool + Sync),
+    record: Option<Trajectory>,
+    (progress, stop): (&(dyn Fn() + Sync), &AtomicBool),
+    done: &(dyn Fn(RunSummary) + Sync),
+) -> Option<Option<Trajectory>> {
+    let first = range.start;
+    let single = range.end.saturating_sub(range.start) == 1;
+    let record = std::sync::Mutex::new(record);
+    let recorded = std::sync::Mutex::new(None);
+    let fly = |r: u64| {
+        if stop.load(Ordering::Relaxed) || skip(r) {
+            return;
+        }
+        let rec = if r == first { record.lock().ok().and_then(|mut f| f.take()) } else { None };
+        let tick: &(dyn Fn() + Sync) = if single { progress } else { &|| {} };
+        let (summary, trajectory) = run_one_stoppable(scenario, options, (seed, r), rec, tick, stop);
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        if let (Some(t), Ok(mut slot)) = (trajectory, recorded.lock()) {
+            *slot = Some(t);
+        }
+        done(summary);
+        if !single {
+            progress();
+        }
+    };
+    if single {
+        fly(first);
+    } else {
+        range.into_par_iter().for_each(fly);
+    }
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
+    Some(recorded.into_inner().ok().flatten())
+}
+
+/// [`run_batch`] of the runs `first_run ..` (`runs` of them) that another thread can stop
+/// (a user's interrupt): once `stop` is set, the flights in progress end at their next step,
+/// no new one starts, and the result is None.
 pub fn run_batch_stoppable(
     scenario: &Scenario,
     options: RunOptions,
-    seed: u64,
-    runs: u64,
+    (seed, first_run, runs): (u64, u64, u64),
     record_first: Option<Trajectory>,
     progress: &(dyn Fn() + Sync),
     stop: &AtomicBool,
 ) -> Option<BatchResult> {
-    let totals = std::sync::Mutex::new(PerUavTotals::default());
+    let collected = std::sync::Mutex::new((Vec::new(), PerUavTotals::default()));
     // Each run's per-follower detail is folded into the totals as it ends.
-    let fold = |(mut s, t): (RunSummary, Option<Trajectory>)| {
-        if let Ok(mut totals) = totals.lock() {
-            totals.add(&std::mem::take(&mut s.per_uav));
+    let done = |mut s: RunSummary| {
+        if let Ok(mut c) = collected.lock() {
+            c.1.add(&std::mem::take(&mut s.per_uav));
+            c.0.push(s);
         }
-        (s, t)
     };
-    let results: Vec<(RunSummary, Option<Trajectory>)> = if runs == 1 {
-        vec![fold(run_one_stoppable(scenario, options, (seed, 0), record_first, progress, stop))]
-    } else {
-        let first = std::sync::Mutex::new(record_first);
-        (0..runs)
-            .into_par_iter()
-            .map(|r| {
-                if stop.load(Ordering::Relaxed) {
-                    return None;
-                }
-                let record = if r == 0 { first.lock().ok().and_then(|mut f| f.take()) } else { None };
-                let out = fold(run_one_stoppable(scenario, options, (seed, r), record, &|| {}, stop));
-                progress();
-                Some(out)
-            })
-            .collect::<Option<_>>()?
-    };
-    if stop.load(Ordering::Relaxed) {
-        return None;
-    }
-    let mut first_trajectory = None;
-    let mut summaries = Vec::with_capacity(results.len());
-    for (s, t) in results {
-        if t.is_some() {
-            first_trajectory = t;
-        }
-        summaries.push(s);
-    }
-    let totals = totals.into_inner().unwrap_or_default();
-    let summary = aggregate_with(scenario, seed, &summaries, totals);
-    Some(BatchResult { runs: summaries, summary, first_trajectory })
+    let range = first_run..first_run.saturating_add(runs);
+    let first_trajectory =
+        fly_runs(scenario, options, (seed, range), &|_| false, record_first, (progress, stop), &done)?;
+    let (mut summaries, totals) = collected.into_inner().ok()?;
+    summaries.sort_by_key(|r| r.run);
+    let summary = aggregate_with(scenario, seed, &summaries, &totals);
+    Some(BatchResult { runs: summaries, summary, first_trajectory, totals })
 }
 
 /// [`run_batch_stoppable`] with the followers' agents outside the engine
@@ -442,29 +479,41 @@ pub fn run_batch_with_agents(
     if stop.load(Ordering::Relaxed) {
         return None;
     }
-    let summary = aggregate_with(scenario, seed, &summaries, totals);
-    Some(BatchResult { runs: summaries, summary, first_trajectory })
+    let summary = aggregate_with(scenario, seed, &summaries, &totals);
+    Some(BatchResult { runs: summaries, summary, first_trajectory, totals })
 }
 
-/// Aggregates run summaries (in run order) into a [`Summary`].
+/// Aggregates run summaries (in run order, their per-follower detail still in them) into a
+/// [`Summary`].
 pub fn aggregate(scenario: &Scenario, seed: u64, runs: &[RunSummary]) -> Summary {
     let mut per_uav = PerUavTotals::default();
     for r in runs {
         per_uav.add(&r.per_uav);
     }
-    aggregate_with(scenario, seed, runs, per_uav)
+    aggregate_with(scenario, seed, runs, &per_uav)
+}
+
+/// [`aggregate`] with the per-follower totals folded as the runs ended (their own detail
+/// dropped); the runs are the batch's from its first.
+pub fn aggregate_with(scenario: &Scenario, seed: u64, runs: &[RunSummary], per_uav: &PerUavTotals) -> Summary {
+    let mut fold = Aggregator::new(scenario, runs.len() as u64);
+    fold.add_totals(per_uav);
+    for r in runs {
+        fold.add(r);
+    }
+    fold.finish(scenario, seed, runs.first().map_or(0, |r| r.run))
 }
 
 /// Per-follower totals over a batch's runs, folded as each run ends (its per-UAV detail is
 /// then dropped, so a batch holds one set of totals whatever its number of runs). Maxima,
 /// integer sums and counts: the same in any order.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PerUavTotals {
-    uavs: Vec<u32>,
-    worst: Vec<[f64; 6]>,
-    adjustments: Vec<u64>,
-    flown: Vec<u64>,
-    passed: Vec<u64>,
+    pub(crate) uavs: Vec<u32>,
+    pub(crate) worst: Vec<[f64; 6]>,
+    pub(crate) adjustments: Vec<u64>,
+    pub(crate) flown: Vec<u64>,
+    pub(crate) passed: Vec<u64>,
 }
 
 impl PerUavTotals {
@@ -485,170 +534,22 @@ impl PerUavTotals {
             self.passed[f] += u64::from(u.pass);
         }
     }
-}
 
-/// [`aggregate`] with the per-follower totals folded as the runs ended (their own detail
-/// dropped).
-pub fn aggregate_with(scenario: &Scenario, seed: u64, runs: &[RunSummary], per_uav: PerUavTotals) -> Summary {
-    let n = runs.len().max(1) as f64;
-    let mut worst = [0.0f64; 6];
-    let mut p99 = [0.0f64; 6];
-    let mut median = [0.0f64; 6];
-    let mut rms = [0.0f64; 6];
-    for k in 0..6 {
-        let mut col: Vec<f64> = runs.iter().map(|r| r.max_abs_error[k]).collect();
-        worst[k] = col.iter().copied().fold(0.0, f64::max);
-        p99[k] = quantile_of(&mut col, 0.99);
-        median[k] = quantile_of(&mut col, 0.5);
-        rms[k] = (runs.iter().map(|r| r.rms_error[k] * r.rms_error[k]).sum::<f64>() / n).sqrt();
-    }
-    let adj_rate = runs.iter().map(RunSummary::adjustments_per_uav_minute).sum::<f64>() / n;
-    // eq. 17: σ = sqrt(σm² + σn²), σm measured as the RMS actuation-error effect per step.
-    let sigma_n = scenario.noise().sigma();
-    let mut model = [0.0f64; 9];
-    for r in runs {
-        for k in 0..9 {
-            model[k] += r.model_error_rms[k].powi(2) / n;
+    /// Adds the totals of other runs (of the same scenario: the same followers listed).
+    pub fn merge(&mut self, other: &PerUavTotals) {
+        if self.uavs.is_empty() {
+            *self = other.clone();
+            return;
+        }
+        for f in 0..self.uavs.len().min(other.uavs.len()) {
+            for k in 0..6 {
+                self.worst[f][k] = self.worst[f][k].max(other.worst[f][k]);
+            }
+            self.adjustments[f] += other.adjustments[f];
+            self.flown[f] += other.flown[f];
+            self.passed[f] += other.passed[f];
         }
     }
-    let idx = [0, 1, 2, 6, 7, 8];
-    let predicted = idx.map(|k| (model[k] + sigma_n[k].powi(2)).sqrt());
-    Summary {
-        scenario: scenario.name().to_string(),
-        uavs: scenario.len() as u64,
-        runs: runs.len() as u64,
-        seed,
-        pass_fraction: runs.iter().filter(|r| r.pass).count() as f64 / n,
-        unjudged_runs: runs.iter().filter(|r| r.judged_steps == 0).count() as u64,
-        worst_abs_error: AxisErrors::from_si(worst),
-        p99_abs_error: AxisErrors::from_si(p99),
-        median_abs_error: AxisErrors::from_si(median),
-        rms_error: AxisErrors::from_si(rms),
-        allowable_error: AxisErrors::from_si(scenario.allowable().as_array()),
-        predicted_sigma: AxisErrors::from_si(predicted),
-        min_separation_m: runs.iter().map(|r| r.min_separation_m).fold(f64::INFINITY, f64::min),
-        safety_distance_m: scenario.safety_distance_m(),
-        unsafe_runs: runs.iter().filter(|r| r.min_separation_m < scenario.safety_distance_m()).count() as u64,
-        path_deviation_m_max: runs.iter().map(|r| r.path_deviation_m).fold(0.0, f64::max),
-        path_bound_m: scenario.allowable().path_m,
-        off_path_runs: runs.iter().filter(|r| r.path_deviation_m > scenario.allowable().path_m).count() as u64,
-        succession_runs: runs.iter().filter(|r| r.succession.is_some()).count() as u64,
-        succession_latest_s: runs.iter().filter_map(|r| r.succession.map(|s| s.0)).reduce(f64::max),
-        adjustments_per_uav_minute: adj_rate,
-        swarm: SwarmMetrics {
-            held_fraction: runs.iter().map(|r| r.held_fraction).sum::<f64>() / n,
-            within_allowable_fraction: runs.iter().map(|r| r.within_allowable_fraction).sum::<f64>() / n,
-            control_effort: runs.iter().map(|r| r.control_effort).sum::<f64>() / n,
-            close_pairs_mean: runs.iter().map(|r| r.close_pairs as f64).sum::<f64>() / n,
-            close_pairs_max: runs.iter().map(|r| r.close_pairs).max().unwrap_or(0),
-            radio_sent_per_uav_s: runs.iter().map(|r| r.radio_sent_per_uav_s).sum::<f64>() / n,
-            radio_used_per_uav_s: runs.iter().map(|r| r.radio_used_per_uav_s).sum::<f64>() / n,
-            order_mean: runs.iter().map(|r| r.order_mean).sum::<f64>() / n,
-            order_min: runs.iter().map(|r| r.order_min).fold(1.0, f64::min),
-            connectivity_min: runs.iter().map(|r| r.connectivity_min).fold(1.0, f64::min),
-            alone_s_per_uav: runs.iter().map(|r| r.alone_s_per_uav).sum::<f64>() / n,
-        },
-        per_uav: per_uav.uavs.iter().map(|u| u + 1).collect(),
-        per_uav_worst: per_uav.worst.into_iter().map(AxisErrors::from_si).collect(),
-        per_uav_adjustments: per_uav.adjustments.iter().map(|&a| a as f64 / n).collect(),
-        per_uav_runs_flown: per_uav.flown,
-        per_uav_runs_passed: per_uav.passed,
-        sensor_faults: sensor_fault_summary(runs),
-        forming: forming_summary(runs),
-        transitions: transition_summary(runs),
-        flown: flown_summary(runs),
-        isolation: isolation_summary(runs),
-    }
-}
-
-/// The isolation part of a batch's summary (None when its runs had neither robust check on).
-fn isolation_summary(runs: &[RunSummary]) -> Option<IsolationSummary> {
-    let m: Vec<_> = runs.iter().filter_map(|r| r.isolation).collect();
-    if m.is_empty() {
-        return None;
-    }
-    let n = m.len() as f64;
-    let mean = |f: fn(&crate::measure::metrics::IsolationMetrics) -> f64| m.iter().map(f).sum::<f64>() / n;
-    Some(IsolationSummary {
-        isolating_s_per_uav: mean(|m| m.isolating_s_per_uav),
-        isolated_per_uav_s: mean(|m| m.isolated_per_uav_s),
-        own_suspect_s_per_uav: mean(|m| m.own_suspect_s_per_uav),
-        own_suspect_episodes: m.iter().map(|m| m.own_suspect_episodes).sum(),
-    })
-}
-
-/// The transition part of a batch's summary (None when the formation never changes).
-fn transition_summary(runs: &[RunSummary]) -> Option<TransitionSummary> {
-    let c: Vec<_> = runs.iter().filter_map(|r| r.transitions).collect();
-    if c.is_empty() {
-        return None;
-    }
-    let mut t: Vec<f64> = c.iter().map(|m| m.transition_s).collect();
-    let p99 = quantile_of(&mut t, 0.99);
-    Some(TransitionSummary {
-        completed_fraction: c.iter().filter(|m| m.transition_s.is_finite()).count() as f64 / c.len() as f64,
-        transition_s_median: crate::measure::stats::quantile(&t, 0.5),
-        transition_s_p99: p99,
-        transition_s_max: t.last().copied().unwrap_or(0.0),
-        transient_error_ratio_max: c.iter().map(|m| m.transient_error_ratio).fold(0.0, f64::max),
-        closest_m: c.iter().map(|m| m.closest_m).fold(f64::INFINITY, f64::min),
-    })
-}
-
-/// The forming part of a batch's summary (None when its runs started in their slots).
-fn forming_summary(runs: &[RunSummary]) -> Option<FormingSummary> {
-    let f: Vec<_> = runs.iter().filter_map(|r| r.forming).collect();
-    if f.is_empty() {
-        return None;
-    }
-    let mut t: Vec<f64> = f.iter().map(|m| m.time_to_form_s).collect();
-    let p99 = quantile_of(&mut t, 0.99);
-    let n = f.len() as f64;
-    Some(FormingSummary {
-        formed_fraction: f.iter().filter(|m| m.time_to_form_s.is_finite()).count() as f64 / n,
-        time_to_form_s_median: crate::measure::stats::quantile(&t, 0.5),
-        time_to_form_s_p99: p99,
-        time_to_form_s_max: t.last().copied().unwrap_or(0.0),
-        transient_error_ratio_max: f.iter().map(|m| m.transient_error_ratio).fold(0.0, f64::max),
-        settled_error_ratio_max: f.iter().filter_map(|m| m.settled_error_ratio).reduce(f64::max),
-    })
-}
-
-/// What the followers of a batch flew (None when it is not measured).
-fn flown_summary(runs: &[RunSummary]) -> Option<FlownSummary> {
-    let f: Vec<_> = runs.iter().filter_map(|r| r.flown).collect();
-    if f.is_empty() {
-        return None;
-    }
-    let n = f.len() as f64;
-    Some(FlownSummary {
-        path_length_m_per_uav: f.iter().map(|m| m.path_length_m_per_uav).sum::<f64>() / n,
-        delta_v_mps_per_uav: f.iter().map(|m| m.delta_v_mps_per_uav).sum::<f64>() / n,
-        work_j_per_kg_per_uav: f.iter().map(|m| m.work_j_per_kg_per_uav).sum::<f64>() / n,
-    })
-}
-
-/// The sensor-fault part of a batch's summary (None when its runs had no sensor fault).
-fn sensor_fault_summary(runs: &[RunSummary]) -> Option<SensorFaultSummary> {
-    let faults: Vec<_> = runs.iter().filter_map(|r| r.sensor_faults).collect();
-    if faults.is_empty() {
-        return None;
-    }
-    let mut worst = [0.0f64; 6];
-    for f in &faults {
-        for k in 0..6 {
-            worst[k] = worst[k].max(f.healthy_max_abs_error[k]);
-        }
-    }
-    let mut rejoin: Vec<f64> = faults.iter().map(|f| f.rejoin_s).collect();
-    let p99 = quantile_of(&mut rejoin, 0.99);
-    Some(SensorFaultSummary {
-        healthy_pass_fraction: faults.iter().filter(|f| f.healthy_pass).count() as f64 / faults.len() as f64,
-        healthy_worst_abs_error: AxisErrors::from_si(worst),
-        rejoin_s_median: crate::measure::stats::quantile(&rejoin, 0.5),
-        rejoin_s_p99: p99,
-        rejoin_s_max: rejoin.last().copied().unwrap_or(0.0),
-    })
 }
 
 #[cfg(test)]
@@ -701,7 +602,7 @@ mod tests {
                 stop.store(true, Ordering::Relaxed);
             }
         };
-        assert!(run_batch_stoppable(&sc, RunOptions::default(), 1, 1, None, &tick, &stop).is_none());
+        assert!(run_batch_stoppable(&sc, RunOptions::default(), (1, 0, 1), None, &tick, &stop).is_none());
         assert_eq!(steps.load(Ordering::Relaxed), 10);
         // Many runs tick per run: no new run starts once stopped.
         let (stop, runs) = (AtomicBool::new(false), AtomicU64::new(0));
@@ -710,12 +611,12 @@ mod tests {
             stop.store(true, Ordering::Relaxed);
         };
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("threads");
-        let out = pool.install(|| run_batch_stoppable(&sc, RunOptions::default(), 1, 1000, None, &tick, &stop));
+        let out = pool.install(|| run_batch_stoppable(&sc, RunOptions::default(), (1, 0, 1000), None, &tick, &stop));
         assert!(out.is_none());
         assert!(runs.load(Ordering::Relaxed) <= 2 + 2, "{runs:?} runs finished after the stop");
         // Never stopped: the whole batch.
         let never = AtomicBool::new(false);
-        let all = run_batch_stoppable(&sc, RunOptions::default(), 1, 2, None, &|| {}, &never).expect("a result");
+        let all = run_batch_stoppable(&sc, RunOptions::default(), (1, 0, 2), None, &|| {}, &never).expect("a result");
         assert_eq!(all.runs.len(), 2);
     }
 

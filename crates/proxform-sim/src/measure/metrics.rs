@@ -16,7 +16,7 @@ use super::verdict::{formed_at, Criterion, Evidence, FollowerJudge};
 pub const PER_UAV_MAX: usize = 4096;
 
 /// One follower's statistics over a run.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UavStats {
     /// UAV index.
     pub uav: u32,
@@ -36,7 +36,7 @@ pub struct UavStats {
 }
 
 /// What one run measured, small enough to keep for thousands of runs.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunSummary {
     /// Run index within its batch.
     pub run: u64,
@@ -109,7 +109,7 @@ pub struct RunSummary {
 }
 
 /// What the followers flew over a run (means per follower).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FlownMetrics {
     /// Distance flown (m).
     pub path_length_m_per_uav: f64,
@@ -122,7 +122,7 @@ pub struct FlownMetrics {
 }
 
 /// How the changes of formation of a run went.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TransitionMetrics {
     /// The slowest change: from its start, how long until every follower was within its
     /// allowable errors of the new formation and stayed there until the next change or the
@@ -147,7 +147,7 @@ struct Transition {
 }
 
 /// How a formation that did not start in its slots came together.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FormingMetrics {
     /// From this time on (s) every follower stayed within every allowable error: 0 when none
     /// ever left them, ∞ when some follower was outside them at the end (not formed).
@@ -161,7 +161,7 @@ pub struct FormingMetrics {
 }
 
 /// How a formation rode out faults of some UAVs' own sensors.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SensorFaultMetrics {
     /// Every follower without a sensor fault stayed within every allowable error.
     pub healthy_pass: bool,
@@ -174,7 +174,7 @@ pub struct SensorFaultMetrics {
 }
 
 /// What the robust fusion and the own-sensor check did over a run.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct IsolationMetrics {
     /// Seconds per follower in which its fusion left at least one neighbour out.
     pub isolating_s_per_uav: f64,
