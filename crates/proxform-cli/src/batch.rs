@@ -44,18 +44,16 @@ pub struct Opened {
 }
 
 /// Opens the journal of the batch `header` in `out`: a new one, or with `resume` the one
-/// there (which must be of the same batch), cut after its last complete commit.
+/// there (which must be of the same batch), cut after its last complete commit (a new one
+/// when there is none yet, so that a job can always be started with `--resume`).
 pub fn open(out: &Path, header: &JournalHeader, resume: bool) -> Result<Opened> {
     let path = out.join(JOURNAL);
     let n = usize::try_from(header.runs).context("too many runs for this machine")?;
-    if !resume {
+    if !resume || !path.exists() {
         let f = File::create(&path).with_context(|| format!("cannot create {}", path.display()))?;
         let writer = JournalWriter::create(BufWriter::new(f), header)
             .with_context(|| format!("cannot write {}", path.display()))?;
         return Ok(Opened { writer, done: vec![false; n], resumed: 0 });
-    }
-    if !path.exists() {
-        bail!("--resume: {} does not exist (no batch was started in {})", path.display(), out.display());
     }
     let scan = scan_file(&path)?;
     let h = &scan.header;

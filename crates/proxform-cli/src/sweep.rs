@@ -143,8 +143,7 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
         let dir = out.join(format!("cell-{:0digits$}", k + 1));
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
         let header = batch::header(sc, RunOptions::default(), (args.seed, 0, args.runs))?;
-        let resume = args.resume && dir.join(batch::JOURNAL).exists();
-        let opened = batch::open(&dir, &header, resume)?;
+        let opened = batch::open(&dir, &header, args.resume)?;
         bar.inc(opened.resumed);
         // A single run ticks per step: count it when it ends.
         let single = args.runs == 1;

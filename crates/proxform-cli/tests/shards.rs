@@ -147,8 +147,11 @@ fn merges_refuse_shards_that_are_not_one_batch_naming_them() {
     // --resume of another batch is refused, naming what differs.
     let e = refused(run(None, &b, &["--runs", "4", "--first-run", "3", "--resume"]));
     assert!(e.contains("--runs 3") && e.contains("without --resume"), "{e}");
-    let e = refused(run(None, &dir.join("none"), &["--runs", "4", "--resume"]));
-    assert!(e.contains("does not exist"), "{e}");
+    // --resume where nothing was started starts the batch.
+    let fresh = dir.join("fresh");
+    let text = ok(run(None, &fresh, &["--runs", "3", "--resume"]));
+    assert!(text.contains("resuming: 0 of 3 runs done"), "{text}");
+    same_outputs(&a, &fresh);
 }
 
 #[test]

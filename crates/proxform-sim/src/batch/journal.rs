@@ -289,7 +289,7 @@ fn decode<'a, T: serde::Deserialize<'a>>(bytes: &'a [u8], offset: u64) -> Result
 }
 
 /// Reads a journal from its start: the header, the done runs and their totals, and where the
-/// valid part ends. A run recorded twice, or outside the header's runs, is an error.
+/// valid part ends. A run outside the header's runs is an error.
 pub fn scan(r: &mut impl Read) -> Result<Scan, JournalError> {
     let mut magic = [0u8; 8];
     if read_full(r, &mut magic)? < 8 || &magic != MAGIC {
@@ -303,7 +303,6 @@ pub fn scan(r: &mut impl Read) -> Result<Scan, JournalError> {
     };
     at += 13 + buf.len() as u64;
     let range = header.run_range();
-    let mut seen = vec![false; header.runs.min(1 << 32) as usize];
     let (mut runs, mut pending) = (Vec::new(), Vec::new());
     let mut totals = PerUavTotals::default();
     let mut end = at;
@@ -319,11 +318,7 @@ pub fn scan(r: &mut impl Read) -> Result<Scan, JournalError> {
                         range.end.saturating_sub(1)
                     )));
                 }
-                let k = (run.run - range.start) as usize;
-                if seen[k] {
-                    return Err(JournalError::Runs(format!("byte {at}: run {} is recorded twice", run.run)));
-                }
-                seen[k] = true;
+                // A run recorded twice is found where the runs are ordered (`merge::plan`).
                 pending.push((run.run, at));
             }
             TOTALS => {
@@ -399,6 +394,65 @@ impl Shard {
             runs.push(read_run(&mut c, at, &mut buf)?);
         }
         runs.sort_by_key(|r| r.run);
+        if let Some((k, r)) = runs.iter().enumerate().find(|(k, r)| r.run != scan.header.first_run + *k as u64) {
+            return Err(JournalError::Runs(format!(
+                "run {} recorded where run {} belongs (a run twice, another missing)",
+                r.run,
+                scan.header.first_run + k as u64
+            )));
+        }
         Ok(Self { header: scan.header, runs, totals: scan.totals })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::batch::runs::run_batch_stoppable;
+
+    fn shard(first: u64, runs: u64) -> Shard {
+        let sc = proxform_scenario::builtin::paper();
+        let never = std::sync::atomic::AtomicBool::new(false);
+        let b = run_batch_stoppable(&sc, RunOptions::default(), (3, first, runs), None, &|| {}, &never).expect("ran");
+        let header = JournalHeader::new(&sc, RunOptions::default(), (3, first, runs)).expect("header");
+        Shard { header, runs: b.runs, totals: b.totals }
+    }
+
+    #[test]
+    fn a_journal_keeps_every_bit_and_drops_only_an_unfinished_tail() {
+        let s = shard(5, 3);
+        let bytes = s.to_bytes().expect("bytes");
+        assert_eq!(Shard::from_bytes(&bytes).expect("reads"), s);
+        // Every cut short of the end loses the commit: the runs are not done, nothing panics;
+        // a cut inside the header is not a journal.
+        let header_end = scan(&mut std::io::Cursor::new(&bytes[..])).expect("reads").runs[0].1 as usize;
+        for cut in [bytes.len() - 1, bytes.len() - 9, (header_end + bytes.len()) / 2, header_end + 3, header_end] {
+            let scan = scan(&mut std::io::Cursor::new(&bytes[..cut])).expect("a journal");
+            assert!(scan.runs.is_empty(), "cut at {cut}: {:?}", scan.runs);
+            assert!(Shard::from_bytes(&bytes[..cut]).is_err());
+        }
+        for cut in [header_end - 1, 20, 9, 3] {
+            assert!(matches!(scan(&mut std::io::Cursor::new(&bytes[..cut])), Err(JournalError::NotAJournal)));
+        }
+        // A flipped bit anywhere after the header is a torn tail, never a wrong result.
+        for at in (header_end..bytes.len()).step_by(37) {
+            let mut b = bytes.clone();
+            b[at] ^= 0x10;
+            let scan = scan(&mut std::io::Cursor::new(&b)).expect("a journal");
+            assert!(!scan.complete(), "a flipped bit at {at} went unnoticed");
+        }
+        assert!(matches!(scan(&mut std::io::Cursor::new(b"PXFJRNL0")), Err(JournalError::NotAJournal)));
+        assert!(matches!(scan(&mut std::io::Cursor::new(b"")), Err(JournalError::NotAJournal)));
+    }
+
+    #[test]
+    fn the_header_rebuilds_the_scenario_and_refuses_a_changed_one() {
+        let s = shard(0, 1);
+        let sc = s.header.scenario().expect("rebuilds");
+        assert_eq!(digest(&sc, RunOptions::default()).expect("digest"), s.header.digest);
+        let mut h = s.header.clone();
+        h.spec_toml = h.spec_toml.replacen("[controller]", "[controller]\nlambda = 0.3", 1);
+        assert!(h.spec_toml.contains("lambda = 0.3"), "{}", h.spec_toml);
+        assert!(h.scenario().is_err());
     }
 }

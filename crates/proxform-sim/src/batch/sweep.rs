@@ -6,7 +6,7 @@ use crate::batch::runs::Summary;
 
 /// Every combination of `axes` ((key, values) each), the first key varying slowest: one
 /// cell per combination, as (key, value) pairs in the axes' order.
-pub fn cells<'a>(axes: &'a [(String, Vec<String>)]) -> Vec<Vec<(&'a str, &'a str)>> {
+pub fn cells(axes: &[(String, Vec<String>)]) -> Vec<Vec<(&str, &str)>> {
     let mut out: Vec<Vec<(&str, &str)>> = vec![Vec::new()];
     for (key, values) in axes {
         let mut next = Vec::with_capacity(out.len() * values.len());
