@@ -164,6 +164,10 @@ pub(crate) fn runs_dict<'py>(py: Python<'py>, seed: u64, runs: &[RunSummary]) ->
     Ok(d)
 }
 
+/// What `run` returns: the summary (JSON text), the per-run columns, the first run's
+/// trajectory columns (or None) and the runs' exact results.
+type RunOut<'py> = (String, Bound<'py, PyDict>, Option<Bound<'py, PyDict>>, PyRuns);
+
 /// Runs `runs` seeded flights of `scenario` (run r draws from streams keyed by (seed, r), as
 /// `proxform run --seed S --runs N`); returns (summary as JSON text, per-run columns, the first
 /// run's trajectory columns or None).
@@ -180,7 +184,7 @@ pub fn run<'py>(
     adjust: bool,
     progress: Option<&Bound<'py, PyAny>>,
     first_run: u64,
-) -> PyResult<(String, Bound<'py, PyDict>, Option<Bound<'py, PyDict>>, PyRuns)> {
+) -> PyResult<RunOut<'py>> {
     if !(1..=MAX_RUNS).contains(&runs) {
         return Err(PyValueError::new_err(format!("runs = {runs}: from 1 to {MAX_RUNS}")));
     }

@@ -230,10 +230,41 @@ fn fault(k: usize, f: &FaultSpec, n: usize) -> Result<Fault, SpecError> {
             None => Ok(Vector3::zeros()),
         }
     };
+    // A key the kind does not use is refused, not ignored.
+    let takes: &[&str] = match kind.as_str() {
+        "remove" => &["uav"],
+        "join" => &["uav", "offset_m"],
+        "glitch" => &["uav", "duration_s", "offset_m"],
+        "stuck_sensor" => &["uav", "duration_s"],
+        "radio_blackout" => &["duration_s"],
+        _ => &["uav", "duration_s", "offset_m"],
+    };
+    for (name, given) in
+        [("uav", f.uav.is_some()), ("duration_s", f.duration_s.is_some()), ("offset_m", f.offset_m.is_some())]
+    {
+        if given && !takes.contains(&name) {
+            let why = match (kind.as_str(), name) {
+                ("stuck_sensor", _) => "it holds the UAV's last reading; a shifted reading is a glitch",
+                ("radio_blackout", _) => "a blackout silences every UAV's radio",
+                ("remove", "duration_s") => "a removed UAV does not come back (a later join brings one in)",
+                _ => "it does not use it",
+            };
+            return Err(err(format!("{key}.{name}"), format!("a {kind} fault takes no {name}: {why}")));
+        }
+    }
     Ok(match kind.as_str() {
         "remove" => Fault::Remove { uav: who()?, at_s },
         "join" => Fault::Join { uav: who()?, at_s, offset_m: offset()? },
-        "glitch" => Fault::Glitch { uav: who()?, at_s, duration_s: duration()?, offset_m: offset()? },
+        "glitch" => {
+            let (uav, duration_s, offset_m) = (who()?, duration()?, offset()?);
+            if offset_m == Vector3::zeros() {
+                return Err(err(
+                    format!("{key}.offset_m"),
+                    "a glitch shifts the UAV's own position reading by offset_m (m): give a non-zero offset",
+                ));
+            }
+            Fault::Glitch { uav, at_s, duration_s, offset_m }
+        }
         "stuck_sensor" => Fault::StuckSensor { uav: who()?, at_s, duration_s: duration()? },
         "radio_blackout" => Fault::RadioBlackout { at_s, duration_s: duration()? },
         o => {
