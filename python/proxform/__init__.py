@@ -69,6 +69,25 @@ ScenarioLike = Union[Scenario, str, "os.PathLike[str]", Mapping[str, Any]]
 Progress = Union[None, bool, Callable[[int, int], Any]]
 
 
+_U64 = 2**64 - 1
+
+
+def _whole(name: str, value: Any, lo: int = 0, hi: int = _U64) -> int:
+    """``value`` as an int in [lo, hi], or a ValueError (TypeError for a non-integer) naming
+    the argument: a float, a bool or an out-of-range number is never truncated or wrapped."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name}: expected a whole number, not {type(value).__name__} {value!r}")
+    v = int(value)
+    if not lo <= v <= hi:
+        raise ValueError(f"{name}: {v} is out of range ({lo} to {hi})")
+    return v
+
+
+def _is_path(source: str) -> bool:
+    """A one-line string that names a file (or ends in .toml) is a path, never TOML text."""
+    return "\n" not in source and (source.endswith(".toml") or os.path.exists(source))
+
+
 def load(source: ScenarioLike, *, uavs: Optional[int] = None) -> Scenario:
     """A checked scenario from a built-in name (``"paper"``, ``"swarm"`` with ``uavs``, …), a
     path to a TOML file, TOML text, or a dict with the keys of a scenario file.
@@ -83,9 +102,11 @@ def load(source: ScenarioLike, *, uavs: Optional[int] = None) -> Scenario:
         path = os.fspath(source)
         return Scenario.from_toml(read_text(path, "scenario file"), source=path)
     if isinstance(source, str):
+        if uavs is not None:
+            uavs = _whole("uavs", uavs, 2)
         if source in builtin_names():
             return Scenario.builtin(source, uavs)
-        if "\n" in source or "=" in source or "[" in source:
+        if not _is_path(source) and ("\n" in source or "=" in source or "[" in source):
             return Scenario.from_toml(source)
         return Scenario.from_toml(read_text(source, "scenario file"), source=source)
     raise TypeError(
@@ -181,6 +202,8 @@ def run(
     ``(done, total)``, called on the calling thread. ``adjust=False`` discards every input
     (shows the pass criterion failing).
     """
+    seed, runs = _whole("seed", seed), _whole("runs", runs, 1)
+    threads, first_run = _whole("threads", threads), _whole("first_run", first_run)
     sc = load(scenario)
     cb, close = _progress(progress, "runs" if runs > 1 else "steps")
     try:
@@ -256,6 +279,7 @@ def sweep(
     1), the keys, and the columns of ``sweep.csv``."""
     import pandas as pd
 
+    seed, runs, threads = _whole("seed", seed), _whole("runs", runs, 1), _whole("threads", threads)
     sc = load(scenario)
     keys = list(grid)
     for k in keys:
@@ -306,12 +330,15 @@ def compare(
     """Runs a comparison file (a path, TOML text, or None for the built-in comparison of the
     paper's experiment), as ``proxform compare``: its ``scenario`` is a built-in name or a file
     beside it. ``seeds`` and ``duration_s`` override the file's."""
+    threads = _whole("threads", threads)
+    if seeds is not None:
+        seeds = _whole("seeds", seeds, 1)
     text: Optional[str] = None
     name = "compare-paper (built-in)"
     base = "."
     if source is not None:
         path = os.fspath(source)
-        if "\n" in path or "=" in path:
+        if not _is_path(path) and ("\n" in path or "=" in path):
             text, name = path, "<string>"
         else:
             text, name, base = read_text(path, "comparison file"), path, os.path.dirname(path) or "."

@@ -27,7 +27,9 @@ def read_text(path: str, what: str) -> str:
     if not stat.S_ISREG(st.st_mode):
         raise fail(f"{what} is not a regular file")
     if st.st_size > MAX_INPUT_BYTES:
-        raise fail(f"{what} is {st.st_size >> 20} MiB, more than the {MAX_INPUT_BYTES >> 20} MiB a {what} may have")
+        raise fail(
+            f"{what} is {st.st_size} bytes, more than the {MAX_INPUT_BYTES} bytes ({MAX_INPUT_BYTES >> 20} MiB) a {what} may have"
+        )
     try:
         with open(path, "rb") as f:
             data = f.read(MAX_INPUT_BYTES + 1)

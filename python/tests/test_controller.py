@@ -148,3 +148,22 @@ def test_the_robust_checks_report_what_they_did(paper):
     # Without the checks neither is reported.
     plain = proxform.Controller(paper, 5)
     assert plain.step(0.0, x[4], nb).isolated == 0
+
+
+def test_the_vectorised_step_refuses_ids_and_counts_that_are_not_whole(paper):
+    many = proxform.Controllers(paper)
+    x = slot_states(paper, 0.0)
+    ok_counts = np.array([1, 0, 0, 0, 0])
+    # 1.9 was read as UAV 1; a float count of 1.5 as 1.
+    with pytest.raises(ValueError, match="ids: expected whole numbers, found 1.9"):
+        many.step(0.0, x[1:], ok_counts, np.array([1.9]), x[:1])
+    with pytest.raises(ValueError, match="counts: expected whole numbers, found 1.5"):
+        many.step(0.0, x[1:], np.array([1.5, 0, 0, 0, 0]), np.array([1]), x[:1])
+    with pytest.raises(ValueError, match="booleans"):
+        many.step(0.0, x[1:], ok_counts, np.array([True]), x[:1])
+    with pytest.raises(ValueError, match="beyond"):
+        many.step(0.0, x[1:], ok_counts, np.array([1e300]), x[:1])
+    # Whole floats are whole numbers: the same decision as integers.
+    a, _ = many.step(0.0, x[1:], ok_counts.astype(float), np.array([1.0]), x[:1])
+    b, _ = proxform.Controllers(paper).step(0.0, x[1:], ok_counts, np.array([1]), x[:1])
+    assert np.array_equal(a, b)

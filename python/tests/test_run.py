@@ -121,10 +121,36 @@ def test_an_error_in_the_progress_callback_stops_the_run():
     assert time.monotonic() - started < 10
 
 
-@pytest.mark.parametrize("kwargs", [{"runs": 0}, {"runs": 10**8}, {"threads": 100_000}, {"seed": -1}])
-def test_bad_arguments_raise(kwargs):
-    with pytest.raises((ValueError, OverflowError, TypeError)):
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"runs": 0},
+        {"runs": 10**8},
+        {"threads": 100_000},
+        {"threads": -1},
+        {"seed": -1},
+        {"seed": 2**70},
+        {"first_run": -3},
+        {"runs": 1.9},
+        {"seed": True},
+    ],
+)
+def test_bad_arguments_raise_naming_the_argument(kwargs):
+    # Never a bare OverflowError, never a float truncated.
+    with pytest.raises((ValueError, TypeError)) as info:
         proxform.run("paper", trajectories=False, **kwargs)
+    assert not isinstance(info.value, OverflowError)
+    assert next(iter(kwargs)) in str(info.value), str(info.value)
+
+
+def test_a_path_with_an_equals_sign_is_read_as_a_file(tmp_path):
+    d = tmp_path / "lambda=0.5"
+    d.mkdir()
+    f = d / "x=y.toml"
+    f.write_text(proxform.load("paper").to_toml().replace('name = "paper"', 'name = "from-file"'))
+    assert proxform.load(str(f)).name == "from-file"
+    with pytest.raises(proxform.ScenarioError, match="cannot read"):
+        proxform.load(str(d / "missing=1.toml"))
 
 
 def test_progress_true_without_tqdm_writes_a_line(capsys, monkeypatch):

@@ -50,7 +50,7 @@ pub fn open(out: &Path, header: &JournalHeader, resume: bool) -> Result<Opened> 
     let path = out.join(JOURNAL);
     let n = usize::try_from(header.runs).context("too many runs for this machine")?;
     if !resume || !path.exists() {
-        let f = File::create(&path).with_context(|| format!("cannot create {}", path.display()))?;
+        let f = crate::files::create_output(&path)?;
         let writer = JournalWriter::create(BufWriter::new(f), header)
             .with_context(|| format!("cannot write {}", path.display()))?;
         return Ok(Opened { writer, done: vec![false; n], resumed: 0 });
@@ -186,7 +186,7 @@ pub fn finish(journals: &[PathBuf], out: &Path, merged_journal: bool) -> Result<
     let mut merged = match merged_journal {
         true => {
             let path = out.join(JOURNAL);
-            let f = File::create(&path).with_context(|| format!("cannot create {}", path.display()))?;
+            let f = crate::files::create_output(&path)?;
             Some(JournalWriter::create(BufWriter::new(f), &plan.header).with_context(|| path.display().to_string())?)
         }
         false => None,

@@ -173,7 +173,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         }
     }
     spinner.finish_and_clear();
-    let mut w = csv::Writer::from_path(out.join("bench.csv"))?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(&out.join("bench.csv"))?));
     for r in &rows {
         w.serialize(r)?;
     }

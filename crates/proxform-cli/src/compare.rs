@@ -114,7 +114,7 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
 }
 
 fn write_csv<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(path)?));
     for r in rows {
         w.serialize(r)?;
     }

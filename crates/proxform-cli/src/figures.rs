@@ -320,24 +320,24 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
         let a = (a * 1e6).round() / 1e6;
         let png = dir.join(format!("{}.png", axis.figure));
         let svg = dir.join(format!("{}.svg", axis.figure));
-        axis_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s, axis, a, nav)?;
-        axis_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s, axis, a, nav)?;
+        axis_figure(&BitMapBackend::new(crate::files::fresh(&png)?, SIZE).into_drawing_area(), &s, axis, a, nav)?;
+        axis_figure(&SVGBackend::new(crate::files::fresh(&svg)?, SIZE).into_drawing_area(), &s, axis, a, nav)?;
         written.extend([png, svg]);
     }
     let png = dir.join("fig10a_tracks.png");
     let svg = dir.join("fig10a_tracks.svg");
-    tracks_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
-    tracks_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
+    tracks_figure(&BitMapBackend::new(crate::files::fresh(&png)?, SIZE).into_drawing_area(), &s)?;
+    tracks_figure(&SVGBackend::new(crate::files::fresh(&svg)?, SIZE).into_drawing_area(), &s)?;
     written.extend([png, svg]);
     let png = dir.join("fig10b_attitude.png");
     let svg = dir.join("fig10b_attitude.svg");
-    attitude_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
-    attitude_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
+    attitude_figure(&BitMapBackend::new(crate::files::fresh(&png)?, SIZE).into_drawing_area(), &s)?;
+    attitude_figure(&SVGBackend::new(crate::files::fresh(&svg)?, SIZE).into_drawing_area(), &s)?;
     written.extend([png, svg]);
     let png = dir.join("fig10c_plan.png");
     let svg = dir.join("fig10c_plan.svg");
-    plan_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s)?;
-    plan_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s)?;
+    plan_figure(&BitMapBackend::new(crate::files::fresh(&png)?, SIZE).into_drawing_area(), &s)?;
+    plan_figure(&SVGBackend::new(crate::files::fresh(&svg)?, SIZE).into_drawing_area(), &s)?;
     written.extend([png, svg]);
     let moves = !scenario.placement().in_slots()
         || !scenario.schedule().is_empty()
@@ -346,8 +346,8 @@ pub fn write_all(dir: &Path, scenario: &Scenario, traj: &Trajectory) -> Result<V
     if moves && nav < s.n {
         let png = dir.join("approach_plan.png");
         let svg = dir.join("approach_plan.svg");
-        approach_figure(&BitMapBackend::new(&png, SIZE).into_drawing_area(), &s, nav)?;
-        approach_figure(&SVGBackend::new(&svg, SIZE).into_drawing_area(), &s, nav)?;
+        approach_figure(&BitMapBackend::new(crate::files::fresh(&png)?, SIZE).into_drawing_area(), &s, nav)?;
+        approach_figure(&SVGBackend::new(crate::files::fresh(&svg)?, SIZE).into_drawing_area(), &s, nav)?;
         written.extend([png, svg]);
     }
     Ok(written)
@@ -473,8 +473,8 @@ pub fn bench_plot(dir: &Path, rows: &[(u64, String, usize, f64)]) -> Result<Vec<
     register_embedded_font()?;
     let png = dir.join("cost_per_update.png");
     let svg = dir.join("cost_per_update.svg");
-    bench_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), rows)?;
-    bench_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), rows)?;
+    bench_chart(&BitMapBackend::new(crate::files::fresh(&png)?, (900, 600)).into_drawing_area(), rows)?;
+    bench_chart(&SVGBackend::new(crate::files::fresh(&svg)?, (900, 600)).into_drawing_area(), rows)?;
     Ok(vec![png, svg])
 }
 
@@ -558,8 +558,18 @@ pub fn compare_plots(
         let title = format!("{}: largest formation error over the allowable error", cmp.base.name());
         let png = dir.join(format!("{file}.png"));
         let svg = dir.join(format!("{file}.svg"));
-        sweep_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), &title, x_desc, &curves)?;
-        sweep_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), &title, x_desc, &curves)?;
+        sweep_chart(
+            &BitMapBackend::new(crate::files::fresh(&png)?, (900, 600)).into_drawing_area(),
+            &title,
+            x_desc,
+            &curves,
+        )?;
+        sweep_chart(
+            &SVGBackend::new(crate::files::fresh(&svg)?, (900, 600)).into_drawing_area(),
+            &title,
+            x_desc,
+            &curves,
+        )?;
         written.extend([png, svg]);
     }
     // The pass fraction against loss on every channel, one line per method.
@@ -584,8 +594,18 @@ pub fn compare_plots(
         let x_desc = "loss on every channel: onboard detections and radio (%)";
         let png = dir.join("pass_vs_channel_loss.png");
         let svg = dir.join("pass_vs_channel_loss.svg");
-        pass_chart(&BitMapBackend::new(&png, (900, 600)).into_drawing_area(), &title, x_desc, &lines)?;
-        pass_chart(&SVGBackend::new(&svg, (900, 600)).into_drawing_area(), &title, x_desc, &lines)?;
+        pass_chart(
+            &BitMapBackend::new(crate::files::fresh(&png)?, (900, 600)).into_drawing_area(),
+            &title,
+            x_desc,
+            &lines,
+        )?;
+        pass_chart(
+            &SVGBackend::new(crate::files::fresh(&svg)?, (900, 600)).into_drawing_area(),
+            &title,
+            x_desc,
+            &lines,
+        )?;
         written.extend([png, svg]);
     }
     Ok(written)

@@ -23,9 +23,10 @@ pub fn read_input(path: &Path, what: &str) -> Result<String> {
     }
     if meta.len() > MAX_INPUT_BYTES {
         bail!(
-            "{what} {} is {} MiB, more than the {} MiB a {what} may have",
+            "{what} {} is {} bytes, more than the {} bytes ({} MiB) a {what} may have",
             path.display(),
-            meta.len() >> 20,
+            meta.len(),
+            MAX_INPUT_BYTES,
             MAX_INPUT_BYTES >> 20
         );
     }
@@ -39,6 +40,82 @@ pub fn read_input(path: &Path, what: &str) -> Result<String> {
         bail!("{what} {} grew past {} MiB while being read", path.display(), MAX_INPUT_BYTES >> 20);
     }
     Ok(text)
+}
+
+/// Makes way for an output file at `path`: an existing regular file is removed (the output is
+/// written fresh), nothing there is fine; a symbolic link, FIFO, device or folder there is
+/// refused before anything is opened, so no output is written through a link to elsewhere and
+/// nothing blocks on a FIFO.
+pub fn clear_output(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            bail!("{} is a symbolic link: outputs are not written through links (remove it)", path.display())
+        }
+        Ok(m) if !m.is_file() => bail!("{} exists and is not a regular file: it cannot be an output", path.display()),
+        Ok(_) => std::fs::remove_file(path).with_context(|| format!("cannot replace {}", path.display())),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(e).with_context(|| format!("cannot write {}", path.display())),
+    }
+}
+
+/// Creates the output file at `path` fresh (see [`clear_output`]); never follows a link or
+/// opens what another process put there meanwhile.
+pub fn create_output(path: &Path) -> Result<std::fs::File> {
+    clear_output(path)?;
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .with_context(|| format!("cannot create {}", path.display()))
+}
+
+/// `path` itself once cleared for a writer that opens it (a figure backend).
+pub fn fresh(path: &Path) -> Result<&Path> {
+    clear_output(path)?;
+    Ok(path)
+}
+
+/// A folder of this process's own in the temporary folder, readable by its owner only (0700),
+/// made fresh (never one that was there: a name another user planted is passed over) and removed
+/// with all it holds when dropped: on every return and error, and on Ctrl-C, which ends the
+/// run by returning.
+pub struct PrivateTemp {
+    dir: PathBuf,
+}
+
+impl PrivateTemp {
+    /// Makes the folder; `what` starts its name.
+    pub fn new(what: &str) -> Result<Self> {
+        use std::os::unix::fs::DirBuilderExt;
+        let base = std::env::temp_dir();
+        let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.subsec_nanos());
+        let mut last = None;
+        for k in 0..64u32 {
+            let dir = base.join(format!("{what}-{}-{nanos:08x}-{k}", std::process::id()));
+            // mkdir never follows a link at its last component and fails on anything there.
+            match std::fs::DirBuilder::new().mode(0o700).create(&dir) {
+                Ok(()) => return Ok(Self { dir }),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+                Err(e) => return Err(e).with_context(|| format!("cannot make a private folder in {}", base.display())),
+            }
+        }
+        Err(last.map_or_else(|| anyhow::anyhow!("no name left"), anyhow::Error::from))
+            .with_context(|| format!("cannot make a private folder in {}", base.display()))
+    }
+
+    /// Writes `text` to a new file `name` inside the folder and returns its path.
+    pub fn write(&self, name: &str, text: &str) -> Result<PathBuf> {
+        let path = self.dir.join(name);
+        std::io::Write::write_all(&mut create_output(&path)?, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+}
+
+impl Drop for PrivateTemp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
 }
 
 /// The default output folder of a run or comparison named `name`: `out/<name>`, the name
@@ -57,6 +134,44 @@ pub fn default_out(name: &str) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn outputs_are_written_fresh_never_through_links_or_fifos() {
+        let dir = std::env::temp_dir().join(format!("proxform-files-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch");
+        let target = dir.join("elsewhere.txt");
+        std::fs::write(&target, "keep").expect("write");
+        let link = dir.join("summary.json");
+        std::os::unix::fs::symlink(&target, &link).expect("symlink");
+        let e = create_output(&link).expect_err("a link");
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        assert_eq!(std::fs::read_to_string(&target).expect("read"), "keep");
+        let old = dir.join("old.csv");
+        std::fs::write(&old, "old").expect("write");
+        use std::io::Write;
+        create_output(&old).expect("replaced").write_all(b"new").expect("write");
+        assert_eq!(std::fs::read_to_string(&old).expect("read"), "new");
+        let e = create_output(&dir).expect_err("a folder");
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn private_temporary_folders_are_the_owners_fresh_and_removed() {
+        use std::os::unix::fs::PermissionsExt;
+        let a = PrivateTemp::new("proxform-test").expect("folder");
+        let b = PrivateTemp::new("proxform-test").expect("another");
+        assert_ne!(a.dir, b.dir);
+        let mode = std::fs::metadata(&a.dir).expect("meta").permissions().mode();
+        assert_eq!(mode & 0o777, 0o700);
+        let f = a.write("s.toml", "x = 1").expect("write");
+        assert_eq!(std::fs::read_to_string(&f).expect("read"), "x = 1");
+        assert!(a.write("s.toml", "again").is_ok(), "a file of its own is replaced");
+        let dir = a.dir.clone();
+        drop(a);
+        assert!(!dir.exists(), "removed with what it holds");
+    }
 
     #[test]
     fn names_stay_inside_out() {

@@ -11,7 +11,7 @@ use proxform_sim::{AxisErrors, RunSummary, Summary, TrajectoryRow};
 
 /// Writes the batch summary as pretty JSON.
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
-    let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let f = crate::files::create_output(path)?;
     serde_json::to_writer_pretty(BufWriter::new(f), summary).with_context(|| format!("cannot write {}", path.display()))
 }
 
@@ -52,7 +52,7 @@ pub struct RunsCsv {
 impl RunsCsv {
     /// Creates the file and writes its header.
     pub fn create(path: &Path, seed: u64, columns: RunColumns) -> Result<Self> {
-        let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let f = crate::files::create_output(path)?;
         let mut w = csv::Writer::from_writer(BufWriter::new(f));
         const AXES: [&str; 6] = ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"];
         let mut header: Vec<String> = ["seed", "run", "pass", "judged_steps"].iter().map(|s| s.to_string()).collect();
@@ -182,7 +182,7 @@ pub struct TrajectoryCsv {
 impl TrajectoryCsv {
     /// Creates the file and writes its header; `dt_s` sets the time column's decimals.
     pub fn create(path: &Path, dt_s: f64) -> Result<Self> {
-        let f = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let f = crate::files::create_output(path)?;
         let mut writer = csv::Writer::from_writer(BufWriter::new(f));
         writer.write_record([
             "t_s",

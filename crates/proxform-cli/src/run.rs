@@ -284,6 +284,10 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     // A bad list is refused before any file is written.
     let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
+    // Outputs a link or FIFO would take are refused before anything flies; old ones go now.
+    for f in ["summary.json", "runs.csv"] {
+        crate::files::clear_output(&out.join(f))?;
+    }
 
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
@@ -323,7 +327,8 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         let shard = proxform_sim::Shard { header: header.clone(), runs: d.runs, totals: d.totals };
         let bytes = shard.to_bytes().map_err(anyhow::Error::msg)?;
         let path = out.join(crate::batch::JOURNAL);
-        std::fs::write(&path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+        std::io::Write::write_all(&mut crate::files::create_output(&path)?, &bytes)
+            .with_context(|| format!("cannot write {}", path.display()))?;
         d.first_trajectory
     } else {
         let opened = crate::batch::open(&out, &header, args.resume)?;

@@ -26,6 +26,9 @@ pub enum Source {
 
 /// A built-in scenario's spec by name; `uavs` sizes the swarm.
 pub fn built_in_spec(name: &str, uavs: Option<u64>) -> Result<ScenarioSpec> {
+    if uavs.is_some() && name != "swarm" && builtin::NAMES.contains(&name) {
+        bail!("--uavs applies to --scenario swarm only, not to {name}");
+    }
     builtin::spec_by_name(name, uavs.map(|n| n as usize)).map_err(anyhow::Error::msg)
 }
 
@@ -134,10 +137,12 @@ pub struct InitArgs {
 /// Writes the annotated example scenario.
 pub fn init(args: &InitArgs) -> Result<ExitCode> {
     let path = args.path.clone().unwrap_or_else(|| PathBuf::from("scenario.toml"));
-    if path.exists() && !args.force {
+    // A dangling link "exists" too: nothing is written through it without --force, nor with it.
+    if std::fs::symlink_metadata(&path).is_ok() && !args.force {
         bail!("{} already exists (use --force to overwrite)", path.display());
     }
-    std::fs::write(&path, EXAMPLE).with_context(|| format!("cannot write {}", path.display()))?;
+    std::io::Write::write_all(&mut crate::files::create_output(&path)?, EXAMPLE.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))?;
     println!("wrote {}; run it with `proxform run {}`", path.display(), path.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -134,8 +134,7 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
     );
     let digits = cells.len().to_string().len().max(3);
     let csv_path = out.join("sweep.csv");
-    let mut table =
-        csv::Writer::from_path(&csv_path).with_context(|| format!("cannot create {}", csv_path.display()))?;
+    let mut table = csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(&csv_path)?));
     let mut all_pass = true;
     let mut stdout = std::io::stdout().lock();
     for (k, (label, sc)) in cells.iter().enumerate() {

@@ -104,6 +104,37 @@ fn strange_files_and_arguments_are_refused_at_once() {
     if made {
         cases.push((vec!["run".into(), fifo.display().to_string()], "is not a regular file"));
     }
+    // Outputs are never written through a link, nor opened when a FIFO or folder took their name.
+    let target = cwd.join("elsewhere.json");
+    std::fs::write(&target, "keep").expect("write");
+    let outs = |k: &str| {
+        let d = cwd.join(format!("outs-{k}"));
+        std::fs::create_dir_all(&d).expect("folder");
+        d
+    };
+    let (o1, o2, o3) = (outs("link"), outs("fifo"), outs("folder"));
+    if std::os::unix::fs::symlink(&target, o1.join("summary.json")).is_ok() {
+        cases.push((
+            vec!["run".into(), "--no-trajectories".into(), "--out".into(), o1.display().to_string()],
+            "is a symbolic link",
+        ));
+    }
+    if Command::new("mkfifo").arg(o2.join("trajectories.csv")).status().is_ok_and(|s| s.success()) {
+        cases.push((
+            vec!["run".into(), "--out".into(), o2.display().to_string()],
+            "trajectories.csv exists and is not a regular file",
+        ));
+    }
+    std::fs::create_dir_all(o3.join("runs.journal")).expect("folder");
+    cases.push((
+        vec!["run".into(), "--no-trajectories".into(), "--no-figures".into(), "--out".into(), o3.display().to_string()],
+        "runs.journal exists and is not a regular file",
+    ));
+    let dangling = cwd.join("dangling.toml");
+    if std::os::unix::fs::symlink(cwd.join("nowhere"), &dangling).is_ok() {
+        cases.push((vec!["init".into(), dangling.display().to_string()], "already exists"));
+        cases.push((vec!["init".into(), "--force".into(), dangling.display().to_string()], "is a symbolic link"));
+    }
     // A 20 MB file of waypoints is refused before it is parsed.
     let big = cwd.join("big.toml");
     let mut waypoints = String::from("[formation.shape]\nkind = \"v\"\nuavs = 3\nspacing_m = 100.0\n[path]\nkind = \"waypoints\"\nspeed_kmh = 250.0\nturn_radius_m = 500.0\npoints_m = [\n");
@@ -112,10 +143,11 @@ fn strange_files_and_arguments_are_refused_at_once() {
     }
     waypoints.push_str("]\n");
     std::fs::write(&big, waypoints).expect("big file");
-    cases.push((vec!["run".into(), big.display().to_string()], "MiB, more than the 16 MiB"));
+    cases.push((vec!["run".into(), big.display().to_string()], "bytes, more than the 16777216 bytes (16 MiB)"));
     for (args, expect) in cases {
         let started = Instant::now();
         let o = run(&cwd, &args);
+        assert_eq!(std::fs::read_to_string(&target).ok().as_deref(), Some("keep"), "{args:?} wrote through a link");
         let all = text(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {all}");
         assert!(all.contains(expect), "{args:?}: expected «{expect}» in «{all}»");

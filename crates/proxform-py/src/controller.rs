@@ -76,6 +76,35 @@ fn array_like<'py>(obj: &Bound<'py, PyAny>, dtype: &str, what: &str) -> PyResult
         .map_err(|e| bad(format!("{what}: expected numbers convertible to {dtype}: {e}")))
 }
 
+/// `obj` as a contiguous int64 array of whole numbers: integers as they are, floats only when
+/// every one is a whole number within ±2^53 (1.9 is refused, never truncated to 1), booleans
+/// refused.
+fn whole_like<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, PyAny>> {
+    let np = obj.py().import("numpy")?;
+    let a = np.call_method1("asarray", (obj,)).map_err(|e| bad(format!("{what}: expected whole numbers: {e}")))?;
+    let kind: String = a.getattr("dtype")?.getattr("kind")?.extract()?;
+    match kind.as_str() {
+        "b" => return Err(bad(format!("{what}: expected whole numbers, found booleans"))),
+        "f" => {
+            let whole = np.call_method1("trunc", (&a,))?;
+            let small = np.call_method1("less_equal", (np.call_method1("abs", (&a,))?, 9_007_199_254_740_992.0f64))?;
+            let ok: bool = np.call_method1("array_equal", (&a, &whole))?.extract::<bool>()?
+                && np.call_method1("all", (small,))?.extract::<bool>()?;
+            if !ok {
+                let flat = a.call_method0("ravel")?;
+                let bad_at = np.call_method1("flatnonzero", (np.call_method1("not_equal", (&a, &whole))?,))?;
+                let first = match bad_at.len()? {
+                    0 => String::from("a number beyond ±2^53"),
+                    _ => flat.get_item(bad_at.get_item(0)?)?.str()?.to_string(),
+                };
+                return Err(bad(format!("{what}: expected whole numbers, found {first}")));
+            }
+        }
+        _ => {}
+    }
+    array_like(&a, "int64", what)
+}
+
 /// Checks a neighbour's number (from 1) against the formation and the observer.
 fn neighbour_id(id: i64, me: UavId, uavs: usize, what: impl Fn() -> String) -> PyResult<UavId> {
     if id < 1 || id as u64 > uavs as u64 {
@@ -396,10 +425,16 @@ impl PyControllers {
         }
         let own = read::<f64>(own, "float64", "own")?;
         let own: PyReadonlyArray2<'py, f64> = own.extract().map_err(|_| bad("own: expected an (n, 9) array".into()))?;
-        let counts = read::<i64>(counts, "int64", "counts")?;
+        let counts = match counts.cast::<numpy::PyArrayDyn<i64>>() {
+            Ok(_) => counts.clone(),
+            Err(_) => whole_like(counts, "counts")?,
+        };
         let counts: PyReadonlyArray1<'py, i64> =
             counts.extract().map_err(|_| bad("counts: expected a 1-D array of whole numbers".into()))?;
-        let ids = read::<i64>(ids, "int64", "ids")?;
+        let ids = match ids.cast::<numpy::PyArrayDyn<i64>>() {
+            Ok(_) => ids.clone(),
+            Err(_) => whole_like(ids, "ids")?,
+        };
         let ids: PyReadonlyArray1<'py, i64> =
             ids.extract().map_err(|_| bad("ids: expected a 1-D array of UAV numbers".into()))?;
         let states_any = read::<f64>(states, "float64", "states")?;

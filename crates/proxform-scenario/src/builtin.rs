@@ -121,7 +121,7 @@ pub fn spec_by_name(name: &str, uavs: Option<usize>) -> Result<ScenarioSpec, Str
         ("swarm", n) => Ok(swarm_spec(n.unwrap_or(SWARM_DEFAULT_UAVS))),
         (name, uavs) => match FILES.iter().find(|f| f.0 == name) {
             _ if NAMES.contains(&name) && uavs.is_some() => {
-                Err(format!("--uavs applies to --scenario swarm only, not to {name}"))
+                Err(format!("a number of UAVs applies to the built-in swarm only, not to {name}"))
             }
             Some((name, text)) => {
                 Ok(crate::load::parse_spec(text, &format!("{name}.toml")).expect("the built-in file parses"))

@@ -107,9 +107,10 @@ pub fn run(
 
     // The agents read the scenario as given (its spec), so they build the same agents.
     let spec_text = toml::to_string(scenario.spec()).context("cannot write the scenario for the agents")?;
-    let spec_file = std::env::temp_dir().join(format!("proxform-{}-{}.toml", std::process::id(), net.swarm().name()));
-    std::fs::write(&spec_file, spec_text).with_context(|| format!("cannot write {}", spec_file.display()))?;
-    let _remove = RemoveOnDrop(spec_file.clone());
+    // In a private folder of the world's own, removed when the world ends (a name in the shared
+    // temporary folder could be planted in advance as a link to overwrite).
+    let temp = crate::files::PrivateTemp::new("proxform-world")?;
+    let spec_file = temp.write("scenario.toml", &spec_text)?;
 
     let mut children = Children::default();
     if args.agents_mavlink && (args.external_agents || args.agents_per_process != 1) {
@@ -240,13 +241,4 @@ fn agent_bin(args: &NetArgs) -> Result<PathBuf> {
         );
     }
     Ok(bin)
-}
-
-/// Removes a file when dropped.
-struct RemoveOnDrop(PathBuf);
-
-impl Drop for RemoveOnDrop {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
 }
