@@ -7,6 +7,7 @@ mod compare;
 mod distributed;
 mod figures;
 mod files;
+mod keys;
 mod memory;
 mod merge;
 mod net_args;
@@ -45,6 +46,9 @@ enum Command {
     /// Serve the simulated world over Zenoh and wait for agents started elsewhere
     /// (`proxform run --distributed --external-agents`).
     World(run::RunArgs),
+    /// Make a swarm's credentials (an authority, and a certificate and key per party) for
+    /// authenticated flights over mutual TLS (`run --distributed --tls DIR`).
+    Keys(keys::KeysArgs),
     /// Run one or more UAVs' controllers as this process (the `proxform-agent` program).
     #[command(disable_help_flag = true)]
     Agent {
@@ -77,6 +81,7 @@ fn main() -> std::process::ExitCode {
             run::run(&args)
         }
         Command::Agent { args } => agent(&args),
+        Command::Keys(args) => keys::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Sweep(args) => sweep::run(&args),

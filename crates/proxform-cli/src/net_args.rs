@@ -31,9 +31,20 @@ pub struct NetArgs {
     /// Pause after the agents are ready and before the flight (s), for outside clients.
     #[arg(long, default_value_t = 0.0)]
     pub start_delay_s: f64,
-    /// The world's Zenoh endpoint [default: a free loopback TCP port].
+    /// The world's Zenoh endpoint [default: a free loopback port, TCP or with --tls TLS].
+    /// Beyond loopback it takes `--tls` (or `--insecure`).
     #[arg(long)]
     pub listen: Option<String>,
+    /// The swarm's credentials folder (`proxform keys`): serve over mutual TLS on a `tls/`
+    /// endpoint, admit only peers with a certificate of the swarm's authority, and let each
+    /// UAV's certificate publish that UAV's state, command and membership only (docs/wire.md,
+    /// "Security"). Agents started here connect with their own certificates from it.
+    #[arg(long)]
+    pub tls: Option<PathBuf>,
+    /// Listen beyond loopback without TLS: any peer that reaches the port can then join,
+    /// publish commands and end the flight.
+    #[arg(long, conflicts_with = "tls")]
+    pub insecure: bool,
     /// The swarm's name (keys proxform/v1/<swarm>/…) [default: proxform-<process id>].
     #[arg(long)]
     pub swarm: Option<String>,

@@ -238,3 +238,55 @@ fn relaying_the_navigator_is_refused_before_anything_starts() {
     assert!(stderr.contains("radio.relay_navigator") && stderr.contains("without --distributed"), "{stderr}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn authenticated_lockstep_is_the_in_process_run_and_open_listening_needs_tls() {
+    let keys = out("keys");
+    let made = Command::new(bin()).args(["keys", "--uavs", "6", "--out"]).arg(&keys).output().expect("keys");
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    use std::os::unix::fs::PermissionsExt;
+    let mode = |f: &str| std::fs::metadata(keys.join(f)).expect("written").permissions().mode() & 0o777;
+    assert_eq!((mode("uav-3.key"), mode("ca.key"), mode("ca.pem")), (0o600, 0o600, 0o644));
+    let (a, b) = (out("tls-local"), out("tls-net"));
+    run(&["--seed", "3", "--duration-s", "15"], &a);
+    let o = run(&["--seed", "3", "--duration-s", "15", "--distributed", "--tls", &keys.display().to_string()], &b);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("5 agent process(es)") && stderr.contains(" 0 missing"), "{stderr}");
+    for f in ["trajectories.csv", "summary.json", "runs.csv"] {
+        let (x, y) = (std::fs::read(a.join(f)).expect("local"), std::fs::read(b.join(f)).expect("over TLS"));
+        assert!(x == y, "{f} differs between the in-process and the authenticated run");
+    }
+    // Refused before anything listens or flies, each naming what to do.
+    let empty = out("no-keys");
+    std::fs::create_dir_all(&empty).expect("folder");
+    let k = keys.display().to_string();
+    let e = empty.display().to_string();
+    for (args, expect) in [
+        (vec!["--listen", "tcp/0.0.0.0:7"], "--tls DIR"),
+        (vec!["--listen", "tcp/[::]:7"], "--insecure"),
+        (vec!["--listen", "tcp/192.0.2.1:7"], "beyond loopback"),
+        (vec!["--tls", &k, "--listen", "tcp/127.0.0.1:7"], "tls/ endpoint"),
+        (vec!["--listen", "tls/127.0.0.1:7"], "needs the swarm's credentials"),
+        (vec!["--tls", &e], "proxform keys"),
+        (vec!["--tls", &k, "--agents-per-process", "2"], "one UAV per agent process"),
+        (vec!["--listen", "tcp/127.0.0.1:0"], "port 0"),
+        (vec!["--listen", "tcp/127.0.0.1"], "PROTOCOL/HOST:PORT"),
+    ] {
+        let o = Command::new(bin())
+            .args(["run", "--distributed", "--duration-s", "1", "-q", "--no-figures", "--out"])
+            .arg(out("refused"))
+            .args(&args)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: expected «{expect}» in «{err}»");
+    }
+    let again = Command::new(bin()).args(["keys", "--uavs", "6", "--out"]).arg(&keys).output().expect("keys");
+    assert!(String::from_utf8_lossy(&again.stderr).contains("--force"), "existing credentials were replaced");
+    let host = Command::new(bin()).args(["keys", "--uavs", "3", "--host", "a b", "--out"]).arg(out("k2")).output();
+    assert!(String::from_utf8_lossy(&host.expect("keys").stderr).contains("\"a b\""));
+    for d in [a, b, keys, empty] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

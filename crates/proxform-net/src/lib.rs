@@ -4,7 +4,9 @@
 //!   `docs/wire.md`).
 //! - [`keys`]: the key expressions under which they travel (`proxform/v1/<swarm>/…`).
 //! - [`transport`]: a Zenoh session on the given endpoints (multicast scouting off), with the
-//!   publishers and subscribers of an agent or a world.
+//!   publishers and subscribers of an agent or a world; mutual TLS where secured.
+//! - [`access`]: the parties of a swarm and the access rules the world's router enforces;
+//!   [`credentials`]: the swarm's authority and its parties' certificates.
 //! - [`vehicle`]: what an agent sees of its UAV (its own state and observations in, a command
 //!   out): the network world implements it here, an autopilot over MAVLink in
 //!   [`mavlink::vehicle`].
@@ -15,7 +17,9 @@
 //! This crate reads the same checked [`proxform_scenario::Scenario`] as the simulator but never
 //! links the simulator: an agent knows only its own measured state and what reaches it.
 
+pub mod access;
 pub mod agent;
+pub mod credentials;
 pub mod keys;
 pub mod mavlink;
 pub mod transport;

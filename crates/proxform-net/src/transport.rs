@@ -3,21 +3,57 @@
 //! of [`crate::wire`] messages. A world runs as a Zenoh router that agents and outside clients
 //! connect to; the key expressions are those of [`crate::keys`].
 
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use zenoh::Wait;
 
+use crate::access::Party;
 use crate::wire::codec::{self, DecodeError};
 use crate::wire::Message;
+
+/// A party's identity on a swarm's authenticated links (PEM files, `proxform keys`): the
+/// swarm's authority, which every peer's certificate must be signed by (mutual TLS), and this
+/// party's own certificate and private key.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tls {
+    /// The swarm authority's certificate.
+    pub ca: PathBuf,
+    /// This party's certificate.
+    pub cert: PathBuf,
+    /// This party's private key.
+    pub key: PathBuf,
+}
+
+impl Tls {
+    /// The files of `party` in a folder written by `proxform keys`: `ca.pem`, `<party>.pem`,
+    /// `<party>.key`.
+    pub fn in_folder(dir: &Path, party: Party) -> Self {
+        let stem = party.file_stem();
+        Self { ca: dir.join("ca.pem"), cert: dir.join(format!("{stem}.pem")), key: dir.join(format!("{stem}.key")) }
+    }
+}
+
+/// A router's authenticated links and the access rules it enforces on them
+/// ([`crate::access::acl_json5`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Secured {
+    /// The router's identity (the world's).
+    pub tls: Tls,
+    /// The `access_control` section (JSON5).
+    pub acl_json5: String,
+}
 
 /// How a process joins the network.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Role {
-    /// A router listening on these endpoints (such as `tcp/127.0.0.1:7447`); others connect to
-    /// it. The world runs as one.
+    /// A router listening on these endpoints (such as `tcp/127.0.0.1:7447`, or `tls/...` when
+    /// secured); others connect to it. The world runs as one.
     Router {
         /// Endpoints to listen on.
         listen: Vec<String>,
+        /// Mutual TLS and access rules (None: plain links, for loopback).
+        secured: Option<Secured>,
     },
     /// A client of a router at one of these endpoints. Agents and outside programs run as one.
     Client {
@@ -25,6 +61,8 @@ pub enum Role {
         connect: Vec<String>,
         /// How long to wait for the router at start.
         wait_for_router: Duration,
+        /// This party's identity for a `tls/` endpoint.
+        tls: Option<Tls>,
     },
 }
 
@@ -69,15 +107,32 @@ fn config(role: &Role) -> Result<zenoh::Config, TransportError> {
     };
     set("scouting/multicast/enabled", "false".into())?;
     set("scouting/gossip/enabled", "false".into())?;
+    let path = |p: &Path| format!("{:?}", p.display().to_string());
     match role {
-        Role::Router { listen } => {
+        Role::Router { listen, secured } => {
             set("mode", "\"router\"".into())?;
             set("listen/endpoints", json(listen))?;
+            if let Some(s) = secured {
+                set("transport/link/tls/root_ca_certificate", path(&s.tls.ca))?;
+                set("transport/link/tls/listen_certificate", path(&s.tls.cert))?;
+                set("transport/link/tls/listen_private_key", path(&s.tls.key))?;
+                set("transport/link/tls/enable_mtls", "true".into())?;
+                set("transport/link/tls/close_link_on_expiration", "true".into())?;
+                set("access_control", s.acl_json5.clone())?;
+            }
         }
-        Role::Client { connect, wait_for_router } => {
+        Role::Client { connect, wait_for_router, tls } => {
             set("mode", "\"client\"".into())?;
             set("connect/endpoints", json(connect))?;
             set("connect/timeout_ms", wait_for_router.as_millis().to_string())?;
+            if let Some(t) = tls {
+                set("transport/link/tls/root_ca_certificate", path(&t.ca))?;
+                set("transport/link/tls/connect_certificate", path(&t.cert))?;
+                set("transport/link/tls/connect_private_key", path(&t.key))?;
+                set("transport/link/tls/enable_mtls", "true".into())?;
+                set("transport/link/tls/verify_name_on_connect", "true".into())?;
+                set("transport/link/tls/close_link_on_expiration", "true".into())?;
+            }
         }
     }
     Ok(c)

@@ -31,7 +31,7 @@ fn sense(uav: u32, k: u64, own: State9, heard: Vec<Observation>) -> SenseMsg {
 fn the_agent_answers_valid_updates_survives_garbage_and_exits_at_the_end() {
     let sc = paper();
     let endpoint = free_loopback_endpoint().expect("a free port");
-    let world = Session::open(&Role::Router { listen: vec![endpoint.clone()] }).expect("a router");
+    let world = Session::open(&Role::Router { listen: vec![endpoint.clone()], secured: None }).expect("a router");
     let swarm = Swarm::new(&format!("agent-test-{}", std::process::id())).expect("a name");
     let inbox = world.inbox(&[swarm.command(2), swarm.member(2)]).expect("subscriptions");
     let mut agent = Reap(

@@ -16,8 +16,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
+use proxform_net::access::{acl_json5, Party};
 use proxform_net::keys::Swarm;
-use proxform_net::transport::{free_loopback_endpoint, Role, Session};
+use proxform_net::transport::{free_loopback_endpoint, Role, Secured, Session, Tls};
 use proxform_net::wire::ClockMode;
 use proxform_scenario::Scenario;
 use proxform_sim::{run_batch_with_agents, BatchResult, RunOptions, Trajectory};
@@ -91,7 +92,11 @@ pub fn run(
         );
     }
     let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
-    let (session, endpoint) = serve(args.listen.as_deref())?;
+    let secured = match &args.tls {
+        Some(dir) => Some(secured(dir, &swarm, scenario, args)?),
+        None => None,
+    };
+    let (session, endpoint) = serve(args.listen.as_deref(), secured, args.insecure)?;
     let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
     let mode = if args.clock == "realtime" { ClockMode::RealTime } else { ClockMode::Lockstep };
     let mut net = NetAgents::new(session, swarm, scenario, (mode, deadline, seed))?;
@@ -139,6 +144,9 @@ pub fn run(
                 .arg("10")
                 .arg("--exit-with-parent")
                 .stdin(std::process::Stdio::null());
+            if let Some(dir) = &args.tls {
+                cmd.arg("--tls").arg(dir);
+            }
             if let (true, Some(base)) = (args.agents_mavlink, args.mavlink_port) {
                 let uav = group[0];
                 // UAV i's system sends to base + i − 1 (checked to fit when the systems opened).
@@ -209,16 +217,76 @@ pub fn run(
 
 /// The world's router on `listen`, or on a free loopback port: a port found free may be taken
 /// before the router binds it (by another program's connection), so a few are tried.
-fn serve(listen: Option<&str>) -> Result<(Session, String)> {
+/// The world's identity in `dir` and the swarm's access rules; every file checked here, and
+/// each agent started here one UAV per process (a certificate speaks for one UAV).
+fn secured(dir: &std::path::Path, swarm: &Swarm, scenario: &Scenario, args: &NetArgs) -> Result<Secured> {
+    if !args.external_agents && args.agents_per_process != 1 {
+        bail!("--tls: one UAV per agent process (--agents-per-process 1): each certificate speaks for one UAV");
+    }
+    let tls = Tls::in_folder(dir, Party::World);
+    let nav = scenario.navigator().0 + 1;
+    let mut needed = vec![tls.ca.clone(), tls.cert.clone(), tls.key.clone()];
+    if !args.external_agents {
+        for u in (1..=scenario.len() as u32).filter(|u| *u != nav) {
+            let t = Tls::in_folder(dir, Party::Uav(u));
+            needed.extend([t.cert, t.key]);
+        }
+    }
+    if let Some(missing) = needed.iter().find(|f| !f.is_file()) {
+        bail!(
+            "--tls {}: {} is missing: make the swarm's credentials with `proxform keys --uavs {} --out {}`",
+            dir.display(),
+            missing.display(),
+            scenario.len(),
+            dir.display()
+        );
+    }
+    Ok(Secured { tls, acl_json5: acl_json5(swarm, scenario.len() as u32, nav) })
+}
+
+/// Whether an endpoint's address is this machine's loopback (`127.x`, `[::1]`, `localhost`).
+fn is_loopback(endpoint: &str) -> bool {
+    let addr = endpoint.split_once('/').map_or(endpoint, |(_, a)| a);
+    let addr = addr.split('#').next().unwrap_or(addr);
+    let host = match addr.rsplit_once(':') {
+        Some((h, _)) => h,
+        None => addr,
+    };
+    let host = host.trim_start_matches('[').trim_end_matches(']');
+    host == "localhost" || host.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
+}
+
+fn serve(listen: Option<&str>, secured: Option<Secured>, insecure: bool) -> Result<(Session, String)> {
     if let Some(e) = listen {
-        let session = Session::open(&Role::Router { listen: vec![e.to_string()] })
+        // The agents are told this endpoint: a port the system would choose cannot be told.
+        let port = e.split('#').next().unwrap_or(e).rsplit_once(':').map(|(_, p)| p);
+        match port.map(str::parse::<u16>) {
+            Some(Ok(0)) => {
+                bail!("--listen {e}: port 0 cannot be told to the agents: name a port, or leave --listen out")
+            }
+            Some(Ok(_)) => {}
+            _ => bail!("--listen {e}: expected PROTOCOL/HOST:PORT with a port from 1 to 65535 (tcp/127.0.0.1:7447)"),
+        }
+        match (&secured, e.starts_with("tls/")) {
+            (Some(_), false) => bail!("--listen {e}: with --tls the world listens on a tls/ endpoint (tls/HOST:PORT)"),
+            (None, true) => bail!("--listen {e}: a tls/ endpoint needs the swarm's credentials (--tls DIR)"),
+            (None, false) if !is_loopback(e) && !insecure => bail!(
+                "--listen {e}: beyond loopback any peer that reaches the port could fly the swarm; serve it with \
+                 --tls DIR (`proxform keys`), or say --insecure"
+            ),
+            _ => {}
+        }
+        let session = Session::open(&Role::Router { listen: vec![e.to_string()], secured })
             .with_context(|| format!("cannot serve the world on {e}"))?;
         return Ok((session, e.to_string()));
     }
     let mut last = None;
     for _ in 0..10 {
-        let e = free_loopback_endpoint()?;
-        match Session::open(&Role::Router { listen: vec![e.clone()] }) {
+        let e = match secured {
+            Some(_) => free_loopback_endpoint()?.replacen("tcp/", "tls/", 1),
+            None => free_loopback_endpoint()?,
+        };
+        match Session::open(&Role::Router { listen: vec![e.clone()], secured: secured.clone() }) {
             Ok(session) => return Ok((session, e)),
             Err(err) => last = Some(err),
         }

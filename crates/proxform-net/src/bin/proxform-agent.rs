@@ -12,13 +12,14 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+use proxform_net::access::Party;
 use proxform_net::agent::{serve, Ended, Host, Timing};
 use proxform_net::keys::Swarm;
 use proxform_net::mavlink::autopilot::Autopilot;
 use proxform_net::mavlink::frame::Frame;
 use proxform_net::mavlink::link::{Endpoint, Link};
 use proxform_net::mavlink::vehicle::MavlinkVehicle;
-use proxform_net::transport::{Role, Session};
+use proxform_net::transport::{Role, Session, Tls};
 use proxform_net::vehicle::NetVehicle;
 use proxform_scenario::{builtin, load, Scenario};
 
@@ -44,6 +45,11 @@ struct Args {
     /// The router's endpoint.
     #[arg(long, default_value = "tcp/127.0.0.1:7447")]
     connect: String,
+    /// The swarm's credentials folder (`proxform keys`): connect over mutual TLS (a `tls/`
+    /// endpoint) as UAV N, with `ca.pem`, `uav-N.pem` and `uav-N.key` from there. One UAV per
+    /// process: the world lets each certificate speak for its own UAV only.
+    #[arg(long)]
+    tls: Option<PathBuf>,
     /// Exit when nothing arrived for this long (s).
     #[arg(long, default_value_t = 30.0)]
     idle_exit_s: f64,
@@ -139,7 +145,25 @@ fn run(args: Args) -> Result<Ended> {
     let mut host = Host::new(sc.clone(), &uavs)?;
     let swarm = Swarm::new(&args.swarm)?;
     let timing = Timing { idle_exit: seconds("idle-exit-s", args.idle_exit_s)?, ..Timing::default() };
-    let role = Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)? };
+    let tls = match (&args.tls, args.connect.starts_with("tls/")) {
+        (Some(_), _) if uavs.len() != 1 => {
+            bail!("--tls: one UAV per process (--uav N): each certificate speaks for its own UAV only")
+        }
+        (Some(dir), true) => {
+            let tls = Tls::in_folder(dir, Party::Uav(uavs[0]));
+            for f in [&tls.ca, &tls.cert, &tls.key] {
+                if !f.is_file() {
+                    bail!("--tls: {} is not a file (make the swarm's credentials with `proxform keys`)", f.display());
+                }
+            }
+            Some(tls)
+        }
+        (Some(_), false) => bail!("--tls: connect to the world's tls/ endpoint (--connect tls/HOST:PORT)"),
+        (None, true) => bail!("--connect {}: a tls/ endpoint needs the swarm's credentials (--tls DIR)", args.connect),
+        (None, false) => None,
+    };
+    let role =
+        Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)?, tls };
     let session = Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?;
     let vehicle = NetVehicle::new(session, swarm, &uavs)?;
     let Some(endpoint) = mavlink else {
