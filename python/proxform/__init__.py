@@ -78,8 +78,10 @@ def _whole(name: str, value: Any, lo: int = 0, hi: int = _U64) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise TypeError(f"{name}: expected a whole number, not {type(value).__name__} {value!r}")
     v = int(value)
-    if not lo <= v <= hi:
-        raise ValueError(f"{name}: {v} is out of range ({lo} to {hi})")
+    if v < lo:
+        raise ValueError(f"{name}: {v} is below {lo}")
+    if v > hi:
+        raise ValueError(f"{name}: {v} is beyond any count this package takes (at most {hi})")
     return v
 
 

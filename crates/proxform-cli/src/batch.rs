@@ -57,10 +57,11 @@ pub fn open(out: &Path, header: &JournalHeader, resume: bool) -> Result<Opened> 
     }
     let scan = scan_file(&path)?;
     let h = &scan.header;
-    let differs = if h.digest != header.digest {
-        Some(format!("of another scenario (\"{}\", or other values)", h.scenario))
-    } else if h.adjust != header.adjust {
+    let differs = if h.adjust != header.adjust {
         Some("of a batch with the other --no-adjust".into())
+    } else if h.digest != header.digest {
+        let at = h.first_difference(header).map(|d| format!(": {d}")).unwrap_or_default();
+        Some(format!("of another scenario (\"{}\", or other values{at})", h.scenario))
     } else if (h.seed, h.first_run, h.runs) != (header.seed, header.first_run, header.runs) {
         Some(format!("of --seed {} --first-run {} --runs {}", h.seed, h.first_run, h.runs))
     } else if h.version != header.version {

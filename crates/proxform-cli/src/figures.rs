@@ -459,7 +459,7 @@ fn plan_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series) ->
             label_uav(drawn, u, color);
         }
         // Dots at the same instants for every UAV (multiples of 10 s from the start).
-        let dots = s.rows[u].iter().filter(|r| ((r.0 - s.t0) / s.dt).round() as usize % every == 0);
+        let dots = s.rows[u].iter().filter(|r| (((r.0 - s.t0) / s.dt).round() as usize).is_multiple_of(every));
         chart.draw_series(dots.map(|r| Circle::new((r.1[0], r.1[1]), 3, color.filled()))).map_err(plot_err)?;
     }
     if s.legend() {

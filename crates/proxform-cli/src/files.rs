@@ -75,6 +75,29 @@ pub fn fresh(path: &Path) -> Result<&Path> {
     Ok(path)
 }
 
+/// An output folder held by this process alone while the value lives (an advisory lock on the
+/// folder itself, released when dropped or when the process dies, however it dies): a second
+/// `proxform` writing the same folder (a requeued job with `--resume`) is refused at once
+/// instead of interleaving two journals.
+pub struct FolderLock {
+    _dir: std::fs::File,
+}
+
+/// Takes `dir`'s lock, or says who has it.
+pub fn lock_folder(dir: &Path) -> Result<FolderLock> {
+    let f = std::fs::File::open(dir).with_context(|| format!("cannot open the folder {}", dir.display()))?;
+    match f.try_lock() {
+        Ok(()) => Ok(FolderLock { _dir: f }),
+        Err(std::fs::TryLockError::WouldBlock) => bail!(
+            "{} is being written by another proxform process: wait for it to end, or give another --out",
+            dir.display()
+        ),
+        Err(std::fs::TryLockError::Error(e)) => {
+            Err(e).with_context(|| format!("cannot lock the folder {}", dir.display()))
+        }
+    }
+}
+
 /// A folder of this process's own in the temporary folder, readable by its owner only (0700),
 /// made fresh (never one that was there: a name another user planted is passed over) and removed
 /// with all it holds when dropped: on every return and error, and on Ctrl-C, which ends the
@@ -171,6 +194,18 @@ mod tests {
         let dir = a.dir.clone();
         drop(a);
         assert!(!dir.exists(), "removed with what it holds");
+    }
+
+    #[test]
+    fn an_output_folder_is_one_writers_at_a_time() {
+        let dir = std::env::temp_dir().join(format!("proxform-lock-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("folder");
+        let held = lock_folder(&dir).expect("free");
+        let e = lock_folder(&dir).err().expect("held");
+        assert!(e.to_string().contains("another proxform process"), "{e}");
+        drop(held);
+        assert!(lock_folder(&dir).is_ok(), "released when dropped");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -35,6 +35,7 @@ pub fn run(args: &MergeArgs) -> Result<ExitCode> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create output directory {}", args.out.display()))?;
     let out = args.out.canonicalize().with_context(|| format!("cannot open {}", args.out.display()))?;
+    let _lock = crate::files::lock_folder(&out)?;
     for j in &journals {
         let dir = j.canonicalize().with_context(|| format!("cannot open {}", j.display()))?;
         if dir.parent() == Some(out.as_path()) {

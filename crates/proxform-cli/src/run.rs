@@ -117,13 +117,15 @@ fn distributed(
         proxform_sim::measure::stats::quantile_of(&mut rt, 0.99) * 1e3,
     );
     eprintln!(
-        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} refused \
-         (a non-finite number; held), {} lost to [network] faults; round trip median {:.3} ms, p99 {:.3} ms",
+        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} on \
+         another UAV's key, {} refused (a non-finite number; held), {} lost to [network] faults; round trip median \
+         {:.3} ms, p99 {:.3} ms",
         d.processes,
         d.stats.answered,
         d.stats.missing,
         d.stats.late,
         d.stats.garbage,
+        d.stats.misplaced,
         d.stats.refused,
         d.stats.dropped,
         median,
@@ -284,6 +286,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     // A bad list is refused before any file is written.
     let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let _lock = crate::files::lock_folder(&out)?;
     // Outputs a link or FIFO would take are refused before anything flies; old ones go now.
     for f in ["summary.json", "runs.csv"] {
         crate::files::clear_output(&out.join(f))?;

@@ -122,6 +122,7 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
     let name = cells.first().map_or("sweep", |c| c.1.name()).to_string();
     let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(&format!("sweep-{name}")));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let _lock = crate::files::lock_folder(&out)?;
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
     let total = args.runs.saturating_mul(cells.len() as u64);

@@ -91,9 +91,45 @@ impl Swarm {
     }
 }
 
+/// Whether `m` came on its own key, as the table above says: a State, Sense or Command on its
+/// UAV's key, a Member on its UAV's membership key, a Clock on the clock's. A message naming
+/// another UAV than its key (a Command for UAV 3 put on UAV 2's key, the one key an
+/// authenticated UAV 2 may publish on) is not its UAV's and is never taken as such.
+pub fn on_its_key(key: &str, m: &crate::wire::Message) -> bool {
+    use crate::wire::Message;
+    let (tail, uav) = match m {
+        Message::State(s) => ("state", Some(s.uav)),
+        Message::Sense(s) => ("sense", Some(s.uav)),
+        Message::Command(c) => ("cmd", Some(c.uav)),
+        Message::Member(m) => ("member", Some(m.uav)),
+        Message::Clock(_) => ("clock", None),
+    };
+    let mut parts = key.rsplit('/');
+    match (tail, uav) {
+        ("clock", _) => parts.next() == Some("clock"),
+        ("member", Some(n)) => parts.next() == Some(n.to_string().as_str()) && parts.next() == Some("member"),
+        (t, Some(n)) => {
+            parts.next() == Some(t) && parts.next() == Some(n.to_string().as_str()) && parts.next() == Some("uav")
+        }
+        _ => false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_message_is_its_keys_only() {
+        use crate::wire::{MemberMsg, Message, Presence};
+        let s = Swarm::new("lab").expect("name");
+        let member = |uav| Message::Member(MemberMsg { uav, presence: Presence::Leaving, pid: 1 });
+        assert!(on_its_key(&s.member(3), &member(3)));
+        assert!(!on_its_key(&s.member(2), &member(3)), "UAV 3 leaving, said on UAV 2's key");
+        assert!(!on_its_key(&s.member(13), &member(3)));
+        assert!(!on_its_key(&s.clock(), &member(3)));
+        assert!(!on_its_key(&s.command(3), &member(3)));
+    }
 
     #[test]
     fn names_that_would_escape_their_keys_are_refused() {

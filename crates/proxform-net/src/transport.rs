@@ -188,6 +188,9 @@ pub enum Received {
     Message(String, Message),
     /// Bytes that are not a message (a foreign or broken sender): reported, not fatal.
     Garbage(String, DecodeError),
+    /// A message on a key that is not its own ([`crate::keys::on_its_key`]: a Command for UAV
+    /// 3 on UAV 2's key): never delivered as a message, reported.
+    Misplaced(String, Message),
 }
 
 /// Messages from any number of subscriptions, in arrival order, in one queue.
@@ -222,7 +225,8 @@ impl Session {
                 .callback(move |sample| {
                     let key = sample.key_expr().as_str().to_string();
                     let received = match codec::decode(&sample.payload().to_bytes()) {
-                        Ok(m) => Received::Message(key, m),
+                        Ok(m) if crate::keys::on_its_key(&key, &m) => Received::Message(key, m),
+                        Ok(m) => Received::Misplaced(key, m),
                         Err(e) => Received::Garbage(key, e),
                     };
                     // The inbox is gone only while its owner shuts down.

@@ -72,7 +72,7 @@ impl Vehicle for NetVehicle {
                 }
                 Some(Received::Message(_, Message::Clock(c))) => return Ok(Event::Clock(c)),
                 Some(Received::Message(..)) => {}
-                Some(Received::Garbage(..)) => self.garbage += 1,
+                Some(Received::Garbage(..) | Received::Misplaced(..)) => self.garbage += 1,
             }
         }
     }

@@ -11,6 +11,7 @@ use proxform_net::access::{acl_json5, Party};
 use proxform_net::credentials::{SwarmCredentials, Validity};
 use proxform_net::keys::Swarm;
 use proxform_net::transport::{free_loopback_endpoint, Received, Role, Secured, Session, Tls};
+use proxform_net::wire::{MemberMsg, Message, Presence};
 
 /// Writes a swarm's credentials for UAVs 1 to `uavs` into a fresh folder.
 fn credentials(name: &str, uavs: u32) -> PathBuf {
@@ -75,6 +76,9 @@ fn only_certified_peers_connect_and_each_publishes_its_own_uavs_keys_only() {
     for key in [swarm.command(2), swarm.state(2)] {
         observer.inner_put(&key, vec![4, 5, 6]);
     }
+    // On its own key, a message naming UAV 3 (UAV 3 leaving): delivered, but never as UAV 3's.
+    let leaving = Message::Member(MemberMsg { uav: 3, presence: Presence::Leaving, pid: 1 });
+    uav2.put(&swarm.member(2), &leaving).expect("put");
     // What UAV 2 may send, last: once it has arrived, everything sent before it on the same link
     // has been delivered or dropped.
     let own = [swarm.state(2), swarm.member(2), swarm.command(2)];
@@ -82,19 +86,23 @@ fn only_certified_peers_connect_and_each_publishes_its_own_uavs_keys_only() {
         uav2.inner_put(key, vec![7, 8, 9]);
     }
     let mut got = Vec::new();
+    let mut misplaced = Vec::new();
     let start = Instant::now();
-    while got.len() < own.len() && start.elapsed() < Duration::from_secs(10) {
-        if let Some(Received::Garbage(key, _) | Received::Message(key, _)) =
-            inbox.recv_timeout(Duration::from_millis(50))
-        {
-            got.push(key);
+    let mut settled = None;
+    while start.elapsed() < Duration::from_secs(10)
+        && settled.is_none_or(|t: Instant| t.elapsed() < Duration::from_millis(300))
+    {
+        match inbox.recv_timeout(Duration::from_millis(50)) {
+            Some(Received::Garbage(key, _) | Received::Message(key, _)) => got.push(key),
+            Some(Received::Misplaced(key, m)) => misplaced.push((key, m)),
+            None => {}
+        }
+        if settled.is_none() && got.len() >= own.len() {
+            settled = Some(Instant::now());
         }
     }
-    std::thread::sleep(Duration::from_millis(200));
-    while let Some(Received::Garbage(key, _) | Received::Message(key, _)) = inbox.try_recv() {
-        got.push(key);
-    }
     assert_eq!(got, own, "the world received exactly UAV 2's own keys");
+    assert_eq!(misplaced, [(swarm.member(2), leaving)], "UAV 3's leaving, said by UAV 2, taken as UAV 3's");
     assert!(uav3_inbox.try_recv().is_none(), "UAV 3 received a forged clock or command");
 
     // The world's own clock reaches the agents.

@@ -126,9 +126,11 @@ impl Agents for Poisoned {
 }
 
 #[test]
-fn a_decision_with_a_non_finite_number_is_never_applied() {
+fn a_decision_with_a_non_finite_or_impossible_number_is_never_applied() {
     let sc = scenario(paper_spec().with(|s| s.duration_s = Some(20.0)));
-    for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+    // Non-finite, and finite far beyond what the vehicle can do in a period (a UAV flown on
+    // 1e300 ended at 2.9e303 m, then NaN).
+    for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300, -1e6] {
         let agents = Poisoned { inner: LocalAgents::new(&sc), uav: 2, value };
         let mut sim = Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents));
         let start = sim.states()[2];

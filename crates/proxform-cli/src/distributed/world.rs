@@ -29,6 +29,9 @@ pub struct NetStats {
     pub late: u64,
     /// Undecodable messages.
     pub garbage: u64,
+    /// Messages on another UAV's key than their own (a Command for UAV 3 put on UAV 2's key):
+    /// never taken.
+    pub misplaced: u64,
     /// Decisions refused for a non-finite number (held instead; also counted as missing).
     pub refused: u64,
     /// Round trips (send of a step's first sense message to each answer), seconds.
@@ -143,6 +146,7 @@ impl NetAgents {
             }
             Received::Message(..) => {}
             Received::Garbage(..) => self.stats.garbage += 1,
+            Received::Misplaced(..) => self.stats.misplaced += 1,
         }
     }
 

@@ -193,6 +193,37 @@ impl VehicleModel {
         }
     }
 
+    /// How many times the width of the per-step input bounds an outside decision may lie beyond
+    /// them ([`Self::plausible`]): an agent bounds its input at the state it believed, not at
+    /// the true one, so its decisions lie near, not inside, the bounds at the true state.
+    pub const PLAUSIBLE_SLACK: f64 = 10.0;
+
+    /// Whether input `u` and setpoint `sp` are ones this vehicle could have been asked at its
+    /// true state `x` over `dt` (a decision from outside the process, which may be broken or
+    /// hostile): `u` within the per-step bounds at `x` widened on each side by
+    /// [`Self::PLAUSIBLE_SLACK`] times their width; a setpoint only for a vehicle flown by
+    /// setpoints, its speed within twice the vehicle's (horizontal, climb and descent) and its
+    /// yaw an angle. Finite numbers are assumed (checked before).
+    pub fn plausible(&self, x: &State9, u: &Input, sp: Option<&Setpoint>, dt: f64) -> bool {
+        let (lo, hi) = self.input_bounds(x, dt);
+        let inputs_ok = (0..u.len()).all(|j| {
+            let w = (hi[j] - lo[j]).max(1e-9) * Self::PLAUSIBLE_SLACK;
+            u[j] >= lo[j] - w && u[j] <= hi[j] + w
+        });
+        let setpoint_ok = match (self, sp) {
+            (_, None) => true,
+            (VehicleModel::Multirotor(m), Some(sp)) => {
+                let [vx, vy, vz] = sp.velocity_mps;
+                vx.hypot(vy) <= 2.0 * m.max_speed_mps
+                    && vz <= 2.0 * m.climb_max_mps
+                    && vz >= -2.0 * m.descent_max_mps
+                    && sp.yaw_rad.abs() <= 2.0 * std::f64::consts::PI
+            }
+            (_, Some(_)) => false,
+        };
+        inputs_ok && setpoint_ok
+    }
+
     /// Whether the vehicle is flown by velocity and yaw setpoints (its inputs are nothing else):
     /// the multirotor.
     pub fn takes_velocity_setpoints(&self) -> bool {
@@ -332,5 +363,32 @@ impl VehicleModel {
             VehicleModel::FixedWing(m) => m.input_scale(),
             VehicleModel::Multirotor(m) => m.input_scale(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_decisions_near_what_the_vehicle_can_do_are_plausible() {
+        let dt = 0.1;
+        let k = VehicleModel::Kinematic(KinematicModel::default());
+        let mut x = State9::zeros();
+        x[crate::state::VX] = 70.0;
+        let (lo, hi) = k.input_bounds(&x, dt);
+        assert!(k.plausible(&x, &hi, None, dt) && k.plausible(&x, &lo, None, dt));
+        let mut far = hi;
+        far[1] = hi[1] + (VehicleModel::PLAUSIBLE_SLACK + 1.0) * (hi[1] - lo[1]);
+        assert!(!k.plausible(&x, &far, None, dt), "beyond the slack");
+        let sp = Setpoint { velocity_mps: [20.0, 0.0, 0.0], yaw_rad: 0.0 };
+        assert!(!k.plausible(&x, &Input::zeros(), Some(&sp), dt), "a setpoint for a vehicle that takes none");
+        let m = VehicleModel::Multirotor(MultirotorModel::default());
+        let x = State9::zeros();
+        assert!(m.plausible(&x, &Input::zeros(), Some(&sp), dt), "20 m/s for a 15 m/s multirotor: near enough");
+        let fast = Setpoint { velocity_mps: [1e3, 0.0, 0.0], yaw_rad: 0.0 };
+        assert!(!m.plausible(&x, &Input::zeros(), Some(&fast), dt), "1 km/s");
+        let spin = Setpoint { velocity_mps: [1.0, 0.0, 0.0], yaw_rad: 1e9 };
+        assert!(!m.plausible(&x, &Input::zeros(), Some(&spin), dt), "not an angle");
     }
 }

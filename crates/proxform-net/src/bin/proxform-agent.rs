@@ -171,7 +171,7 @@ fn run(args: Args) -> Result<Ended> {
         let ended = serve(&mut host, &mut vehicle, timing)?;
         if host.dropped + host.refused + vehicle.garbage > 0 {
             eprintln!(
-                "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable messages",
+                "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable or on another UAV's key",
                 host.dropped, host.refused, vehicle.garbage
             );
         }

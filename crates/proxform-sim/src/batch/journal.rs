@@ -62,8 +62,12 @@ pub enum JournalError {
     #[error("{0}")]
     Io(#[from] std::io::Error),
     /// The bytes do not start as a journal.
-    #[error("not a proxform batch journal (it does not start with {MAGIC:?})")]
+    #[error("not a proxform batch journal (it does not start with \"PXFJRNL1\")")]
     NotAJournal,
+    /// The journal's header frame is cut short or damaged (a write torn by a kill, or a change
+    /// on disk): nothing in it can be trusted.
+    #[error("a proxform batch journal whose header is cut short or damaged: start the batch again without --resume")]
+    BadHeader,
     /// A frame that cannot be decoded although its checksum holds (another version's).
     #[error("byte {offset}: {message}")]
     Decode {
@@ -123,6 +127,26 @@ impl JournalHeader {
             ));
         }
         Ok(sc)
+    }
+
+    /// Where this batch's scenario as it runs (`--print-scenario`'s values) first differs
+    /// from `other`'s: the two lines, or None when they read the same (or cannot be rebuilt).
+    pub fn first_difference(&self, other: &JournalHeader) -> Option<String> {
+        let text = |h: &JournalHeader| {
+            let sc = proxform_scenario::load::parse(&h.spec_toml, &h.scenario).ok()?;
+            proxform_scenario::resolved::to_toml(&sc).ok()
+        };
+        let (a, b) = (text(self)?, text(other)?);
+        let mut section = "";
+        for (x, y) in a.lines().zip(b.lines()) {
+            if x.starts_with('[') {
+                section = x;
+            }
+            if x != y {
+                return Some(format!("{section} `{}` against `{}`", x.trim(), y.trim()).trim_start().to_string());
+            }
+        }
+        (a.lines().count() != b.lines().count()).then(|| "one lists more values than the other".to_string())
     }
 
     /// The run options the runs flew with.
@@ -299,7 +323,7 @@ pub fn scan(r: &mut impl Read) -> Result<Scan, JournalError> {
     let mut at = MAGIC.len() as u64;
     let header: JournalHeader = match read_frame(r, &mut buf)? {
         Some(HEADER) => decode(&buf, at)?,
-        _ => return Err(JournalError::NotAJournal),
+        _ => return Err(JournalError::BadHeader),
     };
     at += 13 + buf.len() as u64;
     let range = header.run_range();
@@ -424,16 +448,17 @@ mod tests {
         let bytes = s.to_bytes().expect("bytes");
         assert_eq!(Shard::from_bytes(&bytes).expect("reads"), s);
         // Every cut short of the end loses the commit: the runs are not done, nothing panics;
-        // a cut inside the header is not a journal.
+        // a cut inside the header is a damaged header.
         let header_end = scan(&mut std::io::Cursor::new(&bytes[..])).expect("reads").runs[0].1 as usize;
         for cut in [bytes.len() - 1, bytes.len() - 9, (header_end + bytes.len()) / 2, header_end + 3, header_end] {
             let scan = scan(&mut std::io::Cursor::new(&bytes[..cut])).expect("a journal");
             assert!(scan.runs.is_empty(), "cut at {cut}: {:?}", scan.runs);
             assert!(Shard::from_bytes(&bytes[..cut]).is_err());
         }
-        for cut in [header_end - 1, 20, 9, 3] {
-            assert!(matches!(scan(&mut std::io::Cursor::new(&bytes[..cut])), Err(JournalError::NotAJournal)));
+        for cut in [header_end - 1, 20, 9] {
+            assert!(matches!(scan(&mut std::io::Cursor::new(&bytes[..cut])), Err(JournalError::BadHeader)), "{cut}");
         }
+        assert!(matches!(scan(&mut std::io::Cursor::new(&bytes[..3])), Err(JournalError::NotAJournal)));
         // A flipped bit anywhere after the header is a torn tail, never a wrong result.
         for at in (header_end..bytes.len()).step_by(37) {
             let mut b = bytes.clone();

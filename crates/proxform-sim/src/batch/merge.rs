@@ -47,21 +47,24 @@ pub fn plan(pieces: &[Piece<'_>]) -> Result<Plan, MergeError> {
         if h.version != h0.version {
             return Err(differ(format!("flown by proxform {} and {}", h0.version, h.version)));
         }
+        if h.adjust != h0.adjust {
+            return Err(differ("one ran with --no-adjust, the other not".into()));
+        }
         if h.digest != h0.digest {
+            let at = h0.first_difference(h).map(|d| format!(": {d}")).unwrap_or_default();
             return Err(differ(format!(
-                "different scenarios (\"{}\" and \"{}\"; their values differ: compare `proxform run --print-scenario` of each)",
+                "different scenarios (\"{}\" and \"{}\"; their values differ{at}; compare `proxform run \
+                 --print-scenario` of each)",
                 h0.scenario, h.scenario
             )));
         }
         if h.seed != h0.seed {
             return Err(differ(format!("seeds {} and {}", h0.seed, h.seed)));
         }
-        if h.adjust != h0.adjust {
-            return Err(differ("one ran with --no-adjust, the other not".into()));
-        }
         if p.runs.len() as u64 != h.runs {
             return Err(MergeError(format!(
-                "{} is unfinished: {} of its {} runs (complete it with `proxform run ... --resume`)",
+                "{} is unfinished: {} of its {} runs (its journal ends, or is damaged, after them; complete it with \
+                 `proxform run ... --resume`)",
                 p.name,
                 p.runs.len(),
                 h.runs

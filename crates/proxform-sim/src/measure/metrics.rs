@@ -633,11 +633,22 @@ fn aftermaths(scenario: &Scenario) -> Vec<Aftermath> {
         .collect()
 }
 
+/// |x|, and +∞ for NaN: a UAV whose state is no longer a number is as far out as can be (a
+/// NaN compared with a bound is never greater, so it would pass every check silently).
+#[inline]
+fn magnitude(x: f64) -> f64 {
+    if x.is_nan() {
+        f64::INFINITY
+    } else {
+        x.abs()
+    }
+}
+
 #[inline]
 fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<StepOutcome>) {
     acc.follower_steps += 1;
     for k in 0..6 {
-        let a = e[k].abs();
+        let a = magnitude(e[k]);
         if a > acc.max_abs[k] {
             acc.max_abs[k] = a;
         }
@@ -703,14 +714,14 @@ fn partial(
         let e = formation_error_to(scenario, frame.formation(scenario), frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
         p.speed_sum += speed;
-        let ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(0.0, f64::max);
+        let ratio = (0..6).map(|k| magnitude(e[k]) / allowable[k]).fold(0.0, f64::max);
         p.max_ratio = p.max_ratio.max(ratio);
         if settled.get(i).copied().unwrap_or(false) {
             p.settled_ratio = p.settled_ratio.max(ratio);
         }
         if faulty.binary_search(&i).is_err() {
             for k in 0..6 {
-                p.healthy_max[k] = p.healthy_max[k].max(e[k].abs());
+                p.healthy_max[k] = p.healthy_max[k].max(magnitude(e[k]));
             }
         }
         p.acc.isolating += u64::from(u.isolated > 0);
@@ -873,7 +884,7 @@ impl Observer for RunMetrics {
             }
             let e = formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
-            let ratio = (0..6).map(|k| e[k].abs() / allowable[k]).fold(0.0, f64::max);
+            let ratio = (0..6).map(|k| magnitude(e[k]) / allowable[k]).fold(0.0, f64::max);
             judge.observe(t, ratio, before_change, |k| {
                 let c = &transitions[k];
                 t >= c.at_s - 1e-9 && t < c.until_s - 1e-9
@@ -909,6 +920,27 @@ mod tests {
 
     fn step(outcome: proxform_core::Outcome, effort: f32) -> UavStep {
         UavStep { outcome: Some(outcome.into()), effort, radio_used: 1, ..UavStep::default() }
+    }
+
+    #[test]
+    fn a_uav_whose_state_is_not_a_number_fails_the_run() {
+        let sc = paper();
+        let good = in_slots(&sc);
+        let uavs = vec![UavStep::default(); 6];
+        let active = [true; 6];
+        let mut m = RunMetrics::new(&sc);
+        for k in 0..20u64 {
+            let mut states = good.clone();
+            if k >= 10 {
+                // A NaN compares as neither above nor below any bound: it passed every check.
+                states[2][Y] = f64::NAN;
+            }
+            m.on_step(&sc, &frame(k, &states, &uavs, &active));
+        }
+        let r = m.finish(0, 2.0);
+        assert!(!r.pass, "a NaN state passed");
+        assert_eq!(r.max_abs_error[1], f64::INFINITY, "{:?}", r.max_abs_error);
+        assert!(r.per_uav.iter().any(|u| !u.pass && u.max_abs_error[1] == f64::INFINITY), "{:?}", r.per_uav);
     }
 
     #[test]

@@ -22,6 +22,7 @@ use std::collections::VecDeque;
 use proxform_core::assignment::{self, Reassignment};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
+use proxform_core::vehicle::VehicleModel;
 use proxform_core::{Agent, Decision};
 use proxform_scenario::faults::{self as schedule, Fault};
 use proxform_scenario::Scenario;
@@ -250,7 +251,7 @@ impl<'s> Simulation<'s> {
             match &mut self.outside {
                 Some(out) => {
                     out.sense(&ctx, (&mut self.agents, &mut self.next, &mut self.uavs), areas);
-                    out.ask(w, t, Phase::Warm);
+                    out.ask(w, t, Phase::Warm, &world.current, (sc.vehicle(), sc.dt_s()));
                 }
                 None => for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| {
                     ctx.warm(b, blk)
@@ -335,7 +336,7 @@ impl<'s> Simulation<'s> {
             Some(out) => {
                 let bufs = (&mut self.agents, &mut self.next, &mut self.uavs);
                 out.sense(&ctx, bufs, areas);
-                out.ask(w.k, w.t(), Phase::Fly);
+                out.ask(w.k, w.t(), Phase::Fly, &w.current, (w.scenario.vehicle(), w.scenario.dt_s()));
                 let by_uav = &out.by_uav;
                 for_each_block_in_order(&mut self.agents, &mut self.next, &mut self.uavs, areas, |b, blk| {
                     ctx.apply(b, blk, by_uav)
@@ -542,14 +543,20 @@ impl Outside<'_> {
         for_each_block_in_order(agents, next, uavs, areas, |b, blk| ctx.sense(b, blk, sensed));
     }
 
-    /// The agents' decisions on what was sensed, by UAV.
-    fn ask(&mut self, k: u64, t_s: f64, phase: Phase) {
+    /// The agents' decisions on what was sensed, by UAV; `truth` is every UAV's true state and
+    /// `(vehicle, dt)` what flies them.
+    fn ask(&mut self, k: u64, t_s: f64, phase: Phase, truth: &[State9], (vehicle, dt): (&VehicleModel, f64)) {
         let request = StepRequest { run: self.run, k, t_s, phase, sensed: &self.sensed };
         self.agents.decide(&request, &mut self.decisions);
         self.by_uav.iter_mut().for_each(|d| *d = None);
         for (j, u) in self.sensed.uavs.iter().enumerate() {
-            // A decision with a non-finite number in it is never applied: the UAV holds.
-            let d = self.decisions.get(j).copied().filter(Decision::is_finite);
+            // A decision with a non-finite number in it, or one no agent of this vehicle could
+            // have made (far beyond what it can do in a period), is never applied: the UAV
+            // holds.
+            let d =
+                self.decisions.get(j).copied().filter(|d| {
+                    d.is_finite() && vehicle.plausible(&truth[u.index()], &d.input, d.setpoint.as_ref(), dt)
+                });
             self.by_uav[u.index()] = Some(d.unwrap_or_else(holding));
         }
     }
