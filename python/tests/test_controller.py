@@ -167,3 +167,11 @@ def test_the_vectorised_step_refuses_ids_and_counts_that_are_not_whole(paper):
     a, _ = many.step(0.0, x[1:], ok_counts.astype(float), np.array([1.0]), x[:1])
     b, _ = proxform.Controllers(paper).step(0.0, x[1:], ok_counts, np.array([1]), x[:1])
     assert np.array_equal(a, b)
+
+
+def test_propagate_refuses_commands_far_beyond_the_vehicle(paper):
+    c = proxform.Controller(paper, 2)
+    x = slot_states(paper, 0.0)[1]
+    with pytest.raises(ValueError, match=r"input\[1\] = 1e300: far beyond"):
+        c.propagate(x, [0.0, 1e300, 0.0, 0.0, 0.0, 0.0])
+    assert np.all(np.isfinite(c.propagate(x, [0.0] * 6)))

@@ -119,3 +119,23 @@ def test_other_types_are_refused():
         proxform.load({("a",): 1})
     with pytest.raises(ScenarioError):
         proxform.Scenario.builtin("no-such-scenario")
+
+
+def test_values_that_contain_themselves_or_nest_without_end_are_refused_at_once():
+    import time
+
+    loop: dict = {"controller": {}}
+    loop["controller"]["lambda"] = loop
+    items: list = []
+    items.append(items)
+    deep: dict = {}
+    d = deep
+    for _ in range(30_000):
+        d["x"] = {}
+        d = d["x"]
+    for value in ({"name": "x", "formation": loop}, {"fault": items}, {"wind": deep}):
+        started = time.monotonic()
+        # It killed the interpreter (a stack overflow), or took seconds and gigabytes.
+        with pytest.raises(ScenarioError, match="nested more than"):
+            proxform.load(value)
+        assert time.monotonic() - started < 2

@@ -331,7 +331,22 @@ impl PyController {
             return Err(bad(format!("input: expected 6 finite numbers, found {input:?}")));
         }
         let u = Input::from_column_slice(&input);
-        let next = self.scenario.vehicle().propagate(&x, &u, self.scenario.dt_s());
+        let (vehicle, dt) = (self.scenario.vehicle(), self.scenario.dt_s());
+        // A command far beyond what the vehicle can do in one period at this state (the fixed
+        // wing's model returned −inf for one) is refused, naming the bounds; near them (as a
+        // decision made at a slightly other state is) it is flown.
+        if !vehicle.plausible(&x, &u, None, dt) {
+            let (lo, hi) = vehicle.input_bounds(&x, dt);
+            let j = (0..u.len()).find(|&j| u[j] < lo[j] || u[j] > hi[j]).unwrap_or(0);
+            return Err(bad(format!(
+                "input[{j}] = {:?}: far beyond what the vehicle can do in one period at this state ({:?} to {:?})",
+                u[j], lo[j], hi[j]
+            )));
+        }
+        let next = vehicle.propagate(&x, &u, dt);
+        if !proxform_core::state::is_finite(&next) {
+            return Err(bad("the vehicle's model gives no finite state for this state and input".into()));
+        }
         Ok(PyArray1::from_slice(py, next.as_slice()))
     }
 

@@ -15,9 +15,24 @@ pub struct ValueError {
     pub message: String,
 }
 
+/// Deepest nesting of dicts and lists a scenario value may have: a scenario's deepest key is a
+/// few levels down; deeper is a mistake, or a list or dict that contains itself (followed
+/// without end, it would exhaust the stack).
+pub const MAX_DEPTH: usize = 32;
+
 /// Converts `obj` at key path `key` (empty at the top) into a TOML value.
 pub fn to_toml(obj: &Bound<'_, PyAny>, key: &str) -> Result<Value, ValueError> {
+    to_toml_at(obj, key, 0)
+}
+
+fn to_toml_at(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> Result<Value, ValueError> {
     let fail = |message: String| ValueError { key: key.to_string(), message };
+    if depth > MAX_DEPTH {
+        return Err(fail(format!(
+            "nested more than {MAX_DEPTH} lists or dicts deep (one that contains itself?): a scenario's values are a \
+             few levels deep"
+        )));
+    }
     if obj.is_none() {
         return Err(fail("None has no meaning in a scenario: leave the key out for its default".into()));
     }
@@ -47,7 +62,7 @@ pub fn to_toml(obj: &Bound<'_, PyAny>, key: &str) -> Result<Value, ValueError> {
                 return Err(fail(format!("keys must be text, found {}", type_name(&k))));
             };
             let path = if key.is_empty() { name.clone() } else { format!("{key}.{name}") };
-            table.insert(name, to_toml(&v, &path)?);
+            table.insert(name, to_toml_at(&v, &path, depth + 1)?);
         }
         return Ok(Value::Table(table));
     }
@@ -73,14 +88,14 @@ pub fn to_toml(obj: &Bound<'_, PyAny>, key: &str) -> Result<Value, ValueError> {
             } else {
                 key.to_string()
             };
-            out.push(to_toml(v, &path)?);
+            out.push(to_toml_at(v, &path, depth + 1)?);
         }
         return Ok(Value::Array(out));
     }
     // numpy scalars and arrays, and other numbers: through the number protocols.
     if let Ok(tolist) = obj.getattr("tolist") {
         if let Ok(v) = tolist.call0() {
-            return to_toml(&v, key);
+            return to_toml_at(&v, key, depth + 1);
         }
     }
     if obj.hasattr("__index__").unwrap_or(false) {

@@ -141,7 +141,8 @@ pub fn run(
                 .arg("--connect")
                 .arg(&endpoint)
                 .arg("--idle-exit-s")
-                .arg("10")
+                // Nothing reaches an agent while the world waits out --start-delay-s.
+                .arg(format!("{}", (10.0 + delay.as_secs_f64()).min(86_400.0)))
                 .arg("--exit-with-parent")
                 .stdin(std::process::Stdio::null());
             if let Some(dir) = &args.tls {

@@ -410,6 +410,11 @@ pub fn schedule(
         }
         super::feasibility::separated(&slots, safety_distance_m).map_err(within)?;
         let dependencies = dependencies(&spec, &slots, &explicit, navigator, sensing_range_m).map_err(within)?;
+        // A change at or after the end is checked, warned of and never flown: it is not in the
+        // schedule (at exactly the end, the last frame was judged against it).
+        if at_s >= duration_s {
+            continue;
+        }
         stages.push(FormationStage {
             at_s,
             formation: Arc::new(Formation { slots, frame: first.frame }),

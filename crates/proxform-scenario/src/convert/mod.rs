@@ -47,6 +47,15 @@ impl TryFrom<ScenarioSpec> for Scenario {
 
     fn try_from(spec: ScenarioSpec) -> Result<Self, SpecError> {
         let name = spec.name.clone().unwrap_or_else(|| "scenario".into());
+        // A name is printed in reports and terminals and names output folders: control
+        // characters (escape sequences that rewrite a terminal) and empty or endless names are
+        // refused here, once.
+        if let Some(c) = name.chars().find(|c| c.is_control()) {
+            return Err(err("name", format!("holds the control character {:?}: use printable text", c)));
+        }
+        if name.trim().is_empty() || name.chars().count() > 200 {
+            return Err(err("name", "1 to 200 printable characters"));
+        }
         let dt_s = or_default("dt_s", spec.dt_s, defaults::DT_S, positive)?;
         if !(MIN_DT_S..=MAX_DT_S).contains(&dt_s) {
             return Err(err(

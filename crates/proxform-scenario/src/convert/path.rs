@@ -106,6 +106,14 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
                 "path.turn_radius_m",
                 positive("path.turn_radius_m", required("path.turn_radius_m", p.turn_radius_m)?)?,
             )?;
+            // Below a metre the turn is a corner: its rates and accelerations are not numbers a
+            // vehicle is checked against (1e-300 was accepted).
+            if r < 1.0 {
+                return Err(err(
+                    "path.turn_radius_m",
+                    format!("{} m is under 1 m: give the radius the navigator turns with", super::values::show(r)),
+                ));
+            }
             let points = required("path.points_m", p.points_m.clone())?;
             let transition = positive("path.transition_s", p.transition_s.unwrap_or(defaults::PATH_TRANSITION_S))?;
             for (k, pt) in points.iter().enumerate() {
