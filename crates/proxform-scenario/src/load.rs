@@ -77,10 +77,10 @@ pub fn syntax_error(text: &str, source_name: &str, e: &toml::de::Error) -> LoadE
 /// Serde's and TOML's words for types, in the words of a file's author.
 pub fn plain_words(message: &str) -> String {
     let mut m = message.trim().replace('\n', " ");
-    const WORDS: [(&str, &str); 18] = [
+    const WORDS: [(&str, &str); 19] = [
         ("expected f64", "expected a number"),
-        ("expected u32", "expected a whole number ≥ 0"),
-        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected u32", "expected a whole number from 0 to 4294967295 (within that, the key's own limit applies)"),
+        ("expected u64", "expected a whole number from 0 to 18446744073709551615"),
         ("expected i64", "expected a whole number"),
         ("expected a boolean", "expected true or false"),
         ("expected a string", "expected text in quotes"),
@@ -90,6 +90,7 @@ pub fn plain_words(message: &str) -> String {
         ("invalid type: string", "found the text"),
         ("invalid type: floating point", "found the number"),
         ("invalid type: integer", "found the whole number"),
+        (" as i128,", ", beyond any whole number a key takes,"),
         ("invalid type: boolean", "found"),
         ("invalid type: sequence", "found a list"),
         ("invalid type: map", "found a table"),
@@ -268,7 +269,7 @@ mod tests {
             ("[controller]\nlambda = \"x\"\n", "controller.lambda", "expected a number"),
             ("[vehicle]\nattitude_max_deg = [1.0, 2.0]\n", "vehicle.attitude_max_deg", "a list of 3 numbers"),
             ("[controller]\nareas = 8.5\n", "controller.areas", "expected a whole number"),
-            ("navigator = -1\n", "navigator", "a whole number ≥ 0"),
+            ("navigator = -1\n", "navigator", "a whole number from 0"),
             ("formation = 3\n", "formation", "expected a table"),
             ("[[fault]]\nkind = \"remove\"\n[[fault]]\nat_s = true\n", "fault[2].at_s", "found true"),
             ("[controller]\nlamda = 0.5\n", "controller.lamda", "unknown key lamda"),

@@ -58,7 +58,11 @@ pub fn initial_states(
             // Blame the key that set the speed: the initial speed, the path's, or the
             // vehicle's bound for the paper's fixed-speed path.
             let path_speed = spec.path.speed_kmh.is_some();
+            // A waypoints path whose first leg heads back along −x starts the kinematic vehicle
+            // at a negative vx: the points, not the speed, are what to change.
+            let backwards = kinematic && spec.path.points_m.is_some() && x[state::VX] < 0.0;
             let key = match (speed.is_some(), path_speed, kinematic, v < vmin) {
+                _ if backwards => "path.points_m[2]",
                 (true, ..) => "initial.speed_kmh",
                 (false, true, ..) => "path.speed_kmh",
                 (false, false, true, true) => "vehicle.vx_min_kmh",
@@ -72,7 +76,10 @@ pub fn initial_states(
                 VehicleModel::Multirotor(_) => "horizontal speed",
             };
             let along_x = x[state::VY].abs() <= 1e-9 * x[state::VX].abs().max(1.0);
-            let hint = if kinematic && !along_x {
+            let hint = if backwards {
+                " (the first leg heads back along -x: the kinematic vehicle flies forward along x, so a \
+                 waypoints path starts along +x; turn the points around or start from the other end)"
+            } else if kinematic && !along_x {
                 " (the kinematic vehicle's limits are on vx, the world x component of its velocity: \
                  its paths start along x)"
             } else {
