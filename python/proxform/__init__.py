@@ -287,6 +287,11 @@ def sweep(
     for k in keys:
         if isinstance(grid[k], (str, bytes)) or not isinstance(grid[k], Sequence) or len(grid[k]) == 0:
             raise ValueError(f"grid[{k!r}]: give a non-empty list of values")
+    count = 1
+    for k in keys:
+        count *= len(grid[k])
+    if count > _proxform.MAX_SWEEP_CELLS:
+        raise ValueError(f"grid: {count} cells, more than the {_proxform.MAX_SWEEP_CELLS} a sweep may have")
     combos = list(itertools.product(*(grid[k] for k in keys)))
     cells = []
     for combo in combos:

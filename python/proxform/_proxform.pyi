@@ -100,6 +100,8 @@ class Controllers:
         ages: Optional[npt.ArrayLike] = None,
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int8]]: ...
 
+MAX_SWEEP_CELLS: int
+
 def builtin_names() -> list[str]: ...
 def run(
     scenario: Scenario,

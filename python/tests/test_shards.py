@@ -100,3 +100,12 @@ def test_dask_workers_run_shards_that_merge_to_the_one_machine_summary():
         workers = {f.key for f in futures}
     assert len(workers) == 4
     same_result(whole, proxform.merge(shards))
+
+
+def test_a_sweep_larger_than_the_cell_limit_is_refused_before_anything_runs():
+    import time
+
+    started = time.monotonic()
+    with pytest.raises(ValueError, match="more than the 10000"):
+        proxform.sweep("paper", {"controller.lambda": [0.5] * 1000, "controller.rho": [0.1] * 1000}, runs=1)
+    assert time.monotonic() - started < 5

@@ -58,6 +58,18 @@ pub fn clear_output(path: &Path) -> Result<()> {
     }
 }
 
+/// Refuses, before anything flies, an output path a link, FIFO, device or folder took; a
+/// regular file there is left as it is (replaced only when the new one is written).
+pub fn check_output(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            bail!("{} is a symbolic link: outputs are not written through links (remove it)", path.display())
+        }
+        Ok(m) if !m.is_file() => bail!("{} exists and is not a regular file: it cannot be an output", path.display()),
+        _ => Ok(()),
+    }
+}
+
 /// Creates the output file at `path` fresh (see [`clear_output`]); never follows a link or
 /// opens what another process put there meanwhile.
 pub fn create_output(path: &Path) -> Result<std::fs::File> {

@@ -172,6 +172,17 @@ fn distributed(
     Ok(d.result)
 }
 
+/// The distributed run's checks that need no network, before any output is touched.
+#[cfg(feature = "net")]
+fn preflight(scenario: &proxform_scenario::Scenario, runs: u64, net: &crate::net_args::NetArgs) -> Result<()> {
+    crate::distributed::preflight(scenario, runs, net)
+}
+
+#[cfg(not(feature = "net"))]
+fn preflight(_: &proxform_scenario::Scenario, _: u64, _: &crate::net_args::NetArgs) -> Result<()> {
+    Ok(())
+}
+
 #[cfg(not(feature = "net"))]
 fn distributed(
     _: &proxform_scenario::Scenario,
@@ -285,9 +296,16 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(scenario.name()));
     // A bad list is refused before any file is written.
     let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
+    if args.net.distributed {
+        preflight(&scenario, args.runs, &args.net)?;
+    }
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let _lock = crate::files::lock_folder(&out)?;
-    // Outputs a link or FIFO would take are refused before anything flies; old ones go now.
+    // Outputs a link or FIFO would take are refused before anything flies.
+    for f in ["summary.json", "runs.csv", "trajectories.csv", crate::batch::JOURNAL] {
+        crate::files::check_output(&out.join(f))?;
+    }
+    // A new batch's folder holds no earlier batch's summary while it flies.
     for f in ["summary.json", "runs.csv"] {
         crate::files::clear_output(&out.join(f))?;
     }

@@ -16,7 +16,7 @@ use proxform_sim::RunOptions;
 use crate::batch;
 
 /// Most cells of a sweep.
-const MAX_CELLS: usize = 10_000;
+use proxform_sim::batch::sweep::MAX_CELLS;
 
 /// Arguments of `proxform sweep`.
 #[derive(Debug, Args)]

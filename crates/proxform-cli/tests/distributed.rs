@@ -261,6 +261,12 @@ fn authenticated_lockstep_is_the_in_process_run_and_open_listening_needs_tls() {
     std::fs::create_dir_all(&empty).expect("folder");
     let k = keys.display().to_string();
     let e = empty.display().to_string();
+    // A refused start leaves an earlier run's outputs as they were.
+    let kept = a.display().to_string();
+    let before: Vec<Vec<u8>> = ["summary.json", "runs.csv", "trajectories.csv"]
+        .iter()
+        .map(|f| std::fs::read(a.join(f)).expect("kept"))
+        .collect();
     for (args, expect) in [
         (vec!["--listen", "tcp/0.0.0.0:7"], "--tls DIR"),
         (vec!["--listen", "tcp/[::]:7"], "--insecure"),
@@ -273,8 +279,7 @@ fn authenticated_lockstep_is_the_in_process_run_and_open_listening_needs_tls() {
         (vec!["--listen", "tcp/127.0.0.1"], "PROTOCOL/HOST:PORT"),
     ] {
         let o = Command::new(bin())
-            .args(["run", "--distributed", "--duration-s", "1", "-q", "--no-figures", "--out"])
-            .arg(out("refused"))
+            .args(["run", "--distributed", "--duration-s", "1", "-q", "--no-figures", "--out", &kept])
             .args(&args)
             .output()
             .expect("runs");
@@ -282,6 +287,11 @@ fn authenticated_lockstep_is_the_in_process_run_and_open_listening_needs_tls() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(expect), "{args:?}: expected «{expect}» in «{err}»");
     }
+    let after: Vec<Vec<u8>> = ["summary.json", "runs.csv", "trajectories.csv"]
+        .iter()
+        .map(|f| std::fs::read(a.join(f)).expect("kept"))
+        .collect();
+    assert!(before == after, "a refused start changed the earlier run's outputs");
     let again = Command::new(bin()).args(["keys", "--uavs", "6", "--out"]).arg(&keys).output().expect("keys");
     assert!(String::from_utf8_lossy(&again.stderr).contains("--force"), "existing credentials were replaced");
     let host = Command::new(bin()).args(["keys", "--uavs", "3", "--host", "a b", "--out"]).arg(out("k2")).output();

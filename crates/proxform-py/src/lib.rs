@@ -25,6 +25,7 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _proxform(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ScenarioError", m.py().get_type::<errors::ScenarioError>())?;
+    m.add("MAX_SWEEP_CELLS", proxform_sim::batch::sweep::MAX_CELLS)?;
     m.add_class::<scenario::PyScenario>()?;
     m.add_class::<shard::PyRuns>()?;
     m.add_function(wrap_pyfunction!(shard::merge_runs, m)?)?;

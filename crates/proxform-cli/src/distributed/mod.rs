@@ -52,18 +52,12 @@ pub struct Distributed {
     pub wall_s: f64,
 }
 
-/// Runs `runs` seeded flights of `scenario` with its followers' agents over the network.
-pub fn run(
-    scenario: &Scenario,
-    options: RunOptions,
-    (seed, runs): (u64, u64),
-    record: Option<Trajectory>,
-    progress: &(dyn Fn() + Sync),
-    args: &NetArgs,
-) -> Result<Distributed> {
-    let deadline = seconds("step-deadline-s", args.step_deadline_s)?;
-    let wait = seconds("wait-agents-s", args.wait_agents_s)?;
-    let delay = seconds("start-delay-s", args.start_delay_s)?;
+/// Every check of a distributed run that needs no network: made before any output is touched,
+/// so that a refused start leaves an earlier run's files as they were.
+pub fn preflight(scenario: &Scenario, runs: u64, args: &NetArgs) -> Result<()> {
+    seconds("step-deadline-s", args.step_deadline_s)?;
+    seconds("wait-agents-s", args.wait_agents_s)?;
+    seconds("start-delay-s", args.start_delay_s)?;
     if runs > u64::from(u32::MAX) {
         bail!("--runs: at most {} runs in a distributed batch", u32::MAX);
     }
@@ -91,6 +85,28 @@ pub fn run(
             k + 1
         );
     }
+    if let Some(e) = &args.listen {
+        listen_allowed(e, args.tls.is_some(), args.insecure)?;
+    }
+    if let Some(dir) = &args.tls {
+        secured(dir, &Swarm::new("preflight")?, scenario, args)?;
+    }
+    Ok(())
+}
+
+/// Runs `runs` seeded flights of `scenario` with its followers' agents over the network.
+pub fn run(
+    scenario: &Scenario,
+    options: RunOptions,
+    (seed, runs): (u64, u64),
+    record: Option<Trajectory>,
+    progress: &(dyn Fn() + Sync),
+    args: &NetArgs,
+) -> Result<Distributed> {
+    preflight(scenario, runs, args)?;
+    let deadline = seconds("step-deadline-s", args.step_deadline_s)?;
+    let wait = seconds("wait-agents-s", args.wait_agents_s)?;
+    let delay = seconds("start-delay-s", args.start_delay_s)?;
     let swarm = Swarm::new(args.swarm.as_deref().unwrap_or(&format!("proxform-{}", std::process::id())))?;
     let secured = match &args.tls {
         Some(dir) => Some(secured(dir, &swarm, scenario, args)?),
@@ -257,26 +273,30 @@ fn is_loopback(endpoint: &str) -> bool {
     host == "localhost" || host.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
 }
 
+/// Whether the world may listen on `e`: a port it can tell the agents, TLS on a `tls/`
+/// endpoint only, and beyond loopback only with TLS (or `--insecure`).
+fn listen_allowed(e: &str, tls: bool, insecure: bool) -> Result<()> {
+    // The agents are told this endpoint: a port the system would choose cannot be told.
+    let port = e.split('#').next().unwrap_or(e).rsplit_once(':').map(|(_, p)| p);
+    match port.map(str::parse::<u16>) {
+        Some(Ok(0)) => bail!("--listen {e}: port 0 cannot be told to the agents: name a port, or leave --listen out"),
+        Some(Ok(_)) => {}
+        _ => bail!("--listen {e}: expected PROTOCOL/HOST:PORT with a port from 1 to 65535 (tcp/127.0.0.1:7447)"),
+    }
+    match (tls, e.starts_with("tls/")) {
+        (true, false) => bail!("--listen {e}: with --tls the world listens on a tls/ endpoint (tls/HOST:PORT)"),
+        (false, true) => bail!("--listen {e}: a tls/ endpoint needs the swarm's credentials (--tls DIR)"),
+        (false, false) if !is_loopback(e) && !insecure => bail!(
+            "--listen {e}: beyond loopback any peer that reaches the port could fly the swarm; serve it with \
+             --tls DIR (`proxform keys`), or say --insecure"
+        ),
+        _ => Ok(()),
+    }
+}
+
 fn serve(listen: Option<&str>, secured: Option<Secured>, insecure: bool) -> Result<(Session, String)> {
     if let Some(e) = listen {
-        // The agents are told this endpoint: a port the system would choose cannot be told.
-        let port = e.split('#').next().unwrap_or(e).rsplit_once(':').map(|(_, p)| p);
-        match port.map(str::parse::<u16>) {
-            Some(Ok(0)) => {
-                bail!("--listen {e}: port 0 cannot be told to the agents: name a port, or leave --listen out")
-            }
-            Some(Ok(_)) => {}
-            _ => bail!("--listen {e}: expected PROTOCOL/HOST:PORT with a port from 1 to 65535 (tcp/127.0.0.1:7447)"),
-        }
-        match (&secured, e.starts_with("tls/")) {
-            (Some(_), false) => bail!("--listen {e}: with --tls the world listens on a tls/ endpoint (tls/HOST:PORT)"),
-            (None, true) => bail!("--listen {e}: a tls/ endpoint needs the swarm's credentials (--tls DIR)"),
-            (None, false) if !is_loopback(e) && !insecure => bail!(
-                "--listen {e}: beyond loopback any peer that reaches the port could fly the swarm; serve it with \
-                 --tls DIR (`proxform keys`), or say --insecure"
-            ),
-            _ => {}
-        }
+        listen_allowed(e, secured.is_some(), insecure)?;
         let session = Session::open(&Role::Router { listen: vec![e.to_string()], secured })
             .with_context(|| format!("cannot serve the world on {e}"))?;
         return Ok((session, e.to_string()));

@@ -4,6 +4,9 @@
 
 use crate::batch::runs::Summary;
 
+/// Most cells a sweep may have (a grid larger than this is a cluster job of sweeps).
+pub const MAX_CELLS: usize = 10_000;
+
 /// Every combination of `axes` ((key, values) each), the first key varying slowest: one
 /// cell per combination, as (key, value) pairs in the axes' order.
 pub fn cells(axes: &[(String, Vec<String>)]) -> Vec<Vec<(&str, &str)>> {
