@@ -47,14 +47,12 @@ pub fn read_input(path: &Path, what: &str) -> Result<String> {
 /// refused before anything is opened, so no output is written through a link to elsewhere and
 /// nothing blocks on a FIFO.
 pub fn clear_output(path: &Path) -> Result<()> {
-    match std::fs::symlink_metadata(path) {
-        Ok(m) if m.file_type().is_symlink() => {
-            bail!("{} is a symbolic link: outputs are not written through links (remove it)", path.display())
+    check_output(path)?;
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("cannot replace {}", path.display()))
         }
-        Ok(m) if !m.is_file() => bail!("{} exists and is not a regular file: it cannot be an output", path.display()),
-        Ok(_) => std::fs::remove_file(path).with_context(|| format!("cannot replace {}", path.display())),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-        Err(e) => Err(e).with_context(|| format!("cannot write {}", path.display())),
+        _ => Ok(()),
     }
 }
 

@@ -1,4 +1,4 @@
-//! Forming from scattered starts (`scenarios/aggregate.toml`, README "Forming from scattered
+//! Forming from scattered starts (`scenarios/aggregate.toml`, docs/manual.md "Forming from scattered
 //! starts"): each check fails when its mechanism is switched off.
 
 use proxform_scenario::load::{check, parse_spec};

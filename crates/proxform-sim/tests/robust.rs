@@ -1,4 +1,4 @@
-//! The robust settings on the shipped scenarios that measure them (README, "Robust formation
+//! The robust settings on the shipped scenarios that measure them (docs/manual.md, "Robust formation
 //! keeping"): each check fails when its mechanism is switched off.
 
 use proxform_scenario::load::{check, parse_spec};
