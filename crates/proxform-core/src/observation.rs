@@ -46,9 +46,11 @@ pub enum ObservationSource {
 /// What a UAV knows of the navigator, to forward to the others (`radio.relay_navigator`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NavigatorReport {
-    /// Its state: the reporter's track of it. With `relative`, its position is relative to
-    /// the reporter's own position fix at the same moment (each UAV's fix has its own error:
-    /// a relative position is free of it, and the receiver adds its own view of the reporter).
+    /// Its state: the reporter's track of it, at the track's last measurement. With
+    /// `relative`, its position is relative to the reporter's own position fix at the moment
+    /// of the report, not of the measurement (each UAV's fix has its own error: a relative
+    /// position is free of it, and the receiver adds its own view of the reporter then; taken
+    /// at the measurement, both would be moved back along straight lines over the whole age).
     pub state: State9,
     /// How old that state is at the time of the report (s).
     pub age_s: f64,

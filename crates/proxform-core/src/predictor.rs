@@ -402,25 +402,34 @@ impl NeighbourTracks {
     }
 
     /// The neighbour of track slot `s` if its track can coast at `now`: last heard before
-    /// `now`, no longer ago than `max_s`, and measured no longer ago than the timeout. A
-    /// neighbour missing from this step's observations (a lost message, a dropped detection)
-    /// is then predicted from its track.
-    pub fn coasting(&self, s: usize, now: f64, max_s: f64) -> Option<UavId> {
+    /// `now`, no longer ago than `max_s`, and measured no longer ago than `max_age_s` (the
+    /// timeout; a relay's information, carried hop by hop, is older). A neighbour missing from
+    /// this step's observations (a lost message, a dropped detection) is then predicted from
+    /// its track.
+    pub fn coasting(&self, s: usize, now: f64, max_s: f64, max_age_s: f64) -> Option<UavId> {
         let (id, _) = self.ids[s];
         let missing = self.missing(s, now);
         let age = now - self.tracks[s].t;
-        (id != FREE && missing >= SAME_INSTANT_S && missing <= max_s + SAME_INSTANT_S && age <= self.timeout_s)
+        (id != FREE && missing >= SAME_INSTANT_S && missing <= max_s + SAME_INSTANT_S && age <= max_age_s)
             .then_some(UavId(id))
     }
 
+    /// Whether reports are brought forward by the plan beyond a period ([`Self::with_carry`]).
+    pub fn carries(&self) -> bool {
+        self.carry.is_some()
+    }
+
     /// What the tracks know of UAV `id` at `now`: its filtered state at its last measurement
-    /// and how long ago that was (s); None without a track, or one older than the timeout
-    /// (and always with the plain transition, which keeps no tracks).
-    pub fn report(&self, id: UavId, now: f64) -> Option<(State9, f64)> {
+    /// and how long ago that was (s); None without a track, one not heard within the timeout,
+    /// or one measured more than `max_age_s` ago (and always with the plain transition, which
+    /// keeps no tracks). A track fed by relays keeps the time of the measurement they
+    /// describe, so that age is how old the information is.
+    pub fn report(&self, id: UavId, now: f64, max_age_s: f64) -> Option<(State9, f64)> {
         let s = self.ids.iter().position(|t| t.0 == id.0 && t.0 != FREE)?;
         let tr = &self.tracks[s];
         let age = now - tr.t;
-        (age >= -SAME_INSTANT_S && age <= self.timeout_s).then(|| (extrapolate(tr, 0.0), age.max(0.0)))
+        let alive = now - tr.heard <= self.timeout_s && age <= max_age_s;
+        (age >= -SAME_INSTANT_S && alive).then(|| (extrapolate(tr, 0.0), age.max(0.0)))
     }
 
     /// Seconds since a report of track slot `s` last arrived, at `now` (its age less the age
@@ -559,8 +568,8 @@ mod tests {
         // Measured 0.3 s before it arrived, heard now: missing from the next period on only.
         assert!((tracks.missing(0, 1.0)).abs() < 1e-12);
         assert!((tracks.missing(0, 1.2) - 0.2).abs() < 1e-12);
-        assert!(tracks.coasting(0, 1.2, 0.5).is_some(), "0.2 s missing, 0.5 s old: coasts");
-        assert!(tracks.coasting(0, 1.8, 0.5).is_none(), "0.8 s missing: no longer");
+        assert!(tracks.coasting(0, 1.2, 0.5, 1.0).is_some(), "0.2 s missing, 0.5 s old: coasts");
+        assert!(tracks.coasting(0, 1.8, 0.5, 1.0).is_none(), "0.8 s missing: no longer");
         assert!(!tracks.heard_onboard(UavId(3), 1.2, 0.5), "heard by radio");
         let mut onboard = radio(s, 0.0);
         onboard.source = crate::ObservationSource::Onboard;
@@ -583,13 +592,13 @@ mod tests {
         tracks.predict(&obs(s), 0.0, 0.1);
         s[X] = 7.0;
         tracks.predict(&obs(s), 0.1, 0.1);
-        let (state, age) = tracks.report(UavId(7), 0.4).expect("tracked");
+        let (state, age) = tracks.report(UavId(7), 0.4, 1.0).expect("tracked");
         assert!((age - 0.3).abs() < 1e-12, "{age}");
         assert!((state[X] - 7.0).abs() < 1e-9 && (state[VX] - 70.0).abs() < 1e-9, "{state:?}");
-        assert!(tracks.report(UavId(8), 0.4).is_none(), "no track");
-        assert!(tracks.report(UavId(7), 1.2).is_none(), "older than the timeout");
+        assert!(tracks.report(UavId(8), 0.4, 1.0).is_none(), "no track");
+        assert!(tracks.report(UavId(7), 1.2, 1.0).is_none(), "older than the timeout");
         let plain = NeighbourTracks::new(PredictorKind::ConstantVelocity, 4, 1.0, 0.2);
-        assert!(plain.report(UavId(7), 0.0).is_none(), "the plain transition keeps no tracks");
+        assert!(plain.report(UavId(7), 0.0, 1.0).is_none(), "the plain transition keeps no tracks");
     }
     use crate::observation::ObservationSource;
     use approx::assert_relative_eq;

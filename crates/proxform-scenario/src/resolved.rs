@@ -281,6 +281,7 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         predictor_accel_sigma_mps2: singer.map(|s| s.0),
         predictor_tau_s: singer.map(|s| s.1),
         track_timeout_s: Some(p.track_timeout_s),
+        relay_max_age_s: Some(p.relay_max_age_s),
         coast_s: Some(p.coast_s),
         coast_accel_s: Some(p.coast_accel_s),
         coast_decay_s: Some(p.coast_decay_s),

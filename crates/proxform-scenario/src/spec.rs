@@ -277,6 +277,9 @@ pub struct ControllerSpec {
     pub predictor_tau_s: Option<f64>,
     /// Track timeout (s). Default 1.
     pub track_timeout_s: Option<f64>,
+    /// Oldest information a UAV forwards of the navigator (`radio.relay_navigator`), s, > 0.
+    /// Default 10.
+    pub relay_max_age_s: Option<f64>,
     /// Longest a missing neighbour coasts on its track (s, ≥ 0). Default 0.5.
     pub coast_s: Option<f64>,
     /// How long a coasting neighbour's acceleration is extrapolated (s, ≥ 0). Default 0.2.

@@ -122,7 +122,7 @@ impl Hearing {
             heard.push(Heard { id: o.id, now: now_state, next, weight: 1.0 });
         }
         for s in 0..tracks.slots() {
-            let Some(id) = tracks.coasting(s, now, p.coast_s) else { continue };
+            let Some(id) = tracks.coasting(s, now, p.coast_s, p.track_timeout_s) else { continue };
             if id == *me || heard.iter().any(|h| h.id == id) {
                 continue;
             }

@@ -39,11 +39,12 @@ pub(super) struct Near {
 }
 
 impl Near {
-    /// Neighbour `id` observed at `x_j`, `dt` s before the next update, for the UAV in `slot_i`
-    /// that will then be at `x_hold`.
+    /// Neighbour `id` observed at `x_j`, `h` s before the next update (the period, plus the
+    /// observation's age: a radio report or a relay describes where the neighbour was), for
+    /// the UAV in `slot_i` that will then be at `x_hold`.
     #[inline]
-    fn new(formation: &Formation, id: UavId, x_j: &State9, dt: f64, slot_i: &FormationSlot, x_hold: &State9) -> Self {
-        let pos = [x_j[X] + dt * x_j[VX], x_j[X + 1] + dt * x_j[VX + 1], x_j[X + 2] + dt * x_j[VX + 2]];
+    fn new(formation: &Formation, id: UavId, x_j: &State9, h: f64, slot_i: &FormationSlot, x_hold: &State9) -> Self {
+        let pos = [x_j[X] + h * x_j[VX], x_j[X + 1] + h * x_j[VX + 1], x_j[X + 2] + h * x_j[VX + 2]];
         let p = [x_hold[X] - pos[0], x_hold[X + 1] - pos[1], x_hold[X + 2] - pos[2]];
         Self {
             id,
@@ -221,7 +222,9 @@ impl Avoidance {
 
     /// Takes this update's neighbours: every UAV perceived, not only the nearest of each
     /// azimuth area (one hidden behind another in its area may be the one closing fastest),
-    /// extrapolated to the next update at its velocity.
+    /// extrapolated to the next update at its velocity (from the moment it describes: a radio
+    /// report's or a relay's age included). A report older than `track_timeout_s` (a relay's
+    /// information, carried hop by hop) says too little of where a UAV is now to avoid it.
     pub fn perceive(
         &mut self,
         formation: &Formation,
@@ -236,10 +239,10 @@ impl Avoidance {
         // A UAV reported twice (onboard and by radio) stands twice: the same limit, met by the
         // same velocity, costs less than looking for it.
         for o in observations {
-            if o.id == me {
+            if o.id == me || o.age_s > params.track_timeout_s {
                 continue;
             }
-            let n = Near::new(formation, o.id, &o.state, params.dt_s, slot_i, x_hold);
+            let n = Near::new(formation, o.id, &o.state, o.age_s + params.dt_s, slot_i, x_hold);
             if o.source == ObservationSource::Onboard && n.d * n.d > r2 {
                 continue;
             }
@@ -348,7 +351,8 @@ impl Avoidance {
     /// Whether [`Self::limit`] could bind on any of `observations` for the centre `o_i` (as
     /// `O_i − X_hold`): false only when, for every one, even closing at the full relative
     /// speed `w` leaves room to stop, `d − d_avoid − w·Δt ≥ w²/(2a)` (the limit with `d_min` at
-    /// its largest). A rule that remembers no side and could bind on nothing leaves the centre
+    /// its largest). Observations older than `max_age_s` do not count, as in [`Self::perceive`]
+    /// (`track_timeout_s`). A rule that remembers no side and could bind on nothing leaves the centre
     /// and itself as they are, so the caller may skip it (and the list it would fill).
     pub fn may_bind(
         &self,
@@ -357,6 +361,7 @@ impl Avoidance {
         dt: f64,
         o_i: &State9,
         observations: &[Observation],
+        max_age_s: f64,
     ) -> bool {
         let v =
             vehicle.clamp_velocity([x_hold[VX] + o_i[VX], x_hold[VX + 1] + o_i[VX + 1], x_hold[VX + 2] + o_i[VX + 2]]);
@@ -364,10 +369,14 @@ impl Avoidance {
         // update, and the generic array and iterator forms did not always inline.
         let h = x_hold.as_slice();
         observations.iter().any(|o| {
+            if o.age_s > max_age_s {
+                return false;
+            }
             let x = o.state.as_slice();
-            let px = h[X] - (x[X] + dt * x[VX]);
-            let py = h[X + 1] - (x[X + 1] + dt * x[VX + 1]);
-            let pz = h[X + 2] - (x[X + 2] + dt * x[VX + 2]);
+            let ahead = o.age_s + dt;
+            let px = h[X] - (x[X] + ahead * x[VX]);
+            let py = h[X + 1] - (x[X + 1] + ahead * x[VX + 1]);
+            let pz = h[X + 2] - (x[X + 2] + ahead * x[VX + 2]);
             let d = (px * px + py * py + pz * pz).sqrt();
             let (wx, wy, wz) = (v[0] - x[VX], v[1] - x[VX + 1], v[2] - x[VX + 2]);
             let w2 = wx * wx + wy * wy + wz * wz;
@@ -506,7 +515,12 @@ mod tests {
                         st[X + a] = 240.0 * next();
                         st[VX + a] = x_hold[VX + a] + 30.0 * next();
                     }
-                    Observation { id: UavId(j), state: st, age_s: 0.0, source: ObservationSource::Onboard }
+                    // The third a radio report up to 1.5 s old (beyond the 1 s limit at times).
+                    let (age_s, source) = match j {
+                        3 => (1.5 * (next() + 0.5), ObservationSource::Radio),
+                        _ => (0.0, ObservationSource::Onboard),
+                    };
+                    Observation { id: UavId(j), state: st, age_s, source }
                 })
                 .collect();
             let mut o_i = State9::zeros();
@@ -515,7 +529,7 @@ mod tests {
                 o_i[VX + a] = 20.0 * next();
             }
             let mut av = Avoidance::new(30.0, 2.5);
-            let may = av.may_bind(&vehicle, &x_hold, 0.1, &o_i, &obs);
+            let may = av.may_bind(&vehicle, &x_hold, 0.1, &o_i, &obs, 1.0);
             let before = o_i;
             let g = goal(&o_i);
             av.perceive(&formation, UavId(0), &formation.slots[0], &x_hold, &params, &obs);
@@ -527,6 +541,39 @@ mod tests {
             bound += usize::from(limited);
         }
         assert!(skipped > 500 && bound > 100, "skipped {skipped}, bound {bound}");
+    }
+
+    #[test]
+    fn a_report_is_avoided_where_its_uav_is_now_not_where_it_was() {
+        // A neighbour flying alongside at 80 m/s, 50 m away (beyond the 37.5 m avoidance
+        // distance), reported 0.6 s late: where the report puts it, it is 31 m away.
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let params = ControllerParams { track_timeout_s: 1.0, ..ControllerParams::default() };
+        let slots = vec![FormationSlot::at(0.0, 0.0, 0.0), FormationSlot::at(40.0, 30.0, 0.0)];
+        let formation = Formation::new(slots, crate::formation::FormationFrame::World).expect("finite");
+        let x_hold = own([0.0, 0.0, 0.0], [80.0, 0.0, 0.0]);
+        let report = |age_s: f64| {
+            let then = own([40.0 - 80.0 * age_s, 30.0, 0.0], [80.0, 0.0, 0.0]);
+            vec![Observation { id: UavId(1), state: then, age_s, source: ObservationSource::Radio }]
+        };
+        let binds = |obs: &[Observation], max_age_s: f64| {
+            let mut av = Avoidance::new(37.5, 2.5);
+            let mut o_i = State9::zeros();
+            let may = av.may_bind(&vehicle, &x_hold, 0.1, &o_i, obs, max_age_s);
+            let p = ControllerParams { track_timeout_s: max_age_s, ..params.clone() };
+            av.perceive(&formation, UavId(0), &formation.slots[0], &x_hold, &p, obs);
+            let g = goal(&o_i);
+            let limited = av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g);
+            assert!(may || !limited);
+            limited
+        };
+        assert!(!binds(&report(0.6), 1.0), "brought forward over its age, it is 50 m away");
+        // A UAV that is where the report says (a fresh detection there) is avoided.
+        let mut there = report(0.6);
+        there[0].age_s = 0.0;
+        assert!(binds(&there, 1.0));
+        // A report older than the limit is not avoided at all.
+        assert!(!binds(&there.iter().map(|o| Observation { age_s: 1.2, ..*o }).collect::<Vec<_>>(), 1.0));
     }
 
     #[test]

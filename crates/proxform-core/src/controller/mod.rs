@@ -253,20 +253,22 @@ impl ProximityController {
     /// What this UAV knows of the navigator at `now`, to forward over the radio
     /// (`radio.relay_navigator`): its track (the filtered state at its last measurement, and
     /// that measurement's age in s). With relative sensing its tracks are in the frame of its
-    /// own last fix: the position is less the UAV's own at that measurement (its last fix
-    /// carried there at the fix's velocity). None when the navigator is not named or not
-    /// tracked (or, relative, before a fix).
+    /// own last fix: the position is less the UAV's own at `now` (its last fix carried there
+    /// at the fix's velocity, one period at most). None when the navigator is not named or not
+    /// tracked (heard within the track timeout, measured within `relay_max_age_s`; or,
+    /// relative, before a fix).
     pub fn navigator_report(&self, now: f64) -> Option<NavigatorReport> {
         let navigator = self.navigator?;
+        let max_age_s = relay_max_age_s(&self.setup.params, &self.tracks);
         if !self.setup.params.relative_sensing {
-            let (state, age_s) = self.tracks.report(navigator, now)?;
+            let (state, age_s) = self.tracks.report(navigator, now, max_age_s)?;
             return Some(NavigatorReport { state, age_s, relative: false });
         }
-        // The track at its last measurement, less the UAV's own position then (its last fix,
-        // in whose frame its tracks are, carried there at the fix's velocity).
+        // The track at its last measurement, less the UAV's own position now (its last fix, in
+        // whose frame its tracks are, carried to now at the fix's velocity).
         let fix = self.own_frame.as_deref()?;
-        let (mut state, age_s) = self.tracks.report(navigator, now)?;
-        let h = (now - age_s) - fix.t;
+        let (mut state, age_s) = self.tracks.report(navigator, now, max_age_s)?;
+        let h = now - fix.t;
         for k in 0..3 {
             state[X + k] -= fix.pos[k] + fix.vel[k] * h;
         }
@@ -343,7 +345,8 @@ impl ProximityController {
         // Collision avoidance (beyond the paper): no closing faster than braking can stop.
         if let Some(av) = &mut self.avoidance {
             // Skipped (with the same result) when it remembers nothing and cannot bind.
-            if av.remembers() || av.may_bind(vehicle, &x_hold, params.dt_s, &o_i, observations) {
+            if av.remembers() || av.may_bind(vehicle, &x_hold, params.dt_s, &o_i, observations, params.track_timeout_s)
+            {
                 av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);
                 av.limit(vehicle, &x_hold, params.dt_s, &mut o_i, &goal);
             }
@@ -439,8 +442,9 @@ impl ProximityController {
                 *a = (k as u32, d2);
             }
         }
+        let navigator = self.navigator;
         for s in 0..tracks.slots() {
-            let Some(id) = tracks.coasting(s, now_s, params.coast_s) else { continue };
+            let Some((id, _)) = coast(params, tracks, navigator, s, now_s) else { continue };
             if id == me
                 || observations.iter().any(|o| {
                     o.id == id
@@ -517,7 +521,7 @@ impl ProximityController {
                     .and_then(|o| {
                         // From its track's last measurement before this report (not yet fed) to
                         // this report's: a delayed report is as old as the radio made it.
-                        let (before, age) = tracks.report(n, now_s)?;
+                        let (before, age) = tracks.report(n, now_s, params.track_timeout_s)?;
                         let span = age - o.age_s;
                         (span > crate::predictor::SAME_INSTANT_S)
                             .then(|| setup.vehicle.turn_rate(&before, &o.state, span))
@@ -554,22 +558,17 @@ impl ProximityController {
             }
             let (id, f_x_j, f, x_j) = if k & TRACK != 0 {
                 let s = (k & !TRACK) as usize;
-                match tracks.coasting(s, now_s, params.coast_s) {
-                    Some(id) => {
+                match coast(params, tracks, navigator, s, now_s) {
+                    Some((id, f)) => {
                         let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
-                        (
-                            id,
-                            tracks.state_at(s, now_s + dt),
-                            params.coasting_weight(tracks.missing(s, now_s)),
-                            (x_j, dt),
-                        )
+                        (id, tracks.state_at(s, now_s + dt), f, (x_j, dt))
                     }
                     None => continue,
                 }
             } else {
                 let o = &observations[k as usize];
                 let f_x_j = tracks.predict(o, now_s, dt);
-                (o.id, f_x_j, 1.0, seen_now(tracks, o, now_s, dt, needs_now))
+                (o.id, f_x_j, 1.0, seen_now(tracks, o, (now_s, dt, params.track_timeout_s), needs_now))
             };
             if separation > 0.0 {
                 keep_apart(formation, id, &f_x_j, slot_i, x_hold, separation, &mut est.push);
@@ -597,19 +596,20 @@ impl ProximityController {
                         continue;
                     }
                     let f_x_j = tracks.predict(o, now_s, dt);
-                    (f_x_j, 1.0, seen_now(tracks, o, now_s, dt, needs_now))
+                    (f_x_j, 1.0, seen_now(tracks, o, (now_s, dt, params.track_timeout_s), needs_now))
                 }
                 None => {
                     // Not observed now: coast on its track, unless its area already did.
-                    let Some(s) = (0..tracks.slots()).find(|&s| tracks.coasting(s, now_s, params.coast_s) == Some(id))
-                    else {
+                    let Some((s, f)) = (0..tracks.slots()).find_map(|s| {
+                        coast(params, tracks, navigator, s, now_s).filter(|c| c.0 == id).map(|c| (s, c.1))
+                    }) else {
                         continue;
                     };
                     if nearest.iter().any(|a| a.0 == TRACK | s as u32) {
                         continue;
                     }
                     let x_j = if needs_now { tracks.state_at(s, now_s) } else { State9::zeros() };
-                    (tracks.state_at(s, now_s + dt), params.coasting_weight(tracks.missing(s, now_s)), (x_j, dt))
+                    (tracks.state_at(s, now_s + dt), f, (x_j, dt))
                 }
             };
             let Some(x_hat) = implied(id, &x_j, &f_x_j, f) else { continue };
@@ -627,6 +627,40 @@ impl ProximityController {
             }
         }
         est
+    }
+}
+
+/// The neighbour of track slot `s` if it coasts at `now_s` (§3), and its weight: up to
+/// `coast_s` after a report of it last arrived, weighing `exp(−missing / coast_decay_s)`, so
+/// that a UAV that has gone fades out. The navigator, where the plan brings reports forward
+/// ([`crate::plan`]), coasts up to `track_timeout_s` at full weight: the plan is its path, so
+/// its track carried by the plan stays where it flies (a lost navigator: where its successor
+/// will fly once the loss is known, a timeout later; METHOD §3).
+fn coast(
+    params: &ControllerParams,
+    tracks: &NeighbourTracks,
+    navigator: Option<UavId>,
+    s: usize,
+    now_s: f64,
+) -> Option<(UavId, f64)> {
+    let on_plan = tracks.carries();
+    let longest = if on_plan { params.coast_s.max(params.track_timeout_s) } else { params.coast_s };
+    let id = tracks.coasting(s, now_s, longest, relay_max_age_s(params, tracks))?;
+    let missing = tracks.missing(s, now_s);
+    let within = |max_s: f64| missing <= max_s + crate::predictor::SAME_INSTANT_S;
+    if on_plan && Some(id) == navigator {
+        return within(params.track_timeout_s).then_some((id, 1.0));
+    }
+    within(params.coast_s).then(|| (id, params.coasting_weight(missing)))
+}
+
+/// How old what a UAV forwards of the navigator may be (s): `relay_max_age_s` where the plan
+/// brings old reports forward, the track timeout otherwise.
+fn relay_max_age_s(params: &ControllerParams, tracks: &NeighbourTracks) -> f64 {
+    if tracks.carries() {
+        params.relay_max_age_s
+    } else {
+        params.track_timeout_s
     }
 }
 
@@ -709,14 +743,16 @@ pub fn centre_from(
 }
 
 /// Neighbour `o`'s state as its track has it at its last measurement (the one just fed, when
-/// the predictor keeps tracks; the raw observation otherwise) and the time from then to its
-/// prediction one period ahead; only when `needed` (a zero state otherwise).
+/// the predictor keeps tracks, measured within `max_age_s`; the raw observation otherwise) and
+/// the time from then to its prediction one period ahead, `times` = (now, the period,
+/// `max_age_s`); only when `needed` (a zero state otherwise).
 #[inline]
-fn seen_now(tracks: &NeighbourTracks, o: &Observation, now_s: f64, dt: f64, needed: bool) -> (State9, f64) {
+fn seen_now(tracks: &NeighbourTracks, o: &Observation, times: (f64, f64, f64), needed: bool) -> (State9, f64) {
+    let (now_s, dt, max_age_s) = times;
     if !needed {
         return (State9::zeros(), dt);
     }
-    match tracks.report(o.id, now_s) {
+    match tracks.report(o.id, now_s, max_age_s) {
         Some((x, age)) => (x, dt + age),
         None => (o.state, dt + o.age_s),
     }

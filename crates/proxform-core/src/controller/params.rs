@@ -36,6 +36,12 @@ pub struct ControllerParams {
     pub predictor: PredictorKind,
     /// A neighbour track not refreshed for this long restarts (s, > 0). Default 1 s.
     pub track_timeout_s: f64,
+    /// What a UAV forwards of the navigator (`radio.relay_navigator`) may be this old (s, > 0):
+    /// the time since the measurement it goes back to, hop by hop. Each hop adds a radio delay
+    /// and a period, so a chain of relays is older than one track's timeout; brought forward by
+    /// the plan ([`crate::plan`]) the report keeps its place. Without the plan it is
+    /// `track_timeout_s`. Default 10 s.
+    pub relay_max_age_s: f64,
     /// A neighbour missing from the observations is predicted from its track for at most this
     /// long (s, ≥ 0; 0 disables coasting). Default 0.5 s.
     pub coast_s: f64,
@@ -161,6 +167,7 @@ impl ControllerParams {
         }
         self.predictor.validate()?;
         positive("track_timeout_s", self.track_timeout_s)?;
+        positive("relay_max_age_s", self.relay_max_age_s)?;
         positive("turn_trend_s", self.turn_trend_s)?;
         if !(self.coast_s.is_finite() && self.coast_s >= 0.0) {
             return Err(ConfigError::OutOfRange {
@@ -257,6 +264,7 @@ impl Default for ControllerParams {
             input_weight: 0.01,
             predictor: PredictorKind::default(),
             track_timeout_s: 1.0,
+            relay_max_age_s: 10.0,
             coast_s: 0.5,
             coast_accel_s: 0.2,
             coast_decay_s: 0.1,

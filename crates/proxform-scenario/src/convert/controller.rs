@@ -64,6 +64,9 @@ pub fn params(c: &ControllerSpec, dt_s: f64, vehicle: &VehicleModel) -> Result<C
     if let Some(v) = c.track_timeout_s {
         p.track_timeout_s = positive("controller.track_timeout_s", v)?;
     }
+    if let Some(v) = c.relay_max_age_s {
+        p.relay_max_age_s = positive("controller.relay_max_age_s", v)?;
+    }
     if let Some(v) = c.coast_s {
         p.coast_s = non_negative("controller.coast_s", v)?;
     }

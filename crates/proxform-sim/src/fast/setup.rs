@@ -94,6 +94,11 @@ pub struct Consts {
     pub filter: Filter,
     /// A track coasts for at most this many steps.
     pub coast_steps: i64,
+    /// The navigator, where the plan carries reports (`carry`): its track coasts up to the
+    /// track timeout at full weight (as the reference controller's, METHOD §3).
+    pub plan_navigator: Option<u32>,
+    /// The track timeout (steps).
+    pub timeout_steps: i64,
     /// Tracks older than this (steps) are freed: the longer of the timeout and the coasting.
     pub track_limit: i64,
     pub coast_decay_s: f64,
@@ -188,6 +193,8 @@ impl Consts {
                 ),
             ),
             coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
+            plan_navigator: setup.carry(sc.formation().frame).map(|_| sc.navigator().0),
+            timeout_steps,
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
             coast_decay_s: p.coast_decay_s,
             carry: setup.carry(sc.formation().frame),

@@ -456,7 +456,7 @@ mod tests {
             assert!(worst[c] < 1e-4, "component {c}: {worst:?}");
         }
         // Coasting: the same extrapolation with the acceleration capped.
-        let (_, age) = reference.report(UavId(7), 20.0).expect("tracked");
+        let (_, age) = reference.report(UavId(7), 20.0, 1.0).expect("tracked");
         assert!(age < 0.2);
         let want = reference.state_at(0, 19.9 + 0.5);
         let got = owner.state_at(&f, 0, 0.5 + (19.9 - 0.1 * f64::from(owner.measured_at(0, 199))), [0.0; 3]);

@@ -452,8 +452,15 @@ fn decide(
     }
     // §3: neighbours perceived recently but not now coast into areas with no fresh report.
     let observed = |id: u32| obs.iter().any(|o| o.id.0 == id && o.source != ObservationSource::Close);
+    // The neighbour of track `t` if it coasts now: the navigator, where the plan carries
+    // reports, up to the track timeout (as the reference controller's `coast`).
+    let coasting = |tracks: &Owner<'_>, t: usize| {
+        let id = tracks.coasting(t, k, c.coast_steps.max(c.timeout_steps))?;
+        let nav = c.plan_navigator == Some(id);
+        (nav || tracks.age_steps(t, k) <= c.coast_steps).then_some(id)
+    };
     for t in 0..tracks.used() {
-        let Some(id) = tracks.coasting(t, k, c.coast_steps) else { continue };
+        let Some(id) = coasting(tracks, t) else { continue };
         if id as usize == i || observed(id) {
             continue;
         }
@@ -477,7 +484,7 @@ fn decide(
     let xh = super::tracks::to_f32(&x_hold);
     let mut e = Sums::new();
     let mut fed = 0;
-    let coast = |tracks: &Owner<'_>, t: usize| {
+    let coast = |tracks: &Owner<'_>, t: usize, id: u32| {
         let age = tracks.age_steps(t, k) as f64 * dt;
         let (k0, h) = (tracks.measured_at(t, k), age + dt);
         let x = match &c.carry {
@@ -486,7 +493,8 @@ fn decide(
             }
             _ => tracks.state_at(f, t, h, shifts(k0)),
         };
-        (x, (-age / c.coast_decay_s).exp() as f32)
+        let w = if c.plan_navigator == Some(id) { 1.0 } else { (-age / c.coast_decay_s).exp() as f32 };
+        (x, w)
     };
     for a in 0..c.areas {
         let n = nearest[a].0;
@@ -495,8 +503,8 @@ fn decide(
         }
         let (id, f_x_j, w) = if n & TRACK != 0 {
             let t = (n & !TRACK) as usize;
-            let Some(id) = tracks.coasting(t, k, c.coast_steps) else { continue };
-            let (x, w) = coast(tracks, t);
+            let Some(id) = coasting(tracks, t) else { continue };
+            let (x, w) = coast(tracks, t, id);
             (id, x, w)
         } else {
             let o = &obs[n as usize];
@@ -534,13 +542,13 @@ fn decide(
                 (tracks.predict(f, (id.0, fed - 1), k, &o.state, shifts).1, 1.0)
             }
             None => {
-                let Some(t) = (0..tracks.used()).find(|&t| tracks.coasting(t, k, c.coast_steps) == Some(id.0)) else {
+                let Some(t) = (0..tracks.used()).find(|&t| coasting(tracks, t) == Some(id.0)) else {
                     continue;
                 };
                 if nearest.iter().any(|a| a.0 == TRACK | t as u32) {
                     continue;
                 }
-                coast(tracks, t)
+                coast(tracks, t, id.0)
             }
         };
         let Some(slot_j) = formation.slot(id) else { continue };
@@ -570,7 +578,10 @@ fn decide(
             }
             // A UAV whose rule remembers nothing and that cannot bind leaves the centre as it
             // is: the rule need not run.
-            None if !s.avoid.as_ref().is_some_and(|av| av.may_bind(vehicle, &x_hold, dt, &o_i, &s.obs)) => {}
+            None if !s
+                .avoid
+                .as_ref()
+                .is_some_and(|av| av.may_bind(vehicle, &x_hold, dt, &o_i, &s.obs, params.track_timeout_s)) => {}
             None => {
                 if let Some(av) = s.avoid.as_mut() {
                     av.perceive(formation, me, &slot_i, &x_hold, params, &s.obs);

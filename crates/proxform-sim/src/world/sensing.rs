@@ -236,14 +236,14 @@ impl ProximitySensor {
             if let Some(m) = relayed {
                 let age_s = link.delay_s + m.age_s;
                 match onboard_of(&out[start..], m.sender).filter(|_| m.relative) {
-                    // Relative: where the receiver sees the sender (moved back to the moment the
-                    // relay describes), plus the relay's position. In the receiver's frame, so
+                    // Relative: where the receiver sees the sender (moved back over the delay, to
+                    // where it was when it sent), plus the relay's position relative to it then. In the receiver's frame, so
                     // the navigator's own broadcast (in its frame) neither stands for it nor
                     // hides it.
                     Some(seen) => {
                         let mut state = m.state;
                         for k in 0..3 {
-                            state[state::X + k] += seen[state::X + k] - seen[state::VX + k] * age_s;
+                            state[state::X + k] += seen[state::X + k] - seen[state::VX + k] * link.delay_s;
                         }
                         out.push(Observation { id: UavId(m.about), state, age_s, source: ObservationSource::Relayed });
                     }
@@ -569,8 +569,10 @@ mod tests {
         let (o, seen) = (placed[0], states[3]);
         assert_eq!((o.id, o.age_s), (UavId(4), 0.1));
         for k in 0..3 {
-            // Where UAV 0 sees UAV 3, moved back over the relay's age, plus the offset.
-            let want = seen[k] - seen[state::VX + k] * 0.1 + offset[k];
+            // Where UAV 0 sees UAV 3 (moved back over the radio's delay, none here: the offset
+            // is relative to the sender when it sent, not when the navigator was measured),
+            // plus the offset.
+            let want = seen[k] + offset[k];
             assert!((o.state[k] - want).abs() < 1e-9, "axis {k}: {} against {want}", o.state[k]);
         }
         // The broadcast is heard beside it (the controller leaves out what is not in its frame).
