@@ -329,7 +329,7 @@ impl Agent {
                 Some(sp) => setup.vehicle().input_flying(&own, sp).unwrap_or(decision.input),
                 None => decision.input,
             };
-            let next = setup.vehicle().propagate(&own, &input, setup.params().dt_s);
+            let next = setup.vehicle().predict(&own, &input, setup.params().dt_s);
             let velocity = [own[state::VX], own[state::VX + 1], own[state::VX + 2]];
             let moved = std::array::from_fn(|k| next[state::X + k] - own[state::X + k]);
             match &mut self.own_prediction {

@@ -453,3 +453,27 @@ fn a_lost_navigator_coasts_on_the_plan_until_its_successor_leads() {
     let faded = batch(&grid("plan_forward = false"), 20);
     assert!(faded.pass_fraction < 0.8, "{}", faded.pass_fraction);
 }
+
+#[test]
+fn a_fixed_wing_whose_sensor_sticks_in_a_steady_wind_flies_on_a_prediction_that_drifts_with_it() {
+    // Nine fixed wings in a diamond, a 22 km/h crosswind; UAV5's own position reading freezes
+    // for 5 s. While its readings are refused it flies on its own prediction, which the wind
+    // its state implies carries across its nose as it carries the UAV (METHOD §8). Predicted
+    // in calm air, it drifted 6 m/s from the UAV, faster than the gate widens: the reading was
+    // refused to the end, UAV5 350 m off, the others dragged 40 m (0 of 20 runs).
+    let text = "name = \"fw-diamond9-stuck\"\nduration_s = 120.0\nsafety_distance_m = 15.0\n\
+                [formation.shape]\nkind = \"diamond\"\nuavs = 9\nspacing_m = 30.0\n\
+                [path]\nkind = \"waypoints\"\nspeed_kmh = 90.0\nturn_radius_m = 500.0\n\
+                points_m = [[1000.0, 0.0, 0.0], [1000.0, -1500.0, 0.0], [2500.0, -1500.0, 0.0]]\n\
+                [vehicle]\nmodel = \"fixed_wing\"\nstall_speed_kmh = 50.0\nmax_speed_kmh = 150.0\n\
+                [wind]\nsteady_kmh = [0.0, 22.0, 0.0]\n\
+                [[fault]]\nkind = \"stuck_sensor\"\nuav = 5\nat_s = 40.0\nduration_s = 5.0\n";
+    let s = proxform_scenario::load::parse(text, "fw-diamond9.toml").expect("valid");
+    let b = batch(&s, 20);
+    let f = b.sensor_faults.as_ref().expect("sensor faults");
+    assert!(f.healthy_pass_fraction >= 0.95, "{f:?}");
+    assert!(f.rejoin_s_max <= 10.0, "{f:?}");
+    let i = b.isolation.as_ref().expect("the own check is on");
+    // Refused for the fault's 5 s (over eight followers), not beyond.
+    assert!(i.own_suspect_s_per_uav < 1.0, "{i:?}");
+}

@@ -127,7 +127,7 @@ impl FixedWingModel {
     /// by the rest of its velocity, the wind across its nose that its state implies (zero in
     /// calm air, up to the noise). So a UAV crabbing in a crosswind is predicted to keep its
     /// track, not to drift where its nose points.
-    fn predict(&self, x: &State9, u: &Input, dt: f64) -> State9 {
+    pub fn predict(&self, x: &State9, u: &Input, dt: f64) -> State9 {
         let (sa, ca) = x[ALPHA].sin_cos();
         let (sb, cb) = x[BETA].sin_cos();
         let nose = [ca * cb, ca * sb, sa];

@@ -265,6 +265,18 @@ impl VehicleModel {
         }
     }
 
+    /// The controller's view of one period under input `u` from a state over the ground (a
+    /// UAV's prediction of itself): for the fixed wing, the plant carried by the wind across
+    /// its nose that the state implies (a steady wind drifts it, and the prediction with it);
+    /// the calm-air plant for the others, whose velocity over the ground is what they hold.
+    #[inline]
+    pub fn predict(&self, x: &State9, u: &Input, dt: f64) -> State9 {
+        match self {
+            VehicleModel::FixedWing(m) => m.predict(x, u, dt),
+            _ => self.propagate(x, u, dt),
+        }
+    }
+
     /// The plant in calm air: the true state after `dt` under the (already perturbed) input `u`.
     #[inline]
     pub fn propagate(&self, x: &State9, u: &Input, dt: f64) -> State9 {
