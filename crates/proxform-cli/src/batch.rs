@@ -174,13 +174,13 @@ pub fn finish(journals: &[PathBuf], out: &Path, merged_journal: bool) -> Result<
     for (n, &(_, i, k)) in plan.order.iter().enumerate() {
         let r = read(i, k)?;
         if n == 0 {
-            columns = RunColumns::of(&r, false);
+            columns = RunColumns::of(&r, None);
         }
         fold.add(&r);
     }
     let summary = fold.finish(&scenario, plan.header.seed, plan.header.first_run);
     if let Some(first) = plan.order.first() {
-        columns = RunColumns::of(&read(first.1, first.2)?, summary.transitions.is_some());
+        columns = RunColumns::of(&read(first.1, first.2)?, Some(&summary));
     }
     // Pass 2: the rows (and the merged journal).
     let mut csv = RunsCsv::create(&out.join("runs.csv"), plan.header.seed, columns)?;

@@ -24,18 +24,21 @@ pub struct RunColumns {
     transitions: bool,
     flown: bool,
     isolation: bool,
+    uncontrolled: bool,
 }
 
 impl RunColumns {
-    /// The columns of a batch whose first run is `first`; `transitions` when some run changed
-    /// formation.
-    pub fn of(first: &RunSummary, transitions: bool) -> Self {
+    /// The columns of a batch whose first run is `first` and whose summary is `summary`:
+    /// `transitions` when some run changed formation, `uncontrolled_s` when in some run a
+    /// follower flew without its agent.
+    pub fn of(first: &RunSummary, summary: Option<&proxform_sim::Summary>) -> Self {
         Self {
             faults: first.sensor_faults.is_some(),
             forming: first.forming.is_some(),
-            transitions,
+            transitions: summary.is_some_and(|s| s.transitions.is_some()),
             flown: first.flown.is_some(),
             isolation: first.isolation.is_some(),
+            uncontrolled: summary.is_some_and(|s| s.uncontrolled.is_some()),
         }
     }
 }
@@ -95,6 +98,9 @@ impl RunsCsv {
                 ["isolating_s_per_uav", "isolated_per_uav_s", "own_suspect_s_per_uav", "own_suspect_episodes"]
                     .map(String::from),
             );
+        }
+        if c.uncontrolled {
+            header.push("uncontrolled_s".into());
         }
         w.write_record(&header).with_context(|| format!("cannot write {}", path.display()))?;
         Ok(Self { path: path.into(), w, seed, columns })
@@ -158,6 +164,9 @@ impl RunsCsv {
                 format!("{:.3}", i.own_suspect_s_per_uav),
                 i.own_suspect_episodes.to_string(),
             ]);
+        }
+        if c.uncontrolled {
+            rec.push(format!("{:.1}", r.uncontrolled_s));
         }
         self.w.write_record(&rec).with_context(|| format!("cannot write {}", self.path.display()))
     }

@@ -114,6 +114,14 @@ pub fn print(
             s.unsafe_runs
         )?;
     }
+    if let Some(u) = &s.uncontrolled {
+        writeln!(
+            out,
+            "uncontrolled             in {} run(s) a follower flew without its agent (up to {} UAV-s in a run, holding its course): those runs do not pass",
+            u.runs,
+            number(u.max_s)
+        )?;
+    }
     if s.off_path_runs > 0 {
         writeln!(
             out,

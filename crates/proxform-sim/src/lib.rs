@@ -27,6 +27,7 @@ pub use batch::journal::{JournalHeader, Shard};
 pub use batch::runs::{
     fly_runs, run_batch, run_batch_stoppable, run_batch_with_agents, run_one, AxisErrors, BatchResult, FlownSummary,
     FormingSummary, IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
+    UncontrolledSummary,
 };
 pub use flight::{engine_for, EngineKind, Flight};
 pub use measure::metrics::{

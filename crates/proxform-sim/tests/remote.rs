@@ -168,15 +168,15 @@ impl Agents for Away {
     }
 }
 
-/// Which UAVs fly at each step.
+/// Whether UAV3 flies, and flies uncontrolled, at each step; its error to its slot 10 s after
+/// its agent came back.
 #[derive(Default)]
-struct Flying(Vec<Vec<bool>>, Vec<proxform_core::State9>);
+struct Flying(Vec<(bool, bool)>, Vec<proxform_core::State9>);
 
 impl Observer for Flying {
     fn on_step(&mut self, sc: &Scenario, frame: &StepFrame<'_>) {
-        self.0.push(frame.active.to_vec());
+        self.0.push((frame.active[2], frame.uavs[2].uncontrolled));
         if frame.k == 150 {
-            // UAV3's error to its slot, 10 s after it came back.
             let nav = frame.states[0];
             self.1.push(sc.slot_state(2, &nav) - frame.states[2]);
         }
@@ -184,15 +184,20 @@ impl Observer for Flying {
 }
 
 #[test]
-fn a_follower_whose_agent_is_gone_leaves_and_joins_its_slot_when_it_is_back() {
+fn a_follower_whose_agent_is_gone_flies_on_uncontrolled_and_the_run_does_not_pass() {
     let sc = scenario(paper_spec().with(|s| s.duration_s = Some(20.0)));
     let agents = Away { inner: LocalAgents::new(&sc), uav: 2, away: 20..50, step: 0 };
     let mut seen = Flying::default();
-    Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents)).run(&mut seen);
-    let uav3: Vec<bool> = seen.0.iter().map(|a| a[2]).collect();
-    assert!(uav3[..20].iter().all(|a| *a), "flies before");
-    assert!(uav3[21..50].iter().all(|a| !*a), "gone while its agent is: {:?}", &uav3[15..55]);
-    assert!(uav3[51..].iter().all(|a| *a), "back after");
+    let mut metrics = proxform_sim::RunMetrics::new(&sc);
+    Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents)).run(&mut (&mut seen, &mut metrics));
+    assert!(seen.0.iter().all(|(flies, _)| *flies), "UAV3 stays in the flight");
+    let gone: Vec<bool> = seen.0.iter().map(|(_, u)| *u).collect();
+    assert!(!gone[..20].iter().any(|u| *u) && !gone[51..].iter().any(|u| *u), "controlled before and after");
+    assert!(gone[21..50].iter().all(|u| *u), "uncontrolled while its agent is gone: {:?}", &gone[15..55]);
+    // Back in its slot once its agent is (it was never moved there).
     let e = seen.1[0];
     assert!(e[0].abs() < 0.5 && e[1].abs() < 0.6 && e[2].abs() < 0.2, "UAV3 back in its slot: {e:?}");
+    let r = metrics.finish(0, sc.duration_s());
+    assert!((r.uncontrolled_s - 3.0).abs() < 0.15, "{}", r.uncontrolled_s);
+    assert!(!r.pass, "a follower flew 3 s without its agent");
 }

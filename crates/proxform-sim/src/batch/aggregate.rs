@@ -92,6 +92,7 @@ pub struct Aggregator {
     off_path_runs: u64,
     succession_runs: u64,
     succession_latest_s: Option<f64>,
+    uncontrolled: Option<super::runs::UncontrolledSummary>,
     swarm: [OrderedSum; 8],
     close_pairs_max: u64,
     order_min: f64,
@@ -135,6 +136,7 @@ impl Aggregator {
             off_path_runs: 0,
             succession_runs: 0,
             succession_latest_s: None,
+            uncontrolled: None,
             swarm: Default::default(),
             close_pairs_max: 0,
             order_min: 1.0,
@@ -181,6 +183,11 @@ impl Aggregator {
         self.unsafe_runs += u64::from(r.min_separation_m < self.safety_distance_m);
         self.path_deviation_m_max = self.path_deviation_m_max.max(r.path_deviation_m);
         self.off_path_runs += u64::from(r.path_deviation_m > self.path_bound_m);
+        if r.uncontrolled_s > 0.0 {
+            let u = self.uncontrolled.get_or_insert(super::runs::UncontrolledSummary { runs: 0, max_s: 0.0 });
+            u.runs += 1;
+            u.max_s = u.max_s.max(r.uncontrolled_s);
+        }
         if let Some((t, _)) = r.succession {
             self.succession_runs += 1;
             self.succession_latest_s = Some(self.succession_latest_s.map_or(t, |l: f64| l.max(t)));
@@ -353,6 +360,7 @@ impl Aggregator {
             transitions,
             flown,
             isolation,
+            uncontrolled: self.uncontrolled,
             counts: self.counts,
         }
     }

@@ -54,6 +54,15 @@ impl AxisErrors {
     }
 }
 
+/// Followers that flew without their agents, over a batch.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct UncontrolledSummary {
+    /// Runs with any (they do not pass).
+    pub runs: u64,
+    /// Follower-seconds flown without an agent: the most in one run.
+    pub max_s: f64,
+}
+
 /// Aggregate of a batch.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Summary {
@@ -136,6 +145,10 @@ pub struct Summary {
     /// What the followers flew, when the formation forms, changes or may be re-assigned.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub flown: Option<FlownSummary>,
+    /// Runs in which a follower flew without its agent (a distributed flight): none of them
+    /// passes. Left out of the JSON when there were none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncontrolled: Option<UncontrolledSummary>,
     /// Counts the report prints beside the fractions (not written to the JSON).
     #[serde(skip)]
     pub counts: RunCounts,
@@ -573,6 +586,7 @@ mod tests {
             model_error_rms: [model; 9],
             duration_s: 60.0,
             flown: None,
+            uncontrolled_s: 0.0,
             held_fraction: 0.5,
             within_allowable_fraction: 1.0,
             control_effort: 0.1,

@@ -106,6 +106,9 @@ pub struct RunSummary {
     pub transitions: Option<TransitionMetrics>,
     /// What the followers flew, when the formation forms, changes or may be re-assigned.
     pub flown: Option<FlownMetrics>,
+    /// Follower-seconds flown without an agent (a distributed flight whose agent was gone:
+    /// the UAV held its course, uncontrolled). A run with any does not pass.
+    pub uncontrolled_s: f64,
 }
 
 /// What the followers flew over a run (means per follower).
@@ -206,6 +209,7 @@ struct Acc {
     isolating: u64,
     isolated: u64,
     suspect: u64,
+    uncontrolled: u64,
 }
 
 /// Observer accumulating a [`RunSummary`].
@@ -471,7 +475,10 @@ impl RunMetrics {
         // The formation must also keep to its mission: its navigator (or, once it is gone, the
         // formation's estimate of its slot) within the path bound of the planned path.
         let on_path = self.path_deviation <= self.path_bound;
-        let pass = safe && on_path && self.criterion.passes(&evidence);
+        // A follower that flew without its agent (gone from a distributed flight) was not
+        // controlled by the method: whatever its errors, the run does not pass.
+        let controlled = self.total.uncontrolled == 0;
+        let pass = safe && on_path && controlled && self.criterion.passes(&evidence);
         // Each sampled follower by the same criterion over its own errors.
         let window_last = |k: usize| {
             let c = &self.transitions[k];
@@ -574,6 +581,7 @@ impl RunMetrics {
             succession: self.succession,
             model_error_rms,
             duration_s,
+            uncontrolled_s: self.total.uncontrolled as f64 * self.dt,
         }
     }
 }
@@ -727,6 +735,7 @@ fn partial(
         p.acc.isolating += u64::from(u.isolated > 0);
         p.acc.isolated += u64::from(u.isolated);
         p.acc.suspect += u64::from(u.own_suspect);
+        p.acc.uncontrolled += u64::from(u.uncontrolled);
         if e.iter().zip(&allowable).all(|(e, a)| e.abs() <= *a) {
             p.acc.within += 1;
         }
@@ -782,6 +791,7 @@ impl Observer for RunMetrics {
             self.total.isolating += p.acc.isolating;
             self.total.isolated += p.acc.isolated;
             self.total.suspect += p.acc.suspect;
+            self.total.uncontrolled += p.acc.uncontrolled;
             for k in 0..6 {
                 self.healthy_max[k] = self.healthy_max[k].max(p.healthy_max[k]);
             }

@@ -70,6 +70,8 @@ pub struct UavStep {
     pub isolated: u16,
     /// It flew on its own prediction, its own measurement failing the own-sensor check.
     pub own_suspect: bool,
+    /// Its agent (outside the engine) was gone: it flew on without one, holding its course.
+    pub uncontrolled: bool,
 }
 
 /// What a UAV's controller did in a step: its [`Outcome`] without the envelope distance (one

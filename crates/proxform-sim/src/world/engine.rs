@@ -318,7 +318,7 @@ impl<'s> Simulation<'s> {
     pub fn step(&mut self) {
         self.world.apply_schedule();
         if let Some(out) = &mut self.outside {
-            out.apply_membership(&mut self.world);
+            out.apply_membership(&self.world);
         }
         self.reassign_slots();
         let w = &mut self.world;
@@ -341,6 +341,9 @@ impl<'s> Simulation<'s> {
                 for_each_block_in_order(&mut self.agents, &mut self.next, &mut self.uavs, areas, |b, blk| {
                     ctx.apply(b, blk, by_uav)
                 });
+                for (u, gone) in self.uavs.iter_mut().zip(&out.absent) {
+                    u.uncontrolled = *gone;
+                }
             }
             None => {
                 for_each_block(&mut self.agents, &mut self.next, &mut self.uavs, areas, parallel, |b, blk| {
@@ -513,26 +516,13 @@ fn slot_state(sc: &Scenario, f: &proxform_core::Formation, i: usize, nav: &State
 type Buffers<'b> = (&'b mut Vec<Option<Agent>>, &'b mut Vec<State9>, &'b mut Vec<UavStep>);
 
 impl Outside<'_> {
-    /// Followers whose agent is gone leave the flight; those whose agent is back join in their
-    /// slot (relative to the navigator, or to the formation's estimate of it). A UAV the
-    /// scenario itself has out of the flight stays out.
-    fn apply_membership(&mut self, w: &mut World<'_>) {
-        let sc = w.scenario;
-        let nav = sc.navigator().index();
-        for i in (0..sc.len()).filter(|i| *i != nav) {
-            if !w.active[i] && !self.absent[i] {
-                continue;
-            }
-            let here = self.agents.present(proxform_core::UavId(i as u32));
-            if !here && w.active[i] {
-                (w.active[i], self.absent[i]) = (false, true);
-            } else if here && self.absent[i] {
-                let f = w.flown();
-                let reference =
-                    crate::measure::observer::navigator_reference(sc, f, &w.current, &w.active, w.carried());
-                w.current[i] = slot_state(sc, f, i, &reference);
-                (w.active[i], self.absent[i]) = (true, false);
-            }
+    /// Which flying followers' agents are gone: such a UAV flies on without one, holding its
+    /// course, uncontrolled; it stays in the flight and is judged (and a run with one does not
+    /// pass). When its agent is back it is controlled again from where it is.
+    fn apply_membership(&mut self, w: &World<'_>) {
+        let nav = w.scenario.navigator().index();
+        for i in (0..w.scenario.len()).filter(|i| *i != nav) {
+            self.absent[i] = w.active[i] && !self.agents.present(proxform_core::UavId(i as u32));
         }
     }
 
@@ -552,11 +542,12 @@ impl Outside<'_> {
         for (j, u) in self.sensed.uavs.iter().enumerate() {
             // A decision with a non-finite number in it, or one no agent of this vehicle could
             // have made (far beyond what it can do in a period), is never applied: the UAV
-            // holds.
-            let d =
-                self.decisions.get(j).copied().filter(|d| {
-                    d.is_finite() && vehicle.plausible(&truth[u.index()], &d.input, d.setpoint.as_ref(), dt)
-                });
+            // holds. So does a UAV whose agent is gone.
+            let d = self.decisions.get(j).copied().filter(|d| {
+                !self.absent[u.index()]
+                    && d.is_finite()
+                    && vehicle.plausible(&truth[u.index()], &d.input, d.setpoint.as_ref(), dt)
+            });
             self.by_uav[u.index()] = Some(d.unwrap_or_else(holding));
         }
     }
