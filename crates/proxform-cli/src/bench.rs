@@ -210,6 +210,9 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
     let dt = spec.dt_s.unwrap_or(proxform_scenario::defaults::DT_S);
     spec.duration_s = Some(proxform_scenario::defaults::DURATION_S.max((steps as f64 + 1.0) * dt));
     let scenario = Scenario::try_from(spec)?;
+    if let Some(engine) = engine {
+        crate::memory::check_flights(&scenario, engine, 1, crate::memory::available_bytes())?;
+    }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let t: Throughput = pool.install(|| match engine {
         Some(engine) => measure(&scenario, engine, steps, search, threads > 1),

@@ -299,6 +299,13 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     if args.net.distributed {
         preflight(&scenario, args.runs, &args.net)?;
     }
+    // Said (or refused) before anything is allocated or written: runs fly one per worker.
+    let workers = match args.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
+    let at_once = workers.min(usize::try_from(args.runs).unwrap_or(usize::MAX)).max(1);
+    crate::memory::check_flights(&scenario, engine, at_once, crate::memory::available_bytes())?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let _lock = crate::files::lock_folder(&out)?;
     // Outputs a link or FIFO would take are refused before anything flies.

@@ -40,6 +40,16 @@ pub fn engine_for(sc: &Scenario) -> Result<EngineKind, Unsupported> {
     }
 }
 
+/// Bytes one flight of `sc` on `engine` will hold (the engine's arrays and agents; the
+/// scenario itself is in memory already), estimated before the flight is built: to refuse or
+/// announce a flight before allocating it.
+pub fn bytes_estimate(sc: &Scenario, engine: EngineKind) -> usize {
+    match engine {
+        EngineKind::Reference => Simulation::bytes_estimate(sc),
+        EngineKind::Fast => FastSimulation::bytes_estimate(sc),
+    }
+}
+
 /// One flight on either engine.
 #[derive(Debug)]
 pub enum Flight<'s> {

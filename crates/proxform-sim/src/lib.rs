@@ -29,7 +29,7 @@ pub use batch::runs::{
     FormingSummary, IsolationSummary, SensorFaultSummary, Summary, SwarmMetrics, TransitionSummary,
     UncontrolledSummary,
 };
-pub use flight::{engine_for, EngineKind, Flight};
+pub use flight::{bytes_estimate, engine_for, EngineKind, Flight};
 pub use measure::metrics::{
     FormingMetrics, IsolationMetrics, RunMetrics, RunSummary, SensorFaultMetrics, TransitionMetrics,
 };

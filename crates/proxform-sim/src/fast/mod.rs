@@ -152,6 +152,21 @@ impl<'s> FastSimulation<'s> {
         &self.states
     }
 
+    /// Bytes a flight of `sc` will hold in the engine's arrays (as [`Self::heap_bytes`]),
+    /// estimated before it is built: its per-UAV arrays, its track records, the neighbour grid
+    /// (about 32 bytes a UAV) and each UAV's environment.
+    pub fn bytes_estimate(sc: &Scenario) -> usize {
+        let c = Consts::new(sc);
+        let n = sc.len();
+        n * (std::mem::size_of::<State9>()
+            + std::mem::size_of::<UavStep>()
+            + std::mem::size_of::<[f32; 6]>()
+            + 2
+            + c.capacity * std::mem::size_of::<Track>()
+            + std::mem::size_of::<UavEnv>()
+            + 32)
+    }
+
     /// Bytes held by the engine's arrays (the scenario excluded).
     pub fn heap_bytes(&self) -> usize {
         let n = self.states.len();

@@ -299,6 +299,19 @@ impl<'s> Simulation<'s> {
             + agents
     }
 
+    /// Bytes a flight of `sc` will hold (as [`Self::heap_bytes`]), estimated before it is
+    /// built: every follower's agent as large as the first one's, the per-UAV buffers, and the
+    /// neighbour grid (about 32 bytes a UAV).
+    pub fn bytes_estimate(sc: &Scenario) -> usize {
+        let n = sc.len();
+        let nav = sc.navigator();
+        let agent = (0..n as u32)
+            .map(proxform_core::UavId)
+            .find(|&u| u != nav)
+            .map_or(0, |u| sc.agent(u).heap_bytes() + std::mem::size_of::<Agent>());
+        n * (3 * std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>() + 32) + n.saturating_sub(1) * agent
+    }
+
     fn frame(&self) -> StepFrame<'_> {
         let w = &self.world;
         StepFrame {
