@@ -96,9 +96,10 @@ pub fn swarm_spec(n: usize) -> ScenarioSpec {
     s.path.yaw_amplitude_deg = Some(5.0);
     s.path.roll_amplitude_deg = Some(10.0);
     s.controller.sensing_range_m = Some(range);
-    // Both engines fly it alike (`proxform bench` compares them): the fast engine does not run
-    // the own-sensor check, so the built-in states it off at every size.
+    // Both engines fly it alike (`proxform bench` compares them): the fast engine runs neither
+    // the own-sensor check nor the robust fusion, so the built-in states them off at every size.
     s.controller.own_gate_m = Some(0.0);
+    s.controller.isolation_gate = Some(0.0);
     s.allowable.x_m = Some(5.0);
     s.allowable.y_m = Some(5.0);
     s.allowable.z_m = Some(5.0);

@@ -29,16 +29,25 @@ pub const FORM_WITHIN_S: f64 = 120.0;
 /// quarter more, since the avoidance holds its distance only to within the lag of the UAVs'
 /// rate-limited inputs.
 pub const AVOID_PER_SAFETY: f64 = 1.25;
-/// Robust fusion's gate (in permissible errors) when `controller.isolation_gate` is unset and
-/// UAVs are off their slots by design (scattered starts, joins, formation changes, slots
-/// re-assigned on a loss): there a neighbour far from its own slot is normal, and leaning on
-/// it drags the UAV that leans (METHOD §8, "Forming from scattered starts"). Unset otherwise.
-pub const ISOLATION_GATE_OFF_SLOTS: f64 = 1.0;
+/// Robust fusion's gate (in permissible errors) when `controller.isolation_gate` is unset: a
+/// neighbour far from its own slot (one whose own sensor failed, one joining, re-assigned or
+/// forming) must not drag the UAVs that lean on it (METHOD §8). Unset with `method = "paper"`
+/// and where the fast engine flies a formation that keeps its slots (it does not run the
+/// fusion).
+pub const ISOLATION_GATE: f64 = 1.0;
 
 /// The own-sensor check's gate (m) when `controller.own_gate_m` is unset (METHOD §8): a reading
 /// of the UAV's own position this far from its prediction is refused. Unset with
 /// `method = "paper"` and where the fast engine flies the scenario (it does not run the check).
 pub const OWN_GATE_M: f64 = 3.0;
+
+/// How fast the own-sensor gate widens while readings are refused (m/s) when
+/// `controller.own_gate_growth_mps` is unset, in calm air; turbulence adds 3 σ_u of its
+/// horizontal wind (METHOD §8): a UAV flying on its prediction drifts from it by as much as the
+/// wind changed, and a gate that widens more slowly never takes a good reading again.
+pub const OWN_GATE_GROWTH_MPS: f64 = 1.0;
+/// See [`OWN_GATE_GROWTH_MPS`]: the turbulence's horizontal σ counts this many times.
+pub const OWN_GATE_GROWTH_SIGMAS: f64 = 3.0;
 
 /// Position noise 1σ (m).
 pub const NOISE_POSITION_M: f64 = 0.02;

@@ -309,14 +309,23 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
-        // Robust fusion by default where UAVs are off their slots by design: a neighbour far
-        // from its own slot must not drag the UAVs that lean on it.
+        // Where the fast engine flies the scenario (it runs neither the fusion nor the own
+        // check).
+        let fast = match engine {
+            crate::scenario::EngineChoice::Fast => true,
+            crate::scenario::EngineChoice::Auto => n >= crate::scenario::EngineChoice::AUTO_FAST_FROM,
+            crate::scenario::EngineChoice::Reference => false,
+        };
+        // Robust fusion by default (METHOD §8): a neighbour far from its own slot (its sensor
+        // failed; it joins, forms or was re-assigned) must not drag the UAVs that lean on it.
+        // Where UAVs are off their slots by design the fusion is needed, and the fast engine
+        // does not fly such scenarios anyway.
         let off_slots = !placement.in_slots()
             || !schedule.is_empty()
             || reassign_on_loss.is_some()
             || faults.iter().any(|f| matches!(f, crate::faults::Fault::Join { .. }));
-        if spec.controller.isolation_gate.is_none() && off_slots && !paper {
-            params.isolation_gate = Some(defaults::ISOLATION_GATE_OFF_SLOTS);
+        if spec.controller.isolation_gate.is_none() && !paper && (off_slots || !fast) {
+            params.isolation_gate = Some(defaults::ISOLATION_GATE);
         }
         // Collision avoidance by default for the kinematic vehicle; the fixed wing's braking is a
         // rough figure (it avoids by turning), so there it is asked for, like the stopping limit.
@@ -332,14 +341,14 @@ impl TryFrom<ScenarioSpec> for Scenario {
             params.plan_forward = false;
         }
         // The own-sensor check by default (METHOD §8), but for the paper's method and where the
-        // fast engine flies the scenario (it does not run the check).
-        let fast = match engine {
-            crate::scenario::EngineChoice::Fast => true,
-            crate::scenario::EngineChoice::Auto => n >= crate::scenario::EngineChoice::AUTO_FAST_FROM,
-            crate::scenario::EngineChoice::Reference => false,
-        };
+        // fast engine flies the scenario (it does not run the check). Its gate widens at least as
+        // fast as the turbulence can move a UAV off its prediction.
         if spec.controller.own_gate_m.is_none() && !paper && !fast {
             params.own_gate_m = Some(defaults::OWN_GATE_M);
+        }
+        if spec.controller.own_gate_growth_mps.is_none() {
+            let sigma_u = wind.turbulence.map_or(0.0, |t| t.scales().1[0]);
+            params.own_gate_growth_mps = defaults::OWN_GATE_GROWTH_MPS + defaults::OWN_GATE_GROWTH_SIGMAS * sigma_u;
         }
         // Every UAV knows the mission: reports are brought forward with the navigator's plan
         // (METHOD §3, "Reports brought forward").
