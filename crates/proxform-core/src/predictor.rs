@@ -414,6 +414,36 @@ impl NeighbourTracks {
             .then_some(UavId(id))
     }
 
+    /// Lets UAV `from`'s track stand for UAV `to`, moved by `shift(its state)` (added to its
+    /// position, velocity and attitude), when there is no track of `to`: a lost leader's
+    /// track, carried by the plan, moved by the formation's offset between the two slots, is
+    /// where its successor flies until reports of it arrive. Nothing when `to` is tracked
+    /// already (what the UAV knows first-hand wins) or `from` is not.
+    pub fn relabel(&mut self, from: UavId, to: UavId, shift: impl Fn(&State9) -> State9) {
+        if self.ids.iter().any(|t| t.0 == to.0) {
+            return;
+        }
+        let Some(s) = self.ids.iter().position(|t| t.0 == from.0 && t.0 != FREE) else { return };
+        let tr = &mut self.tracks[s];
+        let d = shift(&extrapolate(tr, 0.0));
+        if !d.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        for k in 0..3 {
+            tr.pos[k] += d[X + k];
+        }
+        for k in 0..6 {
+            tr.va[k] += d[VX + k] as f32;
+        }
+        if let Kind::Singer(k) = &mut self.kind {
+            for (c, axis) in k.axes[s].iter_mut().enumerate() {
+                axis.x[0] += d[X + c];
+                axis.x[1] += d[VX + c];
+            }
+        }
+        self.ids[s].0 = to.0;
+    }
+
     /// Whether reports are brought forward by the plan beyond a period ([`Self::with_carry`]).
     pub fn carries(&self) -> bool {
         self.carry.is_some()
@@ -721,5 +751,47 @@ mod tests {
         }
         assert_eq!(tracks.tracks.len(), 2);
         assert!(tracks.ids.iter().all(|t| t.0 != 1));
+    }
+
+    #[test]
+    fn a_lost_leaders_track_stands_for_its_successor_moved_by_their_offset() {
+        for kind in [
+            PredictorKind::default(),
+            PredictorKind::Singer {
+                accel_sigma_mps2: 1.0,
+                tau_s: 1.0,
+                position_sigma_m: 0.02,
+                velocity_sigma_mps: 0.05,
+                alpha: 0.8,
+                beta: 0.47,
+            },
+        ] {
+            let mut tracks = NeighbourTracks::new(kind, 4, 1.0, 0.2);
+            let mut s = State9::zeros();
+            s[VX] = 70.0;
+            for k in 0..5 {
+                s[X] = 7.0 * k as f64;
+                tracks.predict(&obs(1, s), 0.1 * k as f64, 0.1);
+            }
+            let shift = |_: &State9| {
+                let mut d = State9::zeros();
+                d[X + 1] = 50.0;
+                d
+            };
+            let (before, age) = tracks.report(UavId(1), 0.4, 1.0).expect("tracked");
+            tracks.relabel(UavId(1), UavId(2), shift);
+            assert!(tracks.report(UavId(1), 0.4, 1.0).is_none(), "{kind:?}: no longer UAV 1's");
+            let (after, age2) = tracks.report(UavId(2), 0.4, 1.0).expect("UAV 2's now");
+            assert_eq!(age, age2);
+            assert!(
+                (after[X + 1] - before[X + 1] - 50.0).abs() < 1e-9 && (after[X] - before[X]).abs() < 1e-9,
+                "{kind:?}"
+            );
+            assert!((after[VX] - before[VX]).abs() < 1e-4, "{kind:?}");
+            // A UAV tracked first-hand keeps its own track.
+            tracks.predict(&obs(3, State9::zeros()), 0.4, 0.1);
+            tracks.relabel(UavId(2), UavId(3), shift);
+            assert!(tracks.report(UavId(2), 0.4, 1.0).is_some() && tracks.report(UavId(3), 0.4, 1.0).is_some());
+        }
     }
 }

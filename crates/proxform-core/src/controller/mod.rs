@@ -235,6 +235,16 @@ impl ProximityController {
             }
         }
         self.tracks.grow_to(self.setup.params.areas.areas + dependency.refs().len());
+        // The lost leader's track (carried by the plan) stands for its successor, moved by the
+        // offset between their slots, until reports of the successor arrive: a UAV that knew
+        // the leader only through relays would otherwise lean on nobody while the relays of
+        // the successor reach it hop by hop (METHOD §8, "Navigator succession").
+        if let Some(lost) = self.navigator.filter(|&n| n != leader) {
+            if let (Some(from), Some(to)) = (self.formation.slot(lost).copied(), self.formation.slot(leader).copied()) {
+                let old = &self.formation;
+                self.tracks.relabel(lost, leader, |s| old.w(&to, &from, s));
+            }
+        }
         self.formation = formation;
         self.dependency = dependency;
         self.navigator = self.formation.slot(leader).map(|_| leader);
