@@ -10,8 +10,9 @@ const AXES: [&str; 6] = ["x m", "y m", "z m", "α °", "β °", "γ °"];
 
 /// The followers whose rows the table shows (indices into the summary's per-UAV detail, in
 /// id order): all of them up to [`MAX_ROWS`]; beyond, the [`MAX_ROWS`] farthest out of their
-/// allowable errors over the batch (the root sum of squares of their largest errors over the
-/// allowable ones; those not flown last), so that a deep formation's rear ranks show.
+/// allowable errors over the batch (the largest of their worst errors over the allowable ones,
+/// the axis that decides a verdict; those not flown last), so that a deep formation's rear
+/// ranks show.
 fn rows_shown(s: &proxform_sim::Summary) -> Vec<usize> {
     let n = s.per_uav.len();
     if n <= MAX_ROWS {
@@ -23,7 +24,7 @@ fn rows_shown(s: &proxform_sim::Summary) -> Vec<usize> {
             return f64::NEG_INFINITY;
         }
         let w = s.per_uav_worst[f].as_array();
-        (0..6).map(|k| (w[k] / allow[k]).powi(2)).sum::<f64>()
+        (0..6).map(|k| w[k] / allow[k]).fold(0.0, f64::max)
     };
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| ratio(b).total_cmp(&ratio(a)).then(a.cmp(&b)));
@@ -87,7 +88,11 @@ pub fn print(
             "); each has its row in summary.json (per_uav".to_string()
         };
         let shown_n = shown.len();
-        writeln!(out, "… {} more followers (shown: the {shown_n} farthest out{detail})", followers - shown_n)?;
+        writeln!(
+            out,
+            "… {} more followers (shown: the {shown_n} farthest out of their allowable errors, on their worst axis{detail})",
+            followers - shown_n
+        )?;
         let per_run = s.adjustments_per_uav_minute * scenario.duration_s() / 60.0;
         let verdict = if s.pass_fraction == 1.0 { "PASS" } else { "FAIL" };
         uav_row(out, "all", &s.worst_abs_error.as_array(), per_run, verdict)?;

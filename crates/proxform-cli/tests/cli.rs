@@ -314,9 +314,34 @@ fn every_follower_has_its_detail_and_chosen_uavs_their_trajectories() {
         .expect("runs");
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{stdout}{}", String::from_utf8_lossy(&o.stderr));
-    assert!(stdout.contains("… 289 more followers (shown: the 10 farthest out)"), "{stdout}");
+    assert!(
+        stdout.contains(
+            "… 289 more followers (shown: the 10 farthest out of their allowable errors, on their worst axis)"
+        ),
+        "{stdout}"
+    );
     let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary");
     let v: serde_json::Value = serde_json::from_str(&summary).expect("json");
+    // The rows shown are the ten whose worst error over its allowable one is largest.
+    let allow = &v["allowable_error"];
+    let ratio = |w: &serde_json::Value| {
+        ["x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg"]
+            .iter()
+            .map(|k| w[k].as_f64().unwrap_or(0.0) / allow[k].as_f64().unwrap_or(1.0))
+            .fold(0.0, f64::max)
+    };
+    let worst = v["per_uav_worst"].as_array().expect("list");
+    let mut ranked: Vec<(f64, u64)> = worst
+        .iter()
+        .zip(v["per_uav"].as_array().expect("list"))
+        .map(|(w, u)| (ratio(w), u.as_u64().unwrap_or(0)))
+        .collect();
+    ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut top: Vec<u64> = ranked[..10].iter().map(|r| r.1).collect();
+    top.sort_unstable();
+    let shown: Vec<u64> =
+        stdout.lines().filter_map(|l| l.strip_prefix("UAV")?.split_whitespace().next()?.parse().ok()).collect();
+    assert_eq!(shown, top, "{stdout}");
     let per_uav: Vec<u64> = v["per_uav"].as_array().expect("list").iter().filter_map(|u| u.as_u64()).collect();
     assert_eq!(per_uav, (2..=300).collect::<Vec<u64>>());
     assert_eq!(v["per_uav_runs_flown"].as_array().map(Vec::len), Some(299));
