@@ -282,7 +282,18 @@ impl Agent {
                     for k in 0..3 {
                         pred.settled[k] += pred.moved[k];
                     }
-                    pred.next
+                    // Dead reckoning goes on with the reading's velocity unless the reading is
+                    // frozen: a fix refused for its position (an offset, or a good one the
+                    // prediction lost while the wind moved the UAV) still tells how it moves,
+                    // so the prediction stops drifting from the UAV and the widening gate
+                    // takes the readings again.
+                    let mut own = pred.next;
+                    if !stale {
+                        for k in 0..3 {
+                            own[state::VX + k] = own_measured[state::VX + k];
+                        }
+                    }
+                    own
                 } else {
                     // Accepted again after refusals (within the widened gate, a lasting
                     // offset included): the readings settle where they are now.

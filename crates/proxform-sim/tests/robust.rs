@@ -533,3 +533,26 @@ fn with_biased_fixes_a_late_radio_and_a_gust_the_rear_follows_the_navigators_suc
     assert!(b.pass_fraction >= 0.95, "{} {:?}", b.pass_fraction, b.worst_abs_error);
     assert!(worst_over_allowable(&b, 20) < 0.6, "{:?}", b.worst_abs_error);
 }
+
+#[test]
+fn a_uav_whose_readings_are_refused_dead_reckons_with_their_velocity_once_they_move_again() {
+    // UAV4's sensor freezes for 5 s as a 30 km/h gust blows through moderate turbulence: on its
+    // prediction it drifts 46 m. When the fault ends its readings are good again but far from
+    // the prediction; they are refused for their position until the gate has widened, yet
+    // their velocity is the UAV's, so the prediction stops drifting and the readings are taken
+    // within seconds (METHOD §8). Dead-reckoned on the prediction's own velocity it took up to
+    // 40.7 s (seed 2, 100 runs).
+    let text = "name = \"grid10-stuck-gust\"\nduration_s = 100.0\nsafety_distance_m = 30.0\n\
+                [formation.shape]\nkind = \"grid\"\nuavs = 10\nspacing_m = 80.0\n\
+                [path]\nkind = \"segments\"\nspeed_kmh = 230.0\n[[path.segment]]\nduration_s = 20.0\n\
+                [[path.segment]]\nduration_s = 30.0\nturn_rate_deg_s = 0.5\nclimb_kmh = 10.0\n\
+                [[path.segment]]\nduration_s = 50.0\nturn_rate_deg_s = -0.3\n\
+                [allowable]\nx_m = 2.0\ny_m = 16.0\nz_m = 2.0\nalpha_deg = 0.4\nbeta_deg = 0.3\ngamma_deg = 1.0\n\
+                [wind]\nturbulence = \"moderate\"\ngust_at_s = 32.0\ngust_duration_s = 5.0\ngust_peak_kmh = [0.0, 30.0, 0.0]\n\
+                [[fault]]\nkind = \"stuck_sensor\"\nuav = 4\nat_s = 30.0\nduration_s = 5.0\n";
+    let s = proxform_scenario::load::parse(text, "grid10-gust.toml").expect("valid");
+    let b = run_batch(&s, RunOptions::default(), 2, 100, None, &|| {}).summary;
+    let f = b.sensor_faults.expect("sensor faults");
+    assert!(f.rejoin_s_max < 10.0, "{f:?}");
+    assert!(f.healthy_pass_fraction >= 0.95, "{f:?}");
+}
