@@ -155,6 +155,10 @@ def _progress(progress: Progress, unit: str) -> tuple[Optional[Callable[[int, in
         return None, lambda: None
     if callable(progress):
         return progress, lambda: None
+    if progress is not True:
+        raise TypeError(
+            f"progress: True (a bar), False or None (none) or a callable(done, total), not {type(progress).__name__} {progress!r}"
+        )
     try:
         from tqdm.auto import tqdm
     except ImportError:

@@ -104,3 +104,11 @@ def test_counts_that_overflow_are_refused():
     big = np.array([1, 2**63 - 1, 0, 0, 0], dtype=np.int64)
     with pytest.raises(ValueError, match="counts"):
         many.step(0.0, own, big, np.array([1]), np.zeros((1, 9)))
+
+
+@pytest.mark.parametrize("bad", [42, "yes", 1.0, [True]])
+def test_progress_that_is_neither_a_flag_nor_a_callable_is_refused(bad):
+    # (It was accepted as true: 42 drew a bar.)
+    sc = proxform.load("paper")
+    with pytest.raises(TypeError, match="progress"):
+        proxform.run(sc, runs=1, trajectories=False, progress=bad)
