@@ -112,3 +112,11 @@ def test_progress_that_is_neither_a_flag_nor_a_callable_is_refused(bad):
     sc = proxform.load("paper")
     with pytest.raises(TypeError, match="progress"):
         proxform.run(sc, runs=1, trajectories=False, progress=bad)
+
+
+@pytest.mark.parametrize("bad", [2.0, True, "2", None])
+def test_a_controller_for_a_uav_that_is_not_an_int_names_the_argument(bad):
+    with pytest.raises(TypeError, match="uav: a UAV number"):
+        proxform.Controller(proxform.load("paper"), bad)
+    with pytest.raises(ValueError, match="uav"):
+        proxform.Controller(proxform.load("paper"), 2**70)

@@ -105,6 +105,16 @@ fn whole_like<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, P
     array_like(&a, "int64", what)
 }
 
+/// A UAV number given as one Python int (a bool, a float such as 2.0, or anything else raises
+/// a TypeError naming the argument `what`).
+fn uav_number(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<i64> {
+    let kind = obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+    if obj.is_instance_of::<pyo3::types::PyBool>() || !obj.is_instance_of::<pyo3::types::PyInt>() {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!("{what}: a UAV number (an int), not {kind} {obj}")));
+    }
+    obj.extract::<i64>().map_err(|_| bad(format!("{what} = {obj}: not a UAV number of this scenario")))
+}
+
 /// Checks a neighbour's number (from 1) against the formation and the observer.
 fn neighbour_id(id: i64, me: UavId, uavs: usize, what: impl Fn() -> String) -> PyResult<UavId> {
     if id < 1 || id as u64 > uavs as u64 {
@@ -229,9 +239,9 @@ impl PyController {
     /// The controller of UAV `uav` (from 1; not the navigator) of `scenario`, running the
     /// scenario's method (the proximity method or a baseline).
     #[new]
-    fn new(scenario: &Bound<'_, PyScenario>, uav: i64) -> PyResult<Self> {
+    fn new(scenario: &Bound<'_, PyScenario>, uav: &Bound<'_, PyAny>) -> PyResult<Self> {
         let sc = scenario.get().inner.clone();
-        let (id, agent) = agent_of(&sc, uav)?;
+        let (id, agent) = agent_of(&sc, uav_number(uav, "uav")?)?;
         Ok(Self { scenario: sc, id, agent, last_t: None, heard: Vec::with_capacity(16) })
     }
 
