@@ -320,10 +320,15 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
             ("controller", "own_gate_m", "the method and the engine"),
             notes,
         ),
-        own_gate_growth_mps: if set.own_gate_m.is_some() {
-            p.own_gate_m.map(|_| p.own_gate_growth_mps)
-        } else {
-            set.own_gate_growth_mps
+        own_gate_growth_mps: match p.own_gate_m {
+            // Derived from the turbulence unless the file sets it: it stays derived.
+            Some(_) => follows(
+                set.own_gate_growth_mps,
+                p.own_gate_growth_mps,
+                ("controller", "own_gate_growth_mps", "wind.turbulence"),
+                notes,
+            ),
+            None => set.own_gate_growth_mps,
         },
         method: Some(if crate::convert::paper_method(set) { crate::convert::PAPER } else { method.label() }.into()),
         gains,

@@ -61,3 +61,18 @@ fn a_value_left_to_follow_another_key_follows_it_in_the_printed_file() {
     // Units round-trip exactly: 0.18 km/h of velocity noise is the same m/s again.
     assert_eq!(again.noise().velocity_mps.to_bits(), original.noise().velocity_mps.to_bits());
 }
+
+#[test]
+fn the_own_gates_growth_left_to_follow_the_turbulence_follows_it_in_the_printed_file() {
+    // The own-sensor check set in the file, its growth left to the turbulence: printed, the
+    // growth is a comment, and a changed turbulence changes it.
+    let text = "name = \"g\"\n[formation.shape]\nkind = \"v\"\nuavs = 5\nspacing_m = 80.0\n[path]\nkind = \"paper\"\n\
+                [wind]\nturbulence = \"light\"\n[controller]\nown_gate_m = 3.0\n";
+    let (original, again) = both(text, "g.toml");
+    assert_eq!(again.controller().own_gate_growth_mps, original.controller().own_gate_growth_mps);
+    assert!(original.controller().own_gate_growth_mps > 3.0);
+    let printed = to_toml(&original).expect("serialises");
+    assert!(printed.contains("# own_gate_growth_mps = "), "{printed}");
+    let calm = parse(&printed.replace("turbulence = \"light\"", "turbulence = \"none\""), "calm.toml").expect("valid");
+    assert_eq!(calm.controller().own_gate_growth_mps, 1.0);
+}
