@@ -137,10 +137,17 @@ fn distributed(
             proxform_sim::measure::stats::quantile_of(&mut ages, 0.5) * 1e3,
             proxform_sim::measure::stats::quantile_of(&mut ages, 0.99) * 1e3,
         );
+        let mut applied = d.stats.applied_ages_s.clone();
+        let (c50, c99) = (
+            proxform_sim::measure::stats::quantile_of(&mut applied, 0.5) * 1e3,
+            proxform_sim::measure::stats::quantile_of(&mut applied, 0.99) * 1e3,
+        );
         eprintln!(
-            "real time: {} of {} steps began late (> 0.1 Δt); updates were {a50:.3} ms old (median), {a99:.3} ms \
-             (p99) when the agents stepped",
-            d.stats.late_steps, d.stats.steps
+            "real time: {} of {} steps began late (> 0.1 Δt); the world fell a period behind {} time(s) and paused \
+             the flight {:.3} s instead of replaying steps; updates were {a50:.3} ms old (median), {a99:.3} ms (p99) \
+             when the agents stepped; commands were {c50:.1} ms old (median), {c99:.1} ms (p99) of flight time when \
+             applied",
+            d.stats.late_steps, d.stats.steps, d.stats.paused.0, d.stats.paused.1
         );
     }
     if let Some(m) = &d.stats.mavlink {

@@ -194,30 +194,176 @@ fn transport_losses_from_the_scenario_are_reproducible_and_cost_decisions() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// A number printed just before `marker` in `text`.
+fn count_before(text: &str, marker: &str) -> f64 {
+    text.split(marker)
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no number before {marker:?} in {text}"))
+}
+
+/// The largest error of the run on `axis` (summary.json's worst_abs_error).
+fn worst(dir: &Path, axis: &str) -> f64 {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary");
+    let summary: serde_json::Value = serde_json::from_str(&text).expect("json");
+    summary["worst_abs_error"][axis].as_f64().expect("an error")
+}
+
 #[test]
-fn a_transport_delay_past_the_period_holds_every_decision_in_real_time() {
-    // Real time, 3 s: a delay of 1 ms costs nothing; one of 95 ms (past 0.9 Δt) makes every
-    // decision of the flight arrive too late, so each counts as holding.
+fn on_their_own_clocks_agents_make_up_a_transport_delay_and_never_act_on_stale_updates() {
+    // Real time, the paper with the world ↔ agent messages delayed each way (queued, never
+    // slept). 1 ms costs nothing. 60 ms: the round trip misses the world's 90 ms window, so
+    // every command acts a step after its update; the agent decides for that step, through the
+    // command already on its way, and the formation holds (deciding at its update's instant
+    // gave y errors past 1.9 m). 300 ms: an update is too old to act on by the time its
+    // command would; every UAV holds, and the run fails.
     let dir = out("delay");
     std::fs::create_dir_all(&dir).expect("a folder");
     let base =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/paper.toml")).expect("paper");
-    let missing = |delay: f64, name: &str| -> u64 {
+    let fly = |delay: f64, seconds: &str, name: &str| -> (std::process::Output, PathBuf) {
         let file = dir.join(format!("{name}.toml"));
         std::fs::write(&file, format!("{base}\n[network]\ndelay_s = {delay}\n")).expect("written");
         let f = file.to_str().expect("utf-8");
-        let o = run(&[f, "--duration-s", "3", "--distributed", "--clock", "realtime"], &dir.join(name));
-        let stderr = String::from_utf8_lossy(&o.stderr).to_string();
-        stderr
-            .split(" missing (held)")
-            .next()
-            .and_then(|s| s.rsplit(' ').next())
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("no count in {stderr}"))
+        let o = run(&[f, "--duration-s", seconds, "--distributed", "--clock", "realtime"], &dir.join(name));
+        (o, dir.join(name))
     };
-    assert_eq!(missing(0.001, "short"), 0);
-    // 30 flight steps × 5 followers late; the warm-up runs in lockstep.
-    assert_eq!(missing(0.095, "long"), 150);
+    let (short, _) = fly(0.001, "3", "short");
+    assert_eq!(count_before(&String::from_utf8_lossy(&short.stderr), " missing (held)"), 0.0);
+    let (late, late_dir) = fly(0.06, "20", "late");
+    let stderr = String::from_utf8_lossy(&late.stderr).to_string();
+    // Only the first step, which no command can reach in time, holds.
+    assert!(count_before(&stderr, " missing (held)") <= 10.0, "{stderr}");
+    assert!(stderr.contains("commands were 0.0 ms old (median)"), "each acts at the step it was decided for: {stderr}");
+    let y = worst(&late_dir, "y_m");
+    assert!(y < 1.0, "y error {y} m with a 60 ms delay each way: {stderr}");
+    let (stale, _) = fly(0.3, "3", "stale");
+    let stderr = String::from_utf8_lossy(&stale.stderr).to_string();
+    assert_eq!(stale.status.code(), Some(1), "{stderr}");
+    // 30 flight steps × 5 followers, none acted on.
+    assert_eq!(count_before(&stderr, " missing (held)"), 150.0, "{stderr}");
+    assert!(stderr.contains("too old to step on"), "the agents say why: {stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Stops process `pid` for `seconds` (SIGSTOP, then SIGCONT).
+fn stall(pid: u32, seconds: f64) {
+    let signal = |s: &str| {
+        let ok = Command::new("kill").args([s, &pid.to_string()]).status().expect("kill runs");
+        assert!(ok.success(), "kill {s} {pid}");
+    };
+    signal("-STOP");
+    std::thread::sleep(std::time::Duration::from_secs_f64(seconds));
+    signal("-CONT");
+}
+
+/// A real-time distributed run in the background, its standard error kept.
+fn launch(args: &[&str], swarm: &str, dir: &Path) -> Reap {
+    Reap(
+        Command::new(bin())
+            .args(["run", "--distributed", "--clock", "realtime", "--no-figures", "-q", "--swarm", swarm])
+            .args(args)
+            .arg("--out")
+            .arg(dir)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("the launcher starts"),
+    )
+}
+
+/// Waits for the launcher; its exit code and everything it printed (standard output, then
+/// error).
+fn finish(mut launcher: Reap) -> (Option<i32>, String) {
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = launcher.0.try_wait().expect("wait") {
+            break s;
+        }
+        assert!(start.elapsed().as_secs() < 120, "the flight did not end");
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    let mut printed = String::new();
+    use std::io::Read;
+    if let Some(mut o) = launcher.0.stdout.take() {
+        let _ = o.read_to_string(&mut printed);
+    }
+    if let Some(mut e) = launcher.0.stderr.take() {
+        let _ = e.read_to_string(&mut printed);
+    }
+    (status.code(), printed)
+}
+
+#[test]
+fn a_stalled_world_pauses_the_flight_instead_of_replaying_it() {
+    // Real time, 20 s of the paper; the world's process stopped for 1.5 s about 6 s in. It does
+    // not run the missed steps back to back on held decisions: the flight's time pauses, the
+    // clock's epoch moves, and the run passes.
+    let (swarm, dir) = (format!("wstall-{}", std::process::id()), out("wstall"));
+    let launcher = launch(&["--duration-s", "20"], &swarm, &dir);
+    std::thread::sleep(std::time::Duration::from_secs(8));
+    stall(launcher.0.id(), 1.5);
+    let (code, stderr) = finish(launcher);
+    assert!(stderr.contains("fell a period behind"), "{stderr}");
+    let paused = count_before(&stderr, " time(s) and paused");
+    assert!(paused >= 1.0, "{stderr}");
+    assert_eq!(code, Some(0), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
+    // Real time, a multirotor V of six; UAV3's agent stopped for 4 s about 9 s into the flight.
+    // Its UAV flies on its last setpoint, uncontrolled, and the run says so; the others' agents
+    // hear it go silent and stop following it (they still avoid it), and keep their errors; its
+    // agent back, it returns to its slot.
+    let (swarm, dir) = (format!("astall-{}", std::process::id()), out("astall"));
+    std::fs::create_dir_all(&dir).expect("a folder");
+    let file = dir.join("v6.toml");
+    std::fs::write(
+        &file,
+        "duration_s = 30.0\n[vehicle]\nmodel = \"multirotor\"\n[formation.shape]\nkind = \"v\"\nuavs = 6\n\
+         spacing_m = 8.0\nangle_deg = 30.0\n[path]\nkind = \"waypoints\"\nspeed_kmh = 18.0\n\
+         points_m = [[100.0, 0.0, 0.0], [100.0, 100.0, 0.0]]\nturn_radius_m = 20.0\n",
+    )
+    .expect("written");
+    let out_dir = dir.join("out");
+    let launcher = launch(&[file.to_str().expect("utf-8")], &swarm, &out_dir);
+    let agent3 = || {
+        let o = Command::new("pgrep")
+            .args(["-f", &format!("proxform-agent.*--uavs 3 .*swarm {swarm}")])
+            .output()
+            .expect("pgrep runs");
+        String::from_utf8_lossy(&o.stdout).lines().next().and_then(|l| l.trim().parse::<u32>().ok())
+    };
+    let start = std::time::Instant::now();
+    let pid = loop {
+        if let Some(p) = agent3() {
+            break p;
+        }
+        assert!(start.elapsed().as_secs() < 30, "UAV3's agent did not start");
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    std::thread::sleep(std::time::Duration::from_secs(10));
+    stall(pid, 4.0);
+    let (code, stderr) = finish(launcher);
+    assert_eq!(code, Some(1), "a follower flew uncontrolled: {stderr}");
+    assert!(stderr.contains("uncontrolled"), "{stderr}");
+    for uav in [2, 4, 5, 6] {
+        let line = stderr.lines().find(|l| l.starts_with(&format!("UAV{uav} "))).expect("a row per UAV");
+        assert!(line.ends_with("PASS"), "UAV{uav} kept its errors: {line}\n{stderr}");
+    }
+    let unfollowed: f64 = stderr
+        .lines()
+        .filter(|l| l.starts_with("proxform-agent") && !l.contains("[3]"))
+        .map(|l| count_before(l, " observations of silent neighbours"))
+        .sum();
+    assert!(unfollowed >= 30.0, "the others stopped following UAV3 while it was silent: {stderr}");
+    let traj = std::fs::read_to_string(out_dir.join("trajectories.csv")).expect("trajectories");
+    let last = traj.lines().rfind(|l| l.split(',').nth(1) == Some("3")).expect("UAV3");
+    let e: Vec<f64> = last.split(',').skip(11).take(3).map(|v| v.parse().expect("a number")).collect();
+    assert!(e.iter().all(|x| x.abs() < 0.3), "UAV3 back in its slot: {last}");
     let _ = std::fs::remove_dir_all(dir);
 }
 
@@ -305,4 +451,34 @@ fn authenticated_lockstep_is_the_in_process_run_and_open_listening_needs_tls() {
     for d in [a, b, keys, empty] {
         let _ = std::fs::remove_dir_all(d);
     }
+}
+
+#[test]
+fn an_agent_of_another_scenario_is_refused_and_named() {
+    // The world flies the paper with another ρ; agents started with the plain paper announce
+    // another digest of what they run: none is taken, and the world says why.
+    let (endpoint, swarm, dir) = (free_endpoint(), format!("digest-{}", std::process::id()), out("digest"));
+    let world = Command::new(bin())
+        .args(["world", "--duration-s", "5", "--no-figures", "-q", "--listen", &endpoint, "--rho", "0.5"])
+        .args(["--swarm", &swarm, "--wait-agents-s", "4", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the world starts");
+    let mut world = Reap(world);
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let _agents: Vec<Reap> = (2..=6).map(|u| spawn_agent(&endpoint, &swarm, u)).collect();
+    let status = world.0.wait().expect("the world ends");
+    let mut stderr = String::new();
+    if let Some(mut e) = world.0.stderr.take() {
+        use std::io::Read;
+        let _ = e.read_to_string(&mut stderr);
+    }
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("agents of another scenario were refused") && stderr.contains("UAV 2's agent runs"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
 }

@@ -158,6 +158,8 @@ struct OwnPrediction {
     last: State9,
     /// Time since a measurement of its own state was last accepted (s).
     unaccepted_s: f64,
+    /// The instant `next` is for (s): the last step's time plus one period.
+    for_s: f64,
 }
 
 impl Changes {
@@ -260,6 +262,12 @@ impl Agent {
         let (gain, gate, dt) = (params.own_filter_gain, params.own_gate_m, params.dt_s);
         let growth = params.own_gate_growth_mps;
         let mut suspect = false;
+        // A prediction made for another instant (an agent on its own clock that skipped
+        // periods: stopped, or without updates) says nothing of this one: the measurement is
+        // taken as it is and the prediction starts again from it.
+        if self.own_prediction.as_ref().is_some_and(|p| (p.for_s - now_s).abs() > 0.5 * dt) {
+            self.own_prediction = None;
+        }
         let own = match self.own_prediction.as_deref_mut() {
             Some(pred) => {
                 let at = state::position(own_measured);
@@ -344,15 +352,35 @@ impl Agent {
             let velocity = [own[state::VX], own[state::VX + 1], own[state::VX + 2]];
             let moved = std::array::from_fn(|k| next[state::X + k] - own[state::X + k]);
             match &mut self.own_prediction {
-                Some(p) => (p.next, p.velocity, p.moved) = (next, velocity, moved),
+                Some(p) => (p.next, p.velocity, p.moved, p.for_s) = (next, velocity, moved, now_s + dt),
                 None => {
                     let settled = [own[state::X], own[state::X + 1], own[state::X + 2]];
-                    let p = OwnPrediction { next, settled, velocity, moved, last: *own_measured, unaccepted_s: 0.0 };
+                    let last = *own_measured;
+                    let p =
+                        OwnPrediction { next, settled, velocity, moved, last, unaccepted_s: 0.0, for_s: now_s + dt };
                     self.own_prediction = Some(Box::new(p));
                 }
             }
         }
         decision
+    }
+
+    /// Its own state one period after `own`, under `decision` acting over that period (its
+    /// setpoint where the vehicle flies one; None: holding its course, no new input), by the
+    /// vehicle's model (the fixed wing carried by the wind its state implies). An agent on its
+    /// own clock brings an update forward to the period its next command will act in, through
+    /// the commands already on their way.
+    pub fn predict_period(&self, own: &State9, decision: Option<&Decision>) -> State9 {
+        let setup = self.controller.setup();
+        let (vehicle, dt) = (setup.vehicle(), setup.params().dt_s);
+        let input = match decision {
+            Some(d) => match &d.setpoint {
+                Some(sp) => vehicle.input_flying(own, sp).unwrap_or(d.input),
+                None => d.input,
+            },
+            None => crate::Input::zeros(),
+        };
+        vehicle.predict(own, &input, dt)
     }
 
     /// Forgets the own-state prediction and the setpoint (after inputs that were not applied,

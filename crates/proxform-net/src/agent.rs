@@ -1,9 +1,24 @@
-//! The agent loop: the core's [`Agent`] of each UAV a process runs, stepped on every update
-//! its [`Vehicle`] delivers, as the simulator steps it. A new run starts a fresh agent; the
-//! first flight update after a warm-up makes the agent forget its own-state estimate (as the
-//! simulator does at t = 0). Whatever arrives is checked first: an update with a non-finite
-//! own state is not stepped, observations of unknown UAVs, of the UAV itself or with
-//! non-finite numbers are dropped.
+//! The agent loop: the core's [`Agent`] of each UAV a process runs, over a [`Vehicle`].
+//!
+//! - **Lockstep** (and the warm-up of any flight): every update the vehicle delivers is
+//!   stepped at once and answered, as the simulator steps it (a lockstep flight is the
+//!   in-process flight, bit for bit).
+//! - **Own clock** (a real-time flight): the agent never waits on a request. It keeps the
+//!   latest update of its UAV (its own state and what it perceived onboard) and the latest
+//!   report of every broadcaster ([`AgentRadio`]: agent to agent over the network, not through
+//!   the world), and decides at its own period on the newest it has: when a new own update is
+//!   there and at least half a period passed since its last decision. Every observation is
+//!   brought to the instant of the own state (its age from the times the messages carry); an
+//!   own update older than [`STALE_AFTER_PERIODS`] periods on the shared clock is not stepped
+//!   on (the UAV keeps its last command, which the world or the autopilot holds); a backlog
+//!   (an agent that was stopped) is skipped to its newest. A neighbour whose agent has
+//!   broadcast nothing for as long flies uncontrolled ([`ControlWatch`]): it is avoided, not
+//!   followed.
+//!
+//! A new run starts a fresh agent; the first flight update after a warm-up makes the agent
+//! forget its own-state estimate (as the simulator does at t = 0). Whatever arrives is checked
+//! first: an update with a non-finite own state is not stepped, observations of unknown UAVs,
+//! of the UAV itself or with non-finite numbers are dropped.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -12,9 +27,13 @@ use std::time::{Duration, Instant};
 use proxform_core::{Agent, Observation, UavId};
 use proxform_scenario::Scenario;
 
+use crate::radio::AgentRadio;
 use crate::transport::TransportError;
 use crate::vehicle::{Event, Vehicle};
-use crate::wire::{ClockMode, CommandMsg, Phase, Presence, SenseMsg, StateMsg};
+use crate::watch::ControlWatch;
+use crate::wire::{
+    ClockMode, CommandMsg, Phase, Presence, SenseMsg, StateMsg, COMMAND_WINDOW_PERIODS, STALE_AFTER_PERIODS,
+};
 
 /// A UAV that cannot be run from this scenario.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -36,6 +55,32 @@ struct Hosted {
     agent: Agent,
     run: u32,
     flying: bool,
+    /// Own clock: the newest update not stepped on yet.
+    pending: Option<SenseMsg>,
+    /// Own clock: when the agent last decided, and the run and time of the update it decided on.
+    decided: Option<Instant>,
+    last: Option<(u32, f64)>,
+    /// The instant the agent last stepped at (s).
+    stepped_t_s: Option<f64>,
+    /// Own clock: its latest decisions and the instants they act at (the commands on their way).
+    in_flight: std::collections::VecDeque<(f64, proxform_core::Decision)>,
+}
+
+/// What a process's agents refused, skipped and left out ([`Host::counts`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Counts {
+    /// Observations dropped as invalid.
+    pub dropped: u64,
+    /// Updates not stepped (invalid own state, unknown UAV).
+    pub refused: u64,
+    /// Own clock: updates replaced by a newer one before a decision.
+    pub skipped: u64,
+    /// Own clock: updates too old to step on.
+    pub stale: u64,
+    /// Own clock: observations of silent neighbours avoided but not followed.
+    pub unfollowed: u64,
+    /// Own clock: broadcasts kept by the radio, and not taken.
+    pub radio: (u64, u64),
 }
 
 /// The agents of the UAVs one process runs.
@@ -43,10 +88,19 @@ pub struct Host {
     scenario: Arc<Scenario>,
     agents: BTreeMap<u32, Hosted>,
     heard: Vec<Observation>,
+    /// The formation's radio, heard on the own clock.
+    radio: AgentRadio,
+    /// Which neighbours fly under their agents, from their broadcasts (own clock).
+    watch: ControlWatch,
+    radio_run: u32,
     /// Observations dropped as invalid.
     pub dropped: u64,
     /// Updates not stepped (invalid own state, unknown UAV).
     pub refused: u64,
+    /// Own clock: updates replaced by a newer one before the agent decided (a backlog skipped).
+    pub skipped: u64,
+    /// Own clock: updates too old to step on ([`STALE_AFTER_PERIODS`]).
+    pub stale: u64,
 }
 
 impl Host {
@@ -55,9 +109,117 @@ impl Host {
         let mut agents = BTreeMap::new();
         for &u in uavs {
             let id = Self::follower(&scenario, u)?;
-            agents.insert(u, Hosted { agent: scenario.agent(id), run: 0, flying: false });
+            agents.insert(
+                u,
+                Hosted {
+                    agent: scenario.agent(id),
+                    run: 0,
+                    flying: false,
+                    pending: None,
+                    decided: None,
+                    last: None,
+                    stepped_t_s: None,
+                    in_flight: Default::default(),
+                },
+            );
         }
-        Ok(Self { scenario, agents, heard: Vec::new(), dropped: 0, refused: 0 })
+        let (radio, watch) = (AgentRadio::new(&scenario), ControlWatch::new(&scenario));
+        Ok(Self {
+            scenario,
+            agents,
+            heard: Vec::new(),
+            radio,
+            watch,
+            radio_run: 0,
+            dropped: 0,
+            refused: 0,
+            skipped: 0,
+            stale: 0,
+        })
+    }
+
+    /// The UAVs whose broadcasts these agents hear on their own clock (from 1): every other
+    /// follower's (whether its agent is there) and the broadcasters' (the radio).
+    pub fn listens_to(&self) -> Vec<u32> {
+        let nav = self.scenario.navigator().0 + 1;
+        let broadcasters = self.radio.broadcasters();
+        (1..=self.scenario.len() as u32)
+            .filter(|u| (*u != nav || broadcasters.contains(u)) && !self.agents.contains_key(u))
+            .collect()
+    }
+
+    /// A broadcast heard (own clock).
+    pub fn hear(&mut self, m: &StateMsg) {
+        self.watch.hear(m);
+        self.radio.hear(m);
+    }
+
+    /// What the agents refused, skipped and left out.
+    pub fn counts(&self) -> Counts {
+        Counts {
+            dropped: self.dropped,
+            refused: self.refused,
+            skipped: self.skipped,
+            stale: self.stale,
+            unfollowed: self.watch.unfollowed,
+            radio: (self.radio.heard, self.radio.ignored),
+        }
+    }
+
+    /// Own clock: keeps `s` as its UAV's newest update (an older one not yet stepped on is
+    /// skipped; one older than the last stepped on is ignored).
+    pub fn keep(&mut self, s: SenseMsg) {
+        let Some(h) = self.agents.get_mut(&s.uav) else {
+            self.refused += 1;
+            return;
+        };
+        let older = |run: u32, t_s: f64| run == s.run && t_s >= s.t_s;
+        if h.last.is_some_and(|(run, t)| older(run, t)) {
+            self.skipped += 1;
+            return;
+        }
+        match &h.pending {
+            Some(p) if older(p.run, p.t_s) => self.skipped += 1,
+            Some(_) => {
+                self.skipped += 1;
+                h.pending = Some(s);
+            }
+            None => h.pending = Some(s),
+        }
+    }
+
+    /// Own clock: the decisions due at `now` (a hosted UAV with a new update and at least half
+    /// a period since its last decision), each with the state it broadcasts; `age_of` gives an
+    /// update's age on the shared clock (s).
+    pub fn decide_due(&mut self, now: Instant, age_of: impl Fn(&SenseMsg) -> f64) -> Vec<(CommandMsg, StateMsg)> {
+        let half = Duration::from_secs_f64(0.5 * self.scenario.dt_s());
+        let due: Vec<u32> = self
+            .agents
+            .iter()
+            .filter(|(_, h)| h.pending.is_some() && h.decided.is_none_or(|d| now.duration_since(d) >= half))
+            .map(|(u, _)| *u)
+            .collect();
+        let mut out = Vec::new();
+        for u in due {
+            let Some(s) = self.agents.get_mut(&u).and_then(|h| h.pending.take()) else { continue };
+            let age = age_of(&s);
+            if age > STALE_AFTER_PERIODS * self.scenario.dt_s() {
+                self.stale += 1;
+                continue;
+            }
+            if s.run != self.radio_run {
+                self.radio.clear();
+                self.watch.clear();
+                self.radio_run = s.run;
+            }
+            if let Some(answer) = self.step(&s, age, true) {
+                if let Some(h) = self.agents.get_mut(&u) {
+                    (h.decided, h.last) = (Some(now), Some((s.run, s.t_s)));
+                }
+                out.push(answer);
+            }
+        }
+        out
     }
 
     fn follower(sc: &Scenario, uav: u32) -> Result<UavId, HostError> {
@@ -76,6 +238,11 @@ impl Host {
         self.agents.keys().copied().collect()
     }
 
+    /// The UAVs run (from 1), each with the digest of what its agent runs, as announced.
+    pub fn members(&self) -> Vec<(u32, u64)> {
+        self.agents.keys().map(|u| (*u, setup_digest(&self.scenario, *u))).collect()
+    }
+
     /// Steps the agent of `s.uav` on the update, which reached it `latency_s` after it was
     /// measured (0 in lockstep); its command and the state it broadcasts, or None when the
     /// update is not for this host or not valid.
@@ -86,6 +253,12 @@ impl Host {
     /// is not there: at 70 m/s, 1 ms is 7 cm). The latency is reported with the command; what
     /// it costs is a decision that reaches the vehicle too late for its period.
     pub fn handle(&mut self, s: &SenseMsg, latency_s: f64) -> Option<(CommandMsg, StateMsg)> {
+        self.step(s, latency_s, false)
+    }
+
+    /// Steps on `s`, `latency_s` old on the shared clock: in lockstep at the update's instant;
+    /// on the own clock at the agent's own instant, with what it heard of the broadcasters.
+    fn step(&mut self, s: &SenseMsg, latency_s: f64, own_clock: bool) -> Option<(CommandMsg, StateMsg)> {
         let n = self.scenario.len();
         let Some(h) = self.agents.get_mut(&s.uav) else {
             self.refused += 1;
@@ -97,7 +270,8 @@ impl Host {
         }
         if s.run != h.run {
             h.agent = self.scenario.agent(UavId(s.uav - 1));
-            (h.run, h.flying) = (s.run, false);
+            (h.run, h.flying, h.stepped_t_s) = (s.run, false, None);
+            h.in_flight.clear();
         }
         if s.phase == Phase::Fly && !h.flying {
             h.flying = true;
@@ -116,9 +290,80 @@ impl Host {
             }
         }
         let latency_s = if latency_s.is_finite() { latency_s.max(0.0) } else { 0.0 };
-        let decision = h.agent.step(s.t_s, &s.own, &self.heard);
-        let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s: s.t_s, age_s: latency_s, decision };
+        let (t_s, own) = match own_clock {
+            // In lockstep the agent steps at the update's instant, as the simulator does.
+            false => (s.t_s, s.own),
+            // On its own clock, for the instant its command will act ([`acts_at`]). The update
+            // and what it perceived are brought forward to it, what it heard to the same instant.
+            true => {
+                let dt = self.scenario.dt_s();
+                let t_s = acts_at(s.t_s, latency_s, dt);
+                if t_s - s.t_s > STALE_AFTER_PERIODS * dt + 1e-9 {
+                    // Its command would act on a state too old to act on.
+                    self.stale += 1;
+                    return None;
+                }
+                if h.stepped_t_s.is_some_and(|t| t_s <= t + 0.5 * dt) {
+                    // A command for that period is already on its way.
+                    self.skipped += 1;
+                    return None;
+                }
+                // Through the commands that act before it (holding where none was sent).
+                let periods = ((t_s - s.t_s) / dt).round() as usize;
+                let mut own = s.own;
+                for p in 0..periods {
+                    let at = s.t_s + p as f64 * dt;
+                    let d = h.in_flight.iter().find(|(t, _)| (t - at).abs() < 0.5 * dt).map(|(_, d)| d);
+                    own = h.agent.predict_period(&own, d);
+                }
+                let age = t_s - s.t_s;
+                for o in &mut self.heard {
+                    o.age_s += age;
+                }
+                self.radio.observations(UavId(s.uav - 1), t_s, &own, &mut self.heard);
+                self.watch.avoid_only_the_silent(t_s, &mut self.heard);
+                (t_s, own)
+            }
+        };
+        let decision = h.agent.step(t_s, &own, &self.heard);
+        if own_clock {
+            let dt = self.scenario.dt_s();
+            h.in_flight.retain(|(t, _)| *t > s.t_s - 0.5 * dt);
+            h.in_flight.push_back((t_s, decision));
+            while h.in_flight.len() > STALE_AFTER_PERIODS as usize + 1 {
+                h.in_flight.pop_front();
+            }
+        }
+        h.stepped_t_s = Some(t_s);
+        let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s, age_s: latency_s, decision };
         Some((command, StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own }))
+    }
+}
+
+/// A digest of what UAV `uav`'s (from 1) agent runs in `scenario`: everything its agent is
+/// built from (its controller and vehicle, the formation and its tables, the plan, the
+/// schedule), as this version of the library builds it. A world takes an agent only when the
+/// digest it announces is the one of the world's own scenario for that UAV, so an agent that
+/// read another file (or the same one with other settings) flies nothing. 64-bit FNV-1a over the
+/// agent's full description (floats as written back exactly).
+pub fn setup_digest(scenario: &Scenario, uav: u32) -> u64 {
+    let description = match uav.checked_sub(1) {
+        Some(i) if (i as usize) < scenario.len() => format!("{:?}", scenario.agent(UavId(i))),
+        _ => String::new(),
+    };
+    description.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// The instant a command decided on an update measured at `t_s` (a step's time), which reached
+/// the agent `latency_s` later, will act at: it takes as long again to reach the world (the link
+/// taken as symmetric), which applies it from the step whose window
+/// ([`crate::wire::COMMAND_WINDOW_PERIODS`]) it reaches in: `t_s` itself while the round trip
+/// fits in the window (the world waits for it: no lag at all), a later step's time otherwise.
+pub fn acts_at(t_s: f64, latency_s: f64, dt_s: f64) -> f64 {
+    let late = 2.0 * latency_s - COMMAND_WINDOW_PERIODS * dt_s;
+    match late > 0.0 {
+        true => t_s + (late / dt_s).ceil() * dt_s,
+        false => t_s,
     }
 }
 
@@ -150,41 +395,136 @@ pub enum Ended {
     Idle,
 }
 
-/// Runs `host`'s agents over `vehicle` until the world ends the batch or goes silent.
+/// Runs `host`'s agents over `vehicle` until the world ends the batch or goes silent: in
+/// lockstep (and in any warm-up) each update is answered at once; in a real-time flight each
+/// agent decides on its own clock (see the module's text).
 pub fn serve(host: &mut Host, vehicle: &mut impl Vehicle, timing: Timing) -> Result<Ended, TransportError> {
     vehicle.announce(Presence::Alive)?;
     let (mut last_heard, mut last_announce) = (Instant::now(), Instant::now());
     // In real time, the wall-clock time of t = 0 (ns since the Unix epoch), from the clock.
     let mut epoch_ns: Option<u64> = None;
+    let mut listening = false;
+    // The own clock looks at what it has a few times a period.
+    let tick = Duration::from_secs_f64(0.25 * host.scenario.dt_s()).min(timing.announce_every);
+    let age = |epoch_ns: Option<u64>, s: &SenseMsg| match (epoch_ns, s.phase) {
+        (Some(e), Phase::Fly) => (unix_ns() as f64 - e as f64) * 1e-9 - s.t_s,
+        _ => 0.0,
+    };
     loop {
-        match vehicle.next(timing.announce_every)? {
-            Event::Sense(s) => {
-                last_heard = Instant::now();
-                let latency = match (epoch_ns, s.phase) {
-                    (Some(e), Phase::Fly) => (unix_ns() as f64 - e as f64) * 1e-9 - s.t_s,
-                    _ => 0.0,
-                };
-                if let Some((command, state)) = host.handle(&s, latency) {
-                    vehicle.command(&command, &state)?;
+        let own_clock = epoch_ns.is_some();
+        let mut event = vehicle.next(if own_clock { tick } else { timing.announce_every })?;
+        // Everything that is waiting, before deciding: the newest counts.
+        loop {
+            match event {
+                Event::Idle => break,
+                Event::Sense(s) => {
+                    last_heard = Instant::now();
+                    if epoch_ns.is_some() && s.phase == Phase::Fly {
+                        host.keep(s);
+                    } else if let Some((command, state)) = host.handle(&s, age(epoch_ns, &s)) {
+                        vehicle.command(&command, &state)?;
+                    }
+                }
+                Event::State(m) => host.hear(&m),
+                Event::Clock(c) => {
+                    last_heard = Instant::now();
+                    if c.mode == ClockMode::RealTime && !listening {
+                        // A real-time flight: its agents hear each other (in its warm-up).
+                        vehicle.listen(&host.listens_to())?;
+                        listening = true;
+                    }
+                    epoch_ns = (c.mode == ClockMode::RealTime && c.epoch_ns > 0).then_some(c.epoch_ns);
+                    if c.end {
+                        vehicle.announce(Presence::Leaving)?;
+                        return Ok(Ended::Done);
+                    }
                 }
             }
-            Event::Clock(c) => {
-                last_heard = Instant::now();
-                epoch_ns = (c.mode == ClockMode::RealTime && c.epoch_ns > 0).then_some(c.epoch_ns);
-                if c.end {
-                    vehicle.announce(Presence::Leaving)?;
-                    return Ok(Ended::Done);
-                }
-            }
-            Event::Idle => {
-                if last_heard.elapsed() >= timing.idle_exit {
-                    return Ok(Ended::Idle);
-                }
-            }
+            event = vehicle.next(Duration::ZERO)?;
+        }
+        for (command, state) in host.decide_due(Instant::now(), |s| age(epoch_ns, s)) {
+            vehicle.command(&command, &state)?;
+        }
+        if last_heard.elapsed() >= timing.idle_exit {
+            return Ok(Ended::Idle);
         }
         if last_announce.elapsed() >= timing.announce_every {
             vehicle.announce(Presence::Alive)?;
             last_announce = Instant::now();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_core::state;
+
+    #[test]
+    fn a_command_acts_at_the_step_whose_window_it_reaches() {
+        // Δt 0.1 s, window 0.09 s: a round trip within it acts at the update's own step.
+        assert_eq!(acts_at(2.0, 0.0, 0.1), 2.0);
+        assert_eq!(acts_at(2.0, 0.044, 0.1), 2.0);
+        assert!((acts_at(2.0, 0.06, 0.1) - 2.1).abs() < 1e-12);
+        assert!((acts_at(2.0, 0.2, 0.1) - 2.4).abs() < 1e-12);
+    }
+
+    fn paper() -> Arc<Scenario> {
+        let spec = proxform_scenario::builtin::spec_by_name("paper", None).expect("built in");
+        Arc::new(Scenario::try_from(spec).expect("valid"))
+    }
+
+    fn update(sc: &Scenario, uav: u32, k: u64) -> SenseMsg {
+        let t_s = k as f64 * sc.dt_s();
+        let nav =
+            proxform_core::state::State9::from_column_slice(&[20.0 * t_s, 0.0, 100.0, 20.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        SenseMsg { uav, run: 0, phase: Phase::Fly, k, t_s, own: sc.slot_state((uav - 1) as usize, &nav), heard: vec![] }
+    }
+
+    #[test]
+    fn on_its_own_clock_it_decides_on_the_newest_once_a_period_and_never_on_stale_updates() {
+        let sc = paper();
+        let mut host = Host::new(sc.clone(), &[2]).expect("a follower");
+        let now = Instant::now();
+        // A backlog of three updates: the newest only is stepped on.
+        for k in 10..13 {
+            host.keep(update(&sc, 2, k));
+        }
+        let out = host.decide_due(now, |_| 0.0);
+        assert_eq!(out.len(), 1);
+        assert_eq!((out[0].0.k, host.counts().skipped), (12, 2));
+        // An older update after it is not stepped on; nothing new, nothing decided.
+        host.keep(update(&sc, 2, 11));
+        assert!(host.decide_due(now + Duration::from_millis(100), |_| 0.0).is_empty());
+        // The next one, within half a period of the last decision: not yet; after it: yes.
+        host.keep(update(&sc, 2, 13));
+        assert!(host.decide_due(now + Duration::from_millis(20), |_| 0.0).is_empty());
+        assert_eq!(host.decide_due(now + Duration::from_millis(60), |_| 0.0).len(), 1);
+        // An update older than five periods on the shared clock is not stepped on.
+        host.keep(update(&sc, 2, 14));
+        assert!(host.decide_due(now + Duration::from_millis(200), |_| 0.51).is_empty());
+        assert_eq!(host.counts().stale, 1);
+    }
+
+    #[test]
+    fn a_late_round_trip_decides_for_the_next_step_through_the_command_on_its_way() {
+        let sc = paper();
+        let dt = sc.dt_s();
+        let mut host = Host::new(sc.clone(), &[2]).expect("a follower");
+        let t0 = Instant::now();
+        host.keep(update(&sc, 2, 10));
+        let first = host.decide_due(t0, |_| 0.06);
+        // 2 × 60 ms is past the 90 ms window: the command acts one step later, at 1.1 s.
+        assert!((first[0].0.t_s - 1.1).abs() < 1e-9, "{:?}", first[0].0);
+        // The next update's own state is brought through that command to 1.2 s.
+        let mut u = update(&sc, 2, 11);
+        u.own[state::VY] += 0.3;
+        host.keep(u.clone());
+        let second = host.decide_due(t0 + Duration::from_millis(100), |_| 0.06);
+        assert!((second[0].0.t_s - (1.1 + dt)).abs() < 1e-9);
+        // Lockstep steps on the update's own instant.
+        let mut lock = Host::new(sc.clone(), &[2]).expect("a follower");
+        let (c, _) = lock.handle(&u, 0.06).expect("stepped");
+        assert_eq!(c.t_s, u.t_s);
     }
 }

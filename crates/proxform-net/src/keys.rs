@@ -123,7 +123,7 @@ mod tests {
     fn a_message_is_its_keys_only() {
         use crate::wire::{MemberMsg, Message, Presence};
         let s = Swarm::new("lab").expect("name");
-        let member = |uav| Message::Member(MemberMsg { uav, presence: Presence::Leaving, pid: 1 });
+        let member = |uav| Message::Member(MemberMsg { uav, presence: Presence::Leaving, pid: 1, digest: 0 });
         assert!(on_its_key(&s.member(3), &member(3)));
         assert!(!on_its_key(&s.member(2), &member(3)), "UAV 3 leaving, said on UAV 2's key");
         assert!(!on_its_key(&s.member(13), &member(3)));

@@ -10,6 +10,9 @@
 //! - [`vehicle`]: what an agent sees of its UAV (its own state and observations in, a command
 //!   out): the network world implements it here, an autopilot over MAVLink in
 //!   [`mavlink::vehicle`].
+//! - [`radio`]: the formation's radio as an agent on its own clock hears it (other agents'
+//!   broadcasts over the network, by the scenario's rules).
+//! - [`watch`]: which neighbours fly under their agents (a silent one is avoided, not followed).
 //! - [`agent`]: the loop that steps the core's [`proxform_core::Agent`] over a vehicle.
 //! - [`mavlink`]: MAVLink 2 to an autopilot (or a simulated vehicle): frames, the UDP link,
 //!   modes, the vehicle's side and the companion's side with its safety policy.
@@ -22,6 +25,8 @@ pub mod agent;
 pub mod credentials;
 pub mod keys;
 pub mod mavlink;
+pub mod radio;
 pub mod transport;
 pub mod vehicle;
+pub mod watch;
 pub mod wire;

@@ -196,6 +196,7 @@ pub enum Received {
 /// Messages from any number of subscriptions, in arrival order, in one queue.
 pub struct Inbox {
     rx: std::sync::mpsc::Receiver<Received>,
+    tx: std::sync::mpsc::Sender<Received>,
     /// Kept alive: dropping a subscriber undeclares it.
     _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
 }
@@ -216,9 +217,15 @@ impl Session {
     /// An inbox receiving every message on `keys` (key expressions: `*` and `**` allowed).
     pub fn inbox(&self, keys: &[String]) -> Result<Inbox, TransportError> {
         let (tx, rx) = std::sync::mpsc::channel();
-        let mut subscribers = Vec::with_capacity(keys.len());
+        let mut inbox = Inbox { rx, tx, _subscribers: Vec::with_capacity(keys.len()) };
+        self.subscribe(&mut inbox, keys)?;
+        Ok(inbox)
+    }
+
+    /// Adds the messages on `keys` to `inbox`.
+    pub fn subscribe(&self, inbox: &mut Inbox, keys: &[String]) -> Result<(), TransportError> {
         for key in keys {
-            let tx = tx.clone();
+            let tx = inbox.tx.clone();
             let sub = self
                 .inner
                 .declare_subscriber(key.clone())
@@ -234,9 +241,9 @@ impl Session {
                 })
                 .wait()
                 .map_err(|e| TransportError::Io(e.to_string()))?;
-            subscribers.push(sub);
+            inbox._subscribers.push(sub);
         }
-        Ok(Inbox { rx, _subscribers: subscribers })
+        Ok(())
     }
 }
 

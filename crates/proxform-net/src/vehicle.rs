@@ -17,6 +17,8 @@ pub enum Event {
     Sense(SenseMsg),
     /// The world's clock (with `end`, the batch is over).
     Clock(ClockMsg),
+    /// Another UAV's broadcast (the formation's radio, heard on the own clock).
+    State(StateMsg),
     /// Nothing within the wait.
     Idle,
 }
@@ -30,12 +32,18 @@ pub trait Vehicle {
     fn command(&mut self, command: &CommandMsg, state: &StateMsg) -> Result<(), TransportError>;
     /// Says that the UAVs are alive (or leaving).
     fn announce(&mut self, presence: Presence) -> Result<(), TransportError>;
+    /// From now on, also delivers the broadcasts of `uavs` (from 1) as [`Event::State`]: an
+    /// agent on its own clock hears the formation's radio and who flies under control
+    /// ([`crate::agent::Host::listens_to`]). In lockstep nobody listens (the world's updates
+    /// carry the radio).
+    fn listen(&mut self, uavs: &[u32]) -> Result<(), TransportError>;
 }
 
 /// UAVs whose sensors and actuators are a network world's ([`crate::keys`]).
 pub struct NetVehicle {
     session: Session,
     swarm: Swarm,
+    members: Vec<(u32, u64)>,
     uavs: Vec<u32>,
     inbox: Inbox,
     commands: Vec<(u32, Publisher, Publisher)>,
@@ -46,8 +54,11 @@ pub struct NetVehicle {
 }
 
 impl NetVehicle {
-    /// Subscribes to the updates of `uavs` (from 1) of `swarm` and the clock.
-    pub fn new(session: Session, swarm: Swarm, uavs: &[u32]) -> Result<Self, TransportError> {
+    /// Subscribes to the updates of the UAVs of `members` (from 1, each with the digest of what
+    /// its agent runs: [`crate::agent::Host::members`]) of `swarm` and the clock.
+    pub fn new(session: Session, swarm: Swarm, members: &[(u32, u64)]) -> Result<Self, TransportError> {
+        let uavs: Vec<u32> = members.iter().map(|m| m.0).collect();
+        let uavs = &uavs[..];
         let mut keys: Vec<String> = uavs.iter().map(|u| swarm.sense(*u)).collect();
         keys.push(swarm.clock());
         let inbox = session.inbox(&keys)?;
@@ -56,7 +67,16 @@ impl NetVehicle {
             .map(|u| Ok((*u, session.publisher(&swarm.command(*u))?, session.publisher(&swarm.state(*u))?)))
             .collect::<Result<_, TransportError>>()?;
         let tokens = uavs.iter().map(|u| session.liveliness_token(&swarm.alive(*u))).collect::<Result<_, _>>()?;
-        Ok(Self { session, swarm, uavs: uavs.to_vec(), inbox, commands, _tokens: tokens, garbage: 0 })
+        Ok(Self {
+            session,
+            swarm,
+            members: members.to_vec(),
+            uavs: uavs.to_vec(),
+            inbox,
+            commands,
+            _tokens: tokens,
+            garbage: 0,
+        })
     }
 }
 
@@ -71,6 +91,9 @@ impl Vehicle for NetVehicle {
                     return Ok(Event::Sense(s))
                 }
                 Some(Received::Message(_, Message::Clock(c))) => return Ok(Event::Clock(c)),
+                Some(Received::Message(_, Message::State(m))) if !self.uavs.contains(&m.uav) => {
+                    return Ok(Event::State(m))
+                }
                 Some(Received::Message(..)) => {}
                 Some(Received::Garbage(..) | Received::Misplaced(..)) => self.garbage += 1,
             }
@@ -85,10 +108,15 @@ impl Vehicle for NetVehicle {
         Ok(())
     }
 
+    fn listen(&mut self, uavs: &[u32]) -> Result<(), TransportError> {
+        let keys: Vec<String> = uavs.iter().map(|u| self.swarm.state(*u)).collect();
+        self.session.subscribe(&mut self.inbox, &keys)
+    }
+
     fn announce(&mut self, presence: Presence) -> Result<(), TransportError> {
-        for u in &self.uavs {
-            let m = Message::Member(MemberMsg { uav: *u, presence, pid: std::process::id() });
-            self.session.put(&self.swarm.member(*u), &m)?;
+        for &(uav, digest) in &self.members {
+            let m = Message::Member(MemberMsg { uav, presence, pid: std::process::id(), digest });
+            self.session.put(&self.swarm.member(uav), &m)?;
         }
         Ok(())
     }

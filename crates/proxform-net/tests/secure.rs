@@ -77,7 +77,7 @@ fn only_certified_peers_connect_and_each_publishes_its_own_uavs_keys_only() {
         observer.inner_put(&key, vec![4, 5, 6]);
     }
     // On its own key, a message naming UAV 3 (UAV 3 leaving): delivered, but never as UAV 3's.
-    let leaving = Message::Member(MemberMsg { uav: 3, presence: Presence::Leaving, pid: 1 });
+    let leaving = Message::Member(MemberMsg { uav: 3, presence: Presence::Leaving, pid: 1, digest: 0 });
     uav2.put(&swarm.member(2), &leaving).expect("put");
     // What UAV 2 may send, last: once it has arrived, everything sent before it on the same link
     // has been delivered or dropped.

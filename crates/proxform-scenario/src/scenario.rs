@@ -342,6 +342,15 @@ impl Scenario {
         &self.radio
     }
 
+    /// Whether the followers' tracks fuse every report of a UAV (the Singer predictor of the
+    /// proximity method): a radio report of a UAV perceived onboard is then passed too;
+    /// otherwise the radio only fills in what onboard sensing missed. The simulator's sensor
+    /// and a network agent's radio both follow it.
+    pub fn fuses_radio(&self) -> bool {
+        matches!(self.controller().predictor, proxform_core::PredictorKind::Singer { .. })
+            && matches!(self.method(), proxform_core::Method::Proximity)
+    }
+
     /// Faults of the transport between the world and the agents of a distributed run.
     pub fn network(&self) -> &NetworkFaults {
         &self.network

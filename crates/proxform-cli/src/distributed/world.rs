@@ -1,14 +1,24 @@
 //! The world's side of a distributed flight: the engine's followers are agents reached over
-//! Zenoh ([`NetAgents`] implements the simulator's `Agents`). Each update period the world
-//! sends every active follower what it sensed, waits for the decisions of the live agents (in
-//! lockstep, until all have answered or the step's deadline passed; a late or missing answer
-//! counts as holding), publishes the navigator's state and its clock, and goes on.
+//! Zenoh ([`NetAgents`] implements the simulator's `Agents`).
+//!
+//! - **Lockstep**: each update period the world sends every active follower what it sensed,
+//!   waits for the decisions of the live agents until all have answered or the step's deadline
+//!   passed (a late or missing answer counts as holding), publishes the navigator's state and
+//!   its clock, and goes on. The flight is the in-process flight, bit for bit.
+//! - **Real time** (the agents on their own clocks): step k begins at its wall-clock time; the
+//!   world sends each follower what its sensors give (its own state and what it perceives
+//!   onboard: the radio goes agent to agent), then applies, until the end of the period, each
+//!   UAV's newest command not yet applied, whatever update it answered, if it is at most
+//!   [`COMMAND_MAX_AGE_PERIODS`] periods old; while none comes the UAV holds (a multirotor
+//!   keeps its last setpoint, as its autopilot would). A world that falls a period or more
+//!   behind its clock (a stall of its machine) does not replay the missed steps: the flight's
+//!   time pauses, the clock's epoch moves by the stall, and the agents read it from the clock.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use anyhow::{bail, Result};
-use proxform_core::Decision;
+use proxform_core::{Decision, ObservationSource, Setpoint};
 use proxform_net::keys::Swarm;
 use proxform_net::transport::{Inbox, LivelinessInbox, Publisher, Received, Session};
 use proxform_net::wire::{self, ClockMode, ClockMsg, Message, Presence, SenseMsg, StateMsg};
@@ -17,6 +27,10 @@ use proxform_sim::world::remote::{holding, Agents, Phase, StepRequest};
 
 /// How long an agent stays live without a word (its heartbeat comes every 0.5 s).
 const LIVE_FOR: Duration = Duration::from_millis(2000);
+
+/// Real time: a command older than this many periods when its step comes is not applied, and a
+/// UAV without one for longer flies uncontrolled.
+const COMMAND_MAX_AGE_PERIODS: f64 = wire::STALE_AFTER_PERIODS;
 
 /// What the world measured of the network.
 #[derive(Debug, Clone, Default)]
@@ -43,8 +57,16 @@ pub struct NetStats {
     pub late_steps: u64,
     /// Flight steps (real time only).
     pub steps: u64,
+    /// Times the world fell a period or more behind its clock and paused the flight's time
+    /// instead of replaying the missed steps, and the time paused (s; real time only).
+    pub paused: (u64, f64),
+    /// Real time: how old each applied command was when its step came (s).
+    pub applied_ages_s: Vec<f64>,
     /// Messages lost to the scenario's `[network]` faults.
     pub dropped: u64,
+    /// Announcements of agents that run another scenario than the world's (their UAVs are
+    /// not theirs to fly).
+    pub foreign: u64,
     /// The UAVs' MAVLink systems, when served.
     pub mavlink: Option<super::mavlink::MavlinkStats>,
 }
@@ -74,6 +96,26 @@ pub struct NetAgents {
     /// The network's numbers.
     pub stats: NetStats,
     answers: Vec<Option<Decision>>,
+    /// Real time: per UAV (from 1) of the current run, the newest command received and not yet
+    /// applied, the time of the update the last applied one answered, and the last setpoint
+    /// applied.
+    own_clock: BTreeMap<u32, OwnClock>,
+    own_clock_run: u32,
+    /// The digest of what each follower's agent must run (from the world's scenario), and the
+    /// UAVs whose agent last announced another.
+    digests: BTreeMap<u32, u64>,
+    foreign: BTreeMap<u32, u64>,
+    /// Real time: updates and commands held by the scenario's `[network] delay_s`, due in order.
+    in_transit: std::collections::VecDeque<(Instant, Message)>,
+}
+
+#[derive(Debug, Clone, Default)]
+struct OwnClock {
+    newest: Option<wire::CommandMsg>,
+    applied_t_s: Option<f64>,
+    setpoint: Option<Setpoint>,
+    /// Steps in a row without a command to apply.
+    held_periods: u32,
 }
 
 impl NetAgents {
@@ -108,6 +150,11 @@ impl NetAgents {
             epoch_ns: 0,
             stats: NetStats::default(),
             answers: Vec::new(),
+            own_clock: BTreeMap::new(),
+            own_clock_run: 0,
+            digests: followers.iter().map(|u| (*u, proxform_net::agent::setup_digest(scenario, *u))).collect(),
+            foreign: BTreeMap::new(),
+            in_transit: std::collections::VecDeque::new(),
         })
     }
 
@@ -123,6 +170,24 @@ impl NetAgents {
             }
             alive()?;
             if start.elapsed() > timeout {
+                let foreign: Vec<String> = missing
+                    .iter()
+                    .filter_map(|u| self.foreign.get(u).map(|d| format!("UAV {u}'s agent runs {d:016x}")))
+                    .collect();
+                if !foreign.is_empty() {
+                    bail!(
+                        "no agent announced UAV(s) {missing:?} within {:.0} s: agents of another scenario were \
+                         refused ({}; this world's scenario needs {}): start them with the world's scenario file \
+                         and settings",
+                        timeout.as_secs_f64(),
+                        foreign.join(", "),
+                        missing
+                            .iter()
+                            .filter_map(|u| self.digests.get(u).map(|d| format!("UAV {u} {d:016x}")))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    );
+                }
                 bail!("no agent announced UAV(s) {missing:?} within {:.0} s", timeout.as_secs_f64());
             }
             if let Some(r) = self.inbox.recv_timeout(Duration::from_millis(100)) {
@@ -134,11 +199,25 @@ impl NetAgents {
     /// Books a message that is not an answer to the current step.
     fn note(&mut self, r: Received) {
         match r {
+            Received::Message(_, Message::Member(m)) if self.digests.get(&m.uav) != Some(&m.digest) => {
+                // Another scenario's agent (or not a follower): its UAV is not its to fly.
+                self.stats.foreign += 1;
+                self.foreign.insert(m.uav, m.digest);
+                self.seen.remove(&m.uav);
+            }
             Received::Message(_, Message::Member(m)) => {
+                self.foreign.remove(&m.uav);
                 match m.presence {
                     Presence::Alive => self.seen.insert(m.uav, Instant::now()),
                     Presence::Leaving => self.seen.remove(&m.uav),
                 };
+            }
+            Received::Message(_, Message::Command(c)) if self.foreign.contains_key(&c.uav) => {
+                self.stats.foreign += 1;
+            }
+            Received::Message(_, Message::Command(c)) if self.mode == ClockMode::RealTime && self.start.is_some() => {
+                self.seen.insert(c.uav, Instant::now());
+                self.offer(c);
             }
             Received::Message(_, Message::Command(c)) => {
                 self.seen.insert(c.uav, Instant::now());
@@ -226,13 +305,206 @@ fn now_ns() -> u64 {
     SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
 }
 
+impl NetAgents {
+    /// Real time: a command received; kept when it is the newest of its UAV for the current
+    /// run and answers an update after the last applied one.
+    fn offer(&mut self, c: wire::CommandMsg) {
+        if c.run != self.own_clock_run {
+            self.stats.late += 1;
+            return;
+        }
+        if !c.decision.is_finite() {
+            self.stats.refused += 1;
+            return;
+        }
+        let slot = self.own_clock.entry(c.uav).or_default();
+        let newer = slot.newest.is_none_or(|n| c.t_s > n.t_s) && slot.applied_t_s.is_none_or(|t| c.t_s > t);
+        match newer {
+            true => {
+                if slot.newest.is_some() {
+                    // Replaced before its step came.
+                    self.stats.late += 1;
+                }
+                slot.newest = Some(c);
+            }
+            false => self.stats.late += 1,
+        }
+    }
+
+    /// Real time, the flight: step k begins at its wall-clock time (or the flight's time
+    /// pauses, when the world fell a period behind), the sensors' updates go out, and each
+    /// UAV's newest command is applied when it comes within the period (see the module's text).
+    /// The scenario's `[network] delay_s` holds each update and each command for that long on
+    /// its way (queued, never slept: a delay longer than the period makes the commands older,
+    /// not the world slower).
+    fn decide_own_clock(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        let s = request.sensed;
+        let run = request.run as u32;
+        if request.k == 0 {
+            // t = 0 a little ahead, so that every agent has the clock before the first update.
+            let lead = Duration::from_millis(200);
+            self.start = Some(Instant::now() + lead);
+            self.epoch_ns = now_ns() + lead.as_nanos() as u64;
+            self.own_clock.clear();
+            self.own_clock_run = run;
+            self.in_transit.clear();
+        }
+        let dt = Duration::from_secs_f64(self.dt_s);
+        let start = self.start.unwrap_or_else(Instant::now);
+        let mut begin = start + Duration::from_secs_f64(request.t_s.max(0.0));
+        let now = Instant::now();
+        if now < begin {
+            std::thread::sleep(begin - now);
+        } else if now - begin >= dt {
+            // Behind by a period or more: the flight's time pauses for as long.
+            let behind = now - begin;
+            self.start = Some(start + behind);
+            self.epoch_ns += behind.as_nanos() as u64;
+            self.stats.paused = (self.stats.paused.0 + 1, self.stats.paused.1 + behind.as_secs_f64());
+            begin = now;
+        } else if now - begin > dt.mul_f64(0.1) {
+            self.stats.late_steps += 1;
+        }
+        self.stats.steps += 1;
+        let deadline = begin + dt.mul_f64(wire::COMMAND_WINDOW_PERIODS);
+        let delay = Duration::from_secs_f64(self.faults.0.delay_s);
+        self.drain();
+        let clock = ClockMsg {
+            mode: self.mode,
+            run,
+            k: request.k,
+            t_s: request.t_s,
+            dt_s: self.dt_s,
+            epoch_ns: self.epoch_ns,
+            end: false,
+        };
+        let _ = self.clock.send(&Message::Clock(clock));
+        let sent = Instant::now();
+        for j in 0..s.len() {
+            let uav = s.uavs[j].0 + 1;
+            // What its sensors give: the radio goes agent to agent.
+            let heard = s
+                .heard_of(j)
+                .iter()
+                .filter(|o| !matches!(o.source, ObservationSource::Radio | ObservationSource::Relayed))
+                .copied()
+                .collect();
+            let m =
+                SenseMsg { uav, run, phase: wire::Phase::Fly, k: request.k, t_s: request.t_s, own: s.own[j], heard };
+            if !self.lost(request, uav, 0) {
+                self.in_transit.push_back((sent + delay, Message::Sense(m)));
+            }
+        }
+        // Until the end of the period, or until every live follower's newest command answers
+        // this step: what is due goes out or comes in.
+        let half = 0.5 * self.dt_s;
+        let max_ahead = COMMAND_MAX_AGE_PERIODS * self.dt_s;
+        let answered_now = |me: &Self| {
+            s.uavs.iter().all(|u| {
+                let uav = u.0 + 1;
+                !me.live(uav)
+                    || me
+                        .own_clock
+                        .get(&uav)
+                        .and_then(|o| o.newest)
+                        .is_some_and(|c| c.t_s > request.t_s - half && c.t_s <= request.t_s + half)
+            })
+        };
+        loop {
+            self.deliver(Instant::now());
+            let waiting = self.in_transit.front().is_some_and(|(due, _)| *due <= deadline);
+            if answered_now(self) && !waiting {
+                break;
+            }
+            let now = Instant::now();
+            let next_due = self.in_transit.front().map_or(deadline, |(due, _)| (*due).min(deadline));
+            if now >= deadline {
+                break;
+            }
+            let Some(r) = self.inbox.recv_timeout(next_due.saturating_duration_since(now)) else { continue };
+            match r {
+                // (An agent decides for the instant its command will act: ahead of the step.)
+                Received::Message(_, Message::Command(c))
+                    if c.run == run && c.t_s <= request.t_s + max_ahead && !self.foreign.contains_key(&c.uav) =>
+                {
+                    self.seen.insert(c.uav, Instant::now());
+                    if self.lost(request, c.uav, 1) {
+                        continue;
+                    }
+                    self.stats.round_trips_s.push(sent.elapsed().as_secs_f64());
+                    self.stats.ages_s.push(c.age_s);
+                    let due = Instant::now() + delay;
+                    match delay.is_zero() {
+                        true => self.offer(c),
+                        false => self.in_transit.push_back((due, Message::Command(c))),
+                    }
+                }
+                other => self.note(other),
+            }
+        }
+        out.clear();
+        let max_age = COMMAND_MAX_AGE_PERIODS * self.dt_s;
+        for j in 0..s.len() {
+            let uav = s.uavs[j].0 + 1;
+            let slot = self.own_clock.entry(uav).or_default();
+            // A command acts at the step nearest the instant it was decided for (a later one
+            // waits for its step).
+            let due = slot.newest.is_some_and(|c| c.t_s <= request.t_s + half);
+            let fresh = slot.newest.take_if(|_| due).filter(|c| request.t_s - c.t_s <= max_age + 1e-9);
+            let decision = match fresh {
+                Some(c) => {
+                    slot.applied_t_s = Some(c.t_s);
+                    slot.held_periods = 0;
+                    if c.decision.setpoint.is_some() {
+                        slot.setpoint = c.decision.setpoint;
+                    }
+                    self.stats.answered += 1;
+                    self.stats.applied_ages_s.push(request.t_s - c.t_s);
+                    c.decision
+                }
+                None => {
+                    slot.held_periods = slot.held_periods.saturating_add(1);
+                    self.stats.missing += 1;
+                    // A multirotor's autopilot keeps flying its last setpoint.
+                    Decision { setpoint: slot.setpoint, ..holding() }
+                }
+            };
+            out.push(decision);
+        }
+    }
+
+    /// Real time: sends the updates and takes the commands whose delay is over at `now`.
+    fn deliver(&mut self, now: Instant) {
+        while self.in_transit.front().is_some_and(|(due, _)| *due <= now) {
+            let Some((_, m)) = self.in_transit.pop_front() else { break };
+            match m {
+                Message::Sense(m) => {
+                    if let Some(p) = self.sense.get(&m.uav) {
+                        // A publication that fails is an update lost.
+                        let _ = p.send(&Message::Sense(m));
+                    }
+                }
+                Message::Command(c) => self.offer(c),
+                _ => {}
+            }
+        }
+    }
+}
+
 impl Agents for NetAgents {
+    /// In lockstep, while the agent is live; on the own clock also while its commands keep
+    /// coming: a UAV that went more than [`COMMAND_MAX_AGE_PERIODS`] periods without one flies
+    /// uncontrolled until one comes again.
     fn present(&mut self, uav: proxform_core::UavId) -> bool {
         self.drain();
-        self.live(uav.0 + 1)
+        let held = self.own_clock.get(&(uav.0 + 1)).map_or(0, |o| o.held_periods);
+        self.live(uav.0 + 1) && f64::from(held) <= COMMAND_MAX_AGE_PERIODS
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        if self.mode == ClockMode::RealTime && request.phase == Phase::Fly {
+            return self.decide_own_clock(request, out);
+        }
         let s = request.sensed;
         let run = request.run as u32;
         let phase = match request.phase {
@@ -305,7 +577,10 @@ impl Agents for NetAgents {
             let Some(r) = self.inbox.recv_timeout(left) else { break };
             match r {
                 Received::Message(_, Message::Command(c))
-                    if c.run == run && c.k == request.k && c.t_s.to_bits() == request.t_s.to_bits() =>
+                    if c.run == run
+                        && c.k == request.k
+                        && c.t_s.to_bits() == request.t_s.to_bits()
+                        && !self.foreign.contains_key(&c.uav) =>
                 {
                     self.seen.insert(c.uav, Instant::now());
                     // A delayed answer arrives `delay_s` later: too late if past the deadline.

@@ -165,15 +165,21 @@ fn run(args: Args) -> Result<Ended> {
     let role =
         Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)?, tls };
     let session = Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?;
-    let vehicle = NetVehicle::new(session, swarm, &uavs)?;
+    let vehicle = NetVehicle::new(session, swarm, &host.members())?;
     let Some(endpoint) = mavlink else {
         let mut vehicle = vehicle;
         let ended = serve(&mut host, &mut vehicle, timing)?;
-        if host.dropped + host.refused + vehicle.garbage > 0 {
-            eprintln!(
-                "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable or on another UAV's key",
-                host.dropped, host.refused, vehicle.garbage
+        let c = host.counts();
+        if c.dropped + c.refused + c.skipped + c.stale + c.unfollowed + vehicle.garbage > 0 {
+            // One write, so that the lines of agents sharing a terminal do not interleave.
+            let line = format!(
+                "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable or on another \
+                 UAV's key; own clock: {} updates skipped for newer ones, {} too old to step on, {} observations of \
+                 silent neighbours avoided but not followed\n",
+                c.dropped, c.refused, vehicle.garbage, c.skipped, c.stale, c.unfollowed
             );
+            use std::io::Write;
+            let _ = std::io::stderr().write_all(line.as_bytes());
         }
         return Ok(ended);
     };

@@ -153,4 +153,8 @@ impl Vehicle for MavlinkVehicle {
     fn announce(&mut self, presence: Presence) -> Result<(), TransportError> {
         self.net.announce(presence)
     }
+
+    fn listen(&mut self, uavs: &[u32]) -> Result<(), TransportError> {
+        self.net.listen(uavs)
+    }
 }

@@ -247,7 +247,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
             w.0
         }
         Message::Member(m) => {
-            let mut w = Writer::new(kind::MEMBER, 12);
+            let mut w = Writer::new(kind::MEMBER, 20);
             w.u32(m.uav);
             w.u8(match m.presence {
                 Presence::Alive => 0,
@@ -255,6 +255,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
             });
             w.pad(3);
             w.u32(m.pid);
+            w.u64(m.digest);
             w.0
         }
     }
@@ -369,7 +370,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
                 v => return Err(DecodeError::Field { field: "presence", value: v.into() }),
             };
             r.skip(3)?;
-            Message::Member(MemberMsg { uav, presence, pid: r.u32()? })
+            Message::Member(MemberMsg { uav, presence, pid: r.u32()?, digest: r.u64()? })
         }
         other => return Err(DecodeError::Kind(other)),
     };
@@ -442,7 +443,7 @@ mod tests {
                 epoch_ns: 1_700_000_000_000_000_000,
                 end: true,
             }),
-            Message::Member(MemberMsg { uav: 9, presence: Presence::Leaving, pid: 4242 }),
+            Message::Member(MemberMsg { uav: 9, presence: Presence::Leaving, pid: 4242, digest: 0xfeed_beef_0123 }),
         ]
     }
 
@@ -455,7 +456,7 @@ mod tests {
         }
         // Layouts as docs/wire.md gives them.
         let lens: Vec<usize> = samples().iter().map(|m| encode(m).len()).collect();
-        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 144, 144, 48, 20]);
+        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 144, 144, 48, 28]);
         // NaN payloads and signed zeros survive (bits, not values).
         let odd = Message::State(StateMsg {
             uav: 1,

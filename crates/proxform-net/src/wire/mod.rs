@@ -16,6 +16,17 @@ use proxform_core::{Decision, Observation, Outcome};
 /// Schema version carried by every message; a reader refuses other versions.
 pub const VERSION: u8 = 1;
 
+/// On the own clock, what is older than this many update periods is stale: an own update is
+/// not stepped on, a command is not applied, and a neighbour whose agent has broadcast nothing
+/// newer flies uncontrolled (it is avoided, not followed).
+pub const STALE_AFTER_PERIODS: f64 = 5.0;
+
+/// A world on real time applies the commands that reach it within this many periods after a
+/// step's time from that step on (it propagates the period once that window has passed); one
+/// that comes later acts from the next step. An agent on its own clock decides for the step its
+/// command will act at ([`crate::agent`]).
+pub const COMMAND_WINDOW_PERIODS: f64 = 0.9;
+
 /// Most observations one [`SenseMsg`] may carry (a sensor reports one UAV per azimuth area and
 /// its main references; radio reports add more, but never this many).
 pub const MAX_OBSERVATIONS: usize = 4096;
@@ -127,6 +138,9 @@ pub struct MemberMsg {
     pub presence: Presence,
     /// The agent's process id (for the launcher's records).
     pub pid: u32,
+    /// What the agent runs for its UAV ([`crate::agent::setup_digest`]): a world takes an agent
+    /// only when it is the digest of its own scenario's agent for that UAV.
+    pub digest: u64,
 }
 
 /// Any message, as decoded.

@@ -215,8 +215,7 @@ impl StepContext<'_> {
             delay_s,
             channel_bad,
             onboard: sc.method().uses_onboard_sensing(),
-            fuse: matches!(sc.controller().predictor, proxform_core::PredictorKind::Singer { .. })
-                && matches!(sc.method(), proxform_core::Method::Proximity),
+            fuse: sc.fuses_radio(),
         }
     }
 

@@ -1,0 +1,109 @@
+//! Which neighbours fly under their agents, as an agent on its own clock can tell: a
+//! follower's agent broadcasts its state with every decision, so a follower whose agent has
+//! broadcast nothing measured within [`STALE_AFTER_PERIODS`] periods of the instant an agent
+//! steps at (stopped, cut off, crashed) flies uncontrolled, holding what it had. Such a
+//! neighbour is still seen and avoided, but not followed: its onboard observations are passed as
+//! close-range detections (collision avoidance only), its radio reports are dropped. A
+//! follower never heard is taken as flying under control (a world may run agents that do not
+//! broadcast); the navigator flies its path and is always followed.
+
+use proxform_core::{Observation, ObservationSource};
+use proxform_scenario::Scenario;
+
+use crate::wire::{StateMsg, STALE_AFTER_PERIODS};
+
+/// The time of the newest broadcast heard of every follower.
+#[derive(Debug, Clone)]
+pub struct ControlWatch {
+    newest: Vec<Option<f64>>,
+    navigator: usize,
+    silent_after_s: f64,
+    /// Observations of silent neighbours passed for avoidance only or dropped.
+    pub unfollowed: u64,
+}
+
+impl ControlWatch {
+    /// The watch over `scenario`'s followers.
+    pub fn new(scenario: &Scenario) -> Self {
+        Self {
+            newest: vec![None; scenario.len()],
+            navigator: scenario.navigator().index(),
+            silent_after_s: STALE_AFTER_PERIODS * scenario.dt_s(),
+            unfollowed: 0,
+        }
+    }
+
+    /// A broadcast heard.
+    pub fn hear(&mut self, m: &StateMsg) {
+        let j = (m.uav as usize).wrapping_sub(1);
+        if let Some(t) = self.newest.get_mut(j).filter(|_| m.t_s.is_finite()) {
+            *t = Some(t.map_or(m.t_s, |t| t.max(m.t_s)));
+        }
+    }
+
+    /// Forgets what was heard (a new run).
+    pub fn clear(&mut self) {
+        self.newest.iter_mut().for_each(|t| *t = None);
+    }
+
+    /// Whether follower `j` (from 0) has been silent at `t_s`.
+    pub fn silent(&self, j: usize, t_s: f64) -> bool {
+        j != self.navigator && self.newest.get(j).copied().flatten().is_some_and(|t| t_s - t > self.silent_after_s)
+    }
+
+    /// What an agent stepping at `t_s` keeps of `heard`: a silent neighbour's onboard
+    /// observations for avoidance only, its radio reports and relays not at all.
+    pub fn avoid_only_the_silent(&mut self, t_s: f64, heard: &mut Vec<Observation>) {
+        let before = heard.len();
+        heard.retain(|o| {
+            !self.silent(o.id.index(), t_s) || matches!(o.source, ObservationSource::Onboard | ObservationSource::Close)
+        });
+        let mut unfollowed = (before - heard.len()) as u64;
+        for o in heard.iter_mut() {
+            if o.source == ObservationSource::Onboard && self.silent(o.id.index(), t_s) {
+                o.source = ObservationSource::Close;
+                unfollowed += 1;
+            }
+        }
+        self.unfollowed += unfollowed;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_core::state::State9;
+    use proxform_core::UavId;
+
+    #[test]
+    fn a_silent_follower_is_avoided_not_followed() {
+        let sc =
+            proxform_scenario::load::parse("[formation.shape]\nkind = \"v\"\nuavs = 4\nspacing_m = 80.0\n", "w.toml")
+                .expect("valid");
+        let mut w = ControlWatch::new(&sc);
+        let nav = sc.navigator().index();
+        let (a, b) = ((nav + 1) % 4, (nav + 2) % 4);
+        let msg = |j: usize, t_s| StateMsg { uav: j as u32 + 1, k: 0, t_s, state: State9::zeros() };
+        w.hear(&msg(a, 1.0));
+        w.hear(&msg(b, 1.0));
+        w.hear(&msg(b, 3.0));
+        let obs = |j: usize, source| Observation { id: UavId(j as u32), state: State9::zeros(), age_s: 0.0, source };
+        let mut heard = vec![
+            obs(a, ObservationSource::Onboard),
+            obs(a, ObservationSource::Radio),
+            obs(b, ObservationSource::Onboard),
+            obs(nav, ObservationSource::Onboard),
+        ];
+        // At 3 s, a was last heard 2 s ago (more than 5 periods of 0.1 s), b just now.
+        w.avoid_only_the_silent(3.0, &mut heard);
+        let got: Vec<(usize, ObservationSource)> = heard.iter().map(|o| (o.id.index(), o.source)).collect();
+        assert_eq!(
+            got,
+            vec![(a, ObservationSource::Close), (b, ObservationSource::Onboard), (nav, ObservationSource::Onboard)]
+        );
+        assert_eq!(w.unfollowed, 2);
+        // Heard again: followed again; never heard: followed.
+        w.hear(&msg(a, 3.0));
+        assert!(!w.silent(a, 3.2) && !w.silent((nav + 3) % 4, 100.0) && !w.silent(nav, 100.0));
+    }
+}
