@@ -58,6 +58,11 @@ pub struct NetArgs {
     /// the autopilot, setpoints in OFFBOARD), one UAV per agent process.
     #[arg(long, requires = "mavlink_port")]
     pub agents_mavlink: bool,
+    /// How many times each agent process started here is started again when it exits during
+    /// the flight (crashed, killed); every loss is reported, and its UAVs fly uncontrolled
+    /// until their agent is back.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    pub agent_restarts: u32,
     /// The agent binary [default: proxform-agent beside this program].
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

@@ -150,6 +150,24 @@ fn distributed(
             d.stats.late_steps, d.stats.steps, d.stats.paused.0, d.stats.paused.1
         );
     }
+    for l in &d.losses {
+        let back = match &l.restarted {
+            Ok(n) => format!("started again (restart {n})"),
+            Err(why) => format!("not started again: {why}"),
+        };
+        eprintln!("agent lost: {} ended ({}) in run {} at t = {:.2} s; {back}", l.label, l.status, l.at.0, l.at.1);
+    }
+    if !d.uncontrolled.is_empty() {
+        let list: Vec<String> = d.uncontrolled.iter().map(|(u, s)| format!("UAV{u} {s:.1} s")).collect();
+        eprintln!(
+            "uncontrolled followers: {} (without their agent, or on the own clock without its commands for more than \
+             5 periods; holding their course or their last setpoint)",
+            list.join(", ")
+        );
+    }
+    if d.stats.foreign > 0 {
+        eprintln!("{} announcement(s) or command(s) of agents running another scenario refused", d.stats.foreign);
+    }
     if let Some(m) = &d.stats.mavlink {
         let flown: Vec<String> =
             m.uavs.iter().filter(|u| u.1 > 0).map(|u| format!("UAV{} {} steps", u.0, u.1)).collect();

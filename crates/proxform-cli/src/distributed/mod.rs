@@ -7,6 +7,7 @@
 
 mod children;
 mod mavlink;
+mod supervise;
 mod world;
 
 use std::cell::RefCell;
@@ -24,7 +25,9 @@ use proxform_scenario::Scenario;
 use proxform_sim::{run_batch_with_agents, BatchResult, RunOptions, Trajectory};
 
 use crate::net_args::NetArgs;
-use children::Children;
+use children::{Children, Recipe};
+pub use supervise::Loss;
+use supervise::Supervised;
 pub use world::NetStats;
 use world::{NavigatorTelemetry, NetAgents};
 
@@ -50,6 +53,10 @@ pub struct Distributed {
     pub usage: Vec<(f64, u64)>,
     /// Wall-clock time of the batch (s).
     pub wall_s: f64,
+    /// Agent processes lost during the flight, and whether they were started again.
+    pub losses: Vec<Loss>,
+    /// Per follower (from 1) that flew uncontrolled, for how long (s, summed over the batch).
+    pub uncontrolled: Vec<(u32, f64)>,
 }
 
 /// Every check of a distributed run that needs no network: made before any output is touched,
@@ -147,33 +154,35 @@ pub fn run(
         let bin = agent_bin(args)?;
         for group in followers.chunks(args.agents_per_process as usize) {
             let list: Vec<String> = group.iter().map(u32::to_string).collect();
-            let mut cmd = std::process::Command::new(&bin);
-            cmd.arg("--scenario")
-                .arg(&spec_file)
-                .arg("--uavs")
-                .arg(list.join(","))
-                .arg("--swarm")
-                .arg(net.swarm().name())
-                .arg("--connect")
-                .arg(&endpoint)
-                .arg("--idle-exit-s")
+            let mut a: Vec<std::ffi::OsString> = vec![
+                "--scenario".into(),
+                spec_file.clone().into(),
+                "--uavs".into(),
+                list.join(",").into(),
+                "--swarm".into(),
+                net.swarm().name().into(),
+                "--connect".into(),
+                endpoint.clone().into(),
+                "--idle-exit-s".into(),
                 // Nothing reaches an agent while the world waits out --start-delay-s.
-                .arg(format!("{}", (10.0 + delay.as_secs_f64()).min(86_400.0)))
-                .arg("--exit-with-parent")
-                .stdin(std::process::Stdio::null());
+                format!("{}", (10.0 + delay.as_secs_f64()).min(86_400.0)).into(),
+                "--exit-with-parent".into(),
+            ];
             if let Some(dir) = &args.tls {
-                cmd.arg("--tls").arg(dir);
+                a.extend(["--tls".into(), dir.clone().into()]);
             }
             if let (true, Some(base)) = (args.agents_mavlink, args.mavlink_port) {
                 let uav = group[0];
                 // UAV i's system sends to base + i − 1 (checked to fit when the systems opened).
                 let port = u32::from(base) + uav - 1;
-                cmd.arg("--mavlink")
-                    .arg(format!("udpin:127.0.0.1:{port}"))
-                    .arg("--mavlink-system")
-                    .arg(uav.to_string());
+                a.extend([
+                    "--mavlink".into(),
+                    format!("udpin:127.0.0.1:{port}").into(),
+                    "--mavlink-system".into(),
+                    uav.to_string().into(),
+                ]);
             }
-            children.spawn(cmd, format!("agent of UAV(s) {}", list.join(",")))?;
+            children.spawn(Recipe { program: bin.clone(), args: a }, format!("agent of UAV(s) {}", list.join(",")))?;
         }
     } else {
         eprintln!(
@@ -195,6 +204,7 @@ pub fn run(
         std::thread::sleep(Duration::from_millis(20));
     }
     let flight = Instant::now();
+    let mut supervised = Supervised::new(&mut net, &mut children, args.agent_restarts, scenario.dt_s());
     let result = match &mavlink {
         Some(swarm) => run_batch_with_agents(
             scenario,
@@ -203,7 +213,7 @@ pub fn run(
             record,
             (progress, &INTERRUPTED),
             (
-                &mut mavlink::WithMavlink { agents: &mut net, swarm: swarm.clone() },
+                &mut mavlink::WithMavlink { agents: &mut supervised, swarm: swarm.clone() },
                 &mut (&mut telemetry, mavlink::MavlinkTelemetry(swarm.clone())),
             ),
         ),
@@ -213,9 +223,10 @@ pub fn run(
             (seed, runs),
             record,
             (progress, &INTERRUPTED),
-            (&mut net, &mut telemetry),
+            (&mut supervised, &mut telemetry),
         ),
     };
+    let (losses, uncontrolled) = supervised.finish();
     let wall_s = flight.elapsed().as_secs_f64();
     let usage = children.usage();
     // Whatever happened: tell the agents, give them a moment, end the rest by id.
@@ -227,7 +238,7 @@ pub fn run(
     stats.mavlink = mavlink.map(|m| m.borrow().stats());
     net.into_session().close();
     match result {
-        Some(result) => Ok(Distributed { result, stats, processes, usage, wall_s }),
+        Some(result) => Ok(Distributed { result, stats, processes, usage, wall_s, losses, uncontrolled }),
         None => bail!("interrupted"),
     }
 }
