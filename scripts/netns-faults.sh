@@ -26,7 +26,7 @@
 #   --delay-min-ms A (20)  --delay-max-ms B (60)
 #   --out DIR               results folder (default /tmp/ns30/results)
 #   --bin DIR               folder of proxform and proxform-agent (default /tmp/nsbin)
-#   --lead-s L              flight start = all agents' TCP links established + L (default 0.6)
+#   --lead-s L              flight start = all agents' TCP links established + L (default 0.75)
 #
 # The flight's start is not printed by the world; the fault is timed from the moment every
 # agent's TCP link to the world (or its relay's) is established, plus --lead-s. After the run
@@ -97,7 +97,7 @@ fi
 # run: options
 # ---------------------------------------------------------------------------------------------
 scenario=paper fault=none seeds=1 duration=40 victim=3 at_s=15 stop_s=5 cut_s=10 wstop_s=1.5
-loss=0.05 dmin=20 dmax=60 out=/tmp/ns30/results bin=/tmp/nsbin lead_s=0.6
+loss=0.05 dmin=20 dmax=60 out=/tmp/ns30/results bin=/tmp/nsbin lead_s=0.75
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scenario) scenario=$2; shift 2;;
@@ -161,7 +161,7 @@ cleanup() {
   local p u
   for p in "${stopped[@]}"; do kill -CONT "$p" 2>/dev/null; done
   for p in "${pids[@]}"; do kill_pid "$p"; done
-  for u in "${uavs[@]}"; do ip netns del "$(ns_of "$u")" 2>/dev/null; done  # its iptables rules and veth go with it
+  for u in "${uavs[@]}"; do ip link del "${tag}h$u" 2>/dev/null; ip netns del "$(ns_of "$u")" 2>/dev/null; done  # its iptables rules go with it
   ip link del "$br" 2>/dev/null
   true
 }
@@ -304,6 +304,17 @@ if victim and os.path.exists(tp):
             r["victim_first_out_t"] = out_t[0] if out_t else None
             r["victim_rejoin_t"] = (out_t[-1] + 0.1) if out_t else None
             r["victim_out_s"] = round(len(out_t) * 0.1, 1)
+# the other UAVs: when they were outside the allowed errors (the within_allowable column)
+r["others_first_out_t"] = None; r["others_out_steps"] = None
+if os.path.exists(tp):
+    ot = []
+    with open(tp) as f:
+        for row in csv.DictReader(f):
+            if row["uav"] in others and row.get("within_allowable") == "0":
+                ot.append(float(row["t_s"]))
+    r["others_first_out_t"] = min(ot) if ot else None
+    r["others_last_out_t"] = max(ot) if ot else None
+    r["others_out_steps"] = len(ot)
 ao = []
 for fn in sorted(os.listdir(rd)):
     if fn.startswith("agent") and fn.endswith(".log"):
@@ -418,9 +429,10 @@ PY
 )
   python3 -c "$PARSE_PY" "$rd" "$meta" >> "$out/results.jsonl"
   [[ -f "$rd/out/trajectories.csv" ]] && gzip -f "$rd/out/trajectories.csv"
-  tail -1 "$out/results.jsonl" | python3 -c '
-import json,sys; r=json.loads(sys.stdin.read())
-print(f"{r[\"scenario\"]} {r[\"fault\"]} seed {r[\"seed\"]}: exit {r[\"exit\"]}, FAIL {[u for u,v in r[\"results\"].items() if v!=\"PASS\"]}, others_pass {r[\"others_pass\"]}, victim_final {r[\"victim_final_maxabs\"]}, fault_at {r.get(\"fault_at_est_s\")}, {r[\"distributed_raw\"][13:110]}")'
+  tail -1 "$out/results.jsonl" | python3 -c 'import json, sys
+r = json.loads(sys.stdin.read())
+print(r["scenario"], r["fault"], "seed", r["seed"], "exit", r["exit"], "FAIL", [u for u, v in r["results"].items() if v != "PASS"],
+      "others_pass", r["others_pass"], "victim_final", r["victim_final_maxabs"], "fault_at", r.get("fault_at_est_s"), "|", r["distributed_raw"][13:110])'
 }
 
 for s in $seedlist; do one_run "$s"; done

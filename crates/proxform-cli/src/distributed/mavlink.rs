@@ -6,7 +6,9 @@
 //! the method's x (the formation's initial course). A follower whose MAVLink controller has
 //! switched it to OFFBOARD and streams velocity setpoints flies them (the decision is the input
 //! toward the setpoint, within the vehicle's limits) instead of its proxform agent's; without
-//! setpoints for a second it falls back to HOLD, and its agent's decisions again.
+//! setpoints for a second it falls back to HOLD, and its agent's decisions again. The navigator
+//! likewise flies an outside controller's setpoints instead of its path while in OFFBOARD (the
+//! followers keep their places around it as it flies), and its path again after.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -42,6 +44,8 @@ pub struct MavlinkSwarm {
     last_beat: Option<Instant>,
     /// Flight steps in which an outside controller flew a UAV, per UAV.
     pub offboard_steps: Vec<u64>,
+    /// The navigator (from 0).
+    navigator: usize,
 }
 
 /// What the MAVLink side saw, for the report.
@@ -73,8 +77,8 @@ impl MavlinkSwarm {
                 let endpoint = Endpoint::Out(([127, 0, 0, 1], base_port + i as u16).into());
                 let link = Link::open(endpoint, i as u8 + 1, 1).context("cannot open a MAVLink port")?;
                 let served = Served::new(i as u8 + 1, flavour, mav_type);
-                // The navigator flies its mission: no outside controller flies it (yet).
-                let served = if i == navigator { served.without_offboard() } else { served };
+                // The navigator too: it flies its path until an outside controller takes it
+                // in OFFBOARD, and again once that controller stops.
                 Ok(Vehicle { served, link })
             })
             .collect::<Result<_>>()?;
@@ -86,6 +90,7 @@ impl MavlinkSwarm {
             start: Instant::now(),
             last_beat: None,
             offboard_steps: vec![0; n],
+            navigator,
         })
     }
 
@@ -189,6 +194,12 @@ pub struct WithMavlink<'a, A: Agents> {
 impl<A: Agents> Agents for WithMavlink<'_, A> {
     fn present(&mut self, uav: proxform_core::UavId) -> bool {
         self.agents.present(uav) || self.swarm.borrow().offboard(uav.index())
+    }
+
+    fn navigator(&mut self, _: f64, truth: &State9) -> Option<Decision> {
+        let mut swarm = self.swarm.borrow_mut();
+        let nav = swarm.navigator;
+        swarm.decision(nav, truth)
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {

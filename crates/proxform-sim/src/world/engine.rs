@@ -79,6 +79,8 @@ struct Outside<'s> {
     by_uav: Vec<Option<Decision>>,
     /// Followers taken out of the flight because their agent is gone.
     absent: Vec<bool>,
+    /// The navigator (an outside controller may fly it).
+    navigator: usize,
 }
 
 /// Everything of a flight but the agents: read by every block while the agents step.
@@ -160,6 +162,7 @@ impl<'s> Simulation<'s> {
             decisions: Vec::new(),
             by_uav: vec![None; n],
             absent: vec![false; n],
+            navigator: scenario.navigator().index(),
         };
         let none = (0..n).map(|_| None).collect();
         let mut sim = Self::build(scenario, options, (seed, run), none, Some(outside));
@@ -562,6 +565,18 @@ impl Outside<'_> {
                     && vehicle.plausible(&truth[u.index()], &d.input, d.setpoint.as_ref(), dt)
             });
             self.by_uav[u.index()] = Some(d.unwrap_or_else(holding));
+        }
+        // An outside controller in charge of the navigator flies it (checked as a follower's
+        // decision is; one that is not valid leaves it on its path).
+        if phase == Phase::Fly {
+            let nav = self.navigator;
+            if let Some(d) = self
+                .agents
+                .navigator(t_s, &truth[nav])
+                .filter(|d| d.is_finite() && vehicle.plausible(&truth[nav], &d.input, d.setpoint.as_ref(), dt))
+            {
+                self.by_uav[nav] = Some(d);
+            }
         }
     }
 }

@@ -352,6 +352,14 @@ impl StepContext<'_> {
                 continue;
             }
             let e = self.env.get(i).copied().unwrap_or_default();
+            if i == nav && s.decisions[b].is_some() {
+                // An outside controller flies the navigator (only agents outside the engine
+                // give it a decision): through its vehicle and the wind, as a follower.
+                let applied = s.applied[b];
+                *next = sc.vehicle().propagate_in_wind(me, &applied, dt, e.wind_now.into(), e.wind_next.into());
+                *aux = UavStep::default();
+                continue;
+            }
             if i == self.lead.uav && (i != nav || sc.navigator_flies()) {
                 // Its autopilot tracks the path (the successor: its own slot on it, from where
                 // it took over) through the vehicle and the wind.

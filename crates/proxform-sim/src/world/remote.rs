@@ -92,6 +92,14 @@ pub trait Agents {
         let _ = uav;
         true
     }
+
+    /// A decision that flies the navigator this flight step instead of its path (an outside
+    /// controller in charge of it: a MAVLink offboard program), given its true state `truth`
+    /// at time `t_s` (s); None (the default) while it flies its path.
+    fn navigator(&mut self, t_s: f64, truth: &State9) -> Option<Decision> {
+        let _ = (t_s, truth);
+        None
+    }
 }
 
 impl<A: Agents + ?Sized> Agents for &mut A {
@@ -101,6 +109,10 @@ impl<A: Agents + ?Sized> Agents for &mut A {
 
     fn present(&mut self, uav: UavId) -> bool {
         (**self).present(uav)
+    }
+
+    fn navigator(&mut self, t_s: f64, truth: &State9) -> Option<Decision> {
+        (**self).navigator(t_s, truth)
     }
 }
 
