@@ -101,6 +101,8 @@ pub struct NetAgents {
     /// applied.
     own_clock: BTreeMap<u32, OwnClock>,
     own_clock_run: u32,
+    /// Real time: the time of the current flight step (s).
+    own_clock_t_s: f64,
     /// The digest of what each follower's agent must run (from the world's scenario), and the
     /// UAVs whose agent last announced another.
     digests: BTreeMap<u32, u64>,
@@ -152,6 +154,7 @@ impl NetAgents {
             answers: Vec::new(),
             own_clock: BTreeMap::new(),
             own_clock_run: 0,
+            own_clock_t_s: 0.0,
             digests: followers.iter().map(|u| (*u, proxform_net::agent::setup_digest(scenario, *u))).collect(),
             foreign: BTreeMap::new(),
             in_transit: std::collections::VecDeque::new(),
@@ -313,6 +316,12 @@ impl NetAgents {
             self.stats.late += 1;
             return;
         }
+        // A command for an instant far ahead of the flight (or none) would stand as the newest
+        // and keep every later one out: it is no command.
+        if !(c.t_s.is_finite() && c.t_s <= self.own_clock_t_s + COMMAND_MAX_AGE_PERIODS * self.dt_s + 1e-9) {
+            self.stats.refused += 1;
+            return;
+        }
         if !c.decision.is_finite() {
             self.stats.refused += 1;
             return;
@@ -340,6 +349,7 @@ impl NetAgents {
     fn decide_own_clock(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
         let s = request.sensed;
         let run = request.run as u32;
+        self.own_clock_t_s = request.t_s;
         if request.k == 0 {
             // t = 0 a little ahead, so that every agent has the clock before the first update.
             let lead = Duration::from_millis(200);
