@@ -124,44 +124,58 @@ fn an_agent_killed_in_flight_leaves_its_uav_uncontrolled_and_the_run_fails() {
 }
 
 #[test]
-fn ctrl_c_ends_the_launcher_and_every_agent_it_started() {
-    let swarm = format!("sigint-{}", std::process::id());
-    let dir = out("sigint");
-    let launcher = Command::new(bin())
-        .args(["run", "--distributed", "--clock", "realtime", "--duration-s", "60", "--no-figures", "-q"])
-        .args(["--swarm", &swarm, "--out"])
-        .arg(&dir)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .expect("the launcher starts");
-    let pid = launcher.id();
-    let mut launcher = Reap(launcher);
-    let agents = || {
-        let o =
-            Command::new("pgrep").args(["-f", &format!("proxform-agent.*swarm {swarm}")]).output().expect("pgrep runs");
-        String::from_utf8_lossy(&o.stdout).lines().count()
-    };
-    // The five agents come up, the flight starts.
-    let start = std::time::Instant::now();
-    while agents() < 5 && start.elapsed().as_secs() < 20 {
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    }
-    assert_eq!(agents(), 5);
-    std::thread::sleep(std::time::Duration::from_secs(2));
-    let kill = Command::new("kill").args(["-INT", &pid.to_string()]).status().expect("kill runs");
-    assert!(kill.success());
-    let start = std::time::Instant::now();
-    let status = loop {
-        if let Some(s) = launcher.0.try_wait().expect("wait") {
-            break s;
+fn ctrl_c_or_sigterm_ends_the_launcher_every_agent_it_started_and_its_private_folder() {
+    for signal in ["-INT", "-TERM"] {
+        let swarm = format!("sig{}-{}", &signal[1..], std::process::id());
+        let dir = out(&swarm);
+        let launcher = Command::new(bin())
+            .args(["run", "--distributed", "--clock", "realtime", "--duration-s", "60", "--no-figures", "-q"])
+            .args(["--swarm", &swarm, "--out"])
+            .arg(&dir)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("the launcher starts");
+        let pid = launcher.id();
+        let mut launcher = Reap(launcher);
+        let agents = || {
+            let o = Command::new("pgrep")
+                .args(["-f", &format!("proxform-agent.*swarm {swarm}")])
+                .output()
+                .expect("pgrep runs");
+            String::from_utf8_lossy(&o.stdout).lines().count()
+        };
+        // Its private folder (the scenario it hands its agents).
+        let private = || {
+            std::fs::read_dir(std::env::temp_dir())
+                .expect("the temporary folder")
+                .flatten()
+                .filter(|e| e.file_name().to_string_lossy().starts_with(&format!("proxform-world-{pid}-")))
+                .count()
+        };
+        // The five agents come up, the flight starts.
+        let start = std::time::Instant::now();
+        while agents() < 5 && start.elapsed().as_secs() < 20 {
+            std::thread::sleep(std::time::Duration::from_millis(100));
         }
-        assert!(start.elapsed().as_secs() < 10, "the launcher did not end after Ctrl-C");
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    };
-    assert_eq!(status.code(), Some(2), "an interrupted run is an error");
-    assert_eq!(agents(), 0, "agents outlived their launcher");
-    let _ = std::fs::remove_dir_all(dir);
+        assert_eq!(agents(), 5);
+        assert_eq!(private(), 1);
+        std::thread::sleep(std::time::Duration::from_secs(2));
+        let kill = Command::new("kill").args([signal, &pid.to_string()]).status().expect("kill runs");
+        assert!(kill.success());
+        let start = std::time::Instant::now();
+        let status = loop {
+            if let Some(s) = launcher.0.try_wait().expect("wait") {
+                break s;
+            }
+            assert!(start.elapsed().as_secs() < 10, "the launcher did not end after {signal}");
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        };
+        assert_eq!(status.code(), Some(2), "an interrupted run is an error ({signal})");
+        assert_eq!(agents(), 0, "agents outlived their launcher ({signal})");
+        assert_eq!(private(), 0, "its private folder outlived it ({signal})");
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }
 
 #[test]
