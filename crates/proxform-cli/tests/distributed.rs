@@ -532,3 +532,26 @@ fn the_launcher_starts_a_crashed_agent_again_and_reports_every_loss() {
         let _ = std::fs::remove_dir_all(dir);
     }
 }
+
+#[test]
+fn damaged_credentials_are_named_before_any_link_is_tried() {
+    let keys = out("badkeys");
+    let made = Command::new(bin()).args(["keys", "--uavs", "6", "--out"]).arg(&keys).output().expect("keys");
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    for (file, what) in [("ca.pem", "not a PEM certificate"), ("uav-4.key", "not a PEM private key")] {
+        let saved = std::fs::read(keys.join(file)).expect("written");
+        std::fs::write(keys.join(file), "garbage\n").expect("damaged");
+        let o = Command::new(bin())
+            .args(["run", "--duration-s", "1", "--distributed", "--no-figures", "-q", "--tls"])
+            .arg(&keys)
+            .arg("--out")
+            .arg(out("badkeys-run"))
+            .output()
+            .expect("proxform runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(file) && stderr.contains(what), "{stderr}");
+        std::fs::write(keys.join(file), saved).expect("restored");
+    }
+    let _ = std::fs::remove_dir_all(keys);
+}

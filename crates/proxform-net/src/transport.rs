@@ -32,6 +32,31 @@ impl Tls {
         let stem = party.file_stem();
         Self { ca: dir.join("ca.pem"), cert: dir.join(format!("{stem}.pem")), key: dir.join(format!("{stem}.key")) }
     }
+
+    /// Checks that each file is there and is what it should be (a PEM certificate, a PEM
+    /// private key), so that a missing or damaged file is named before any link is tried (the
+    /// TLS library only says that nothing could be trusted, or times out).
+    pub fn check(&self) -> Result<(), TransportError> {
+        for (path, label) in [(&self.ca, "CERTIFICATE"), (&self.cert, "CERTIFICATE"), (&self.key, "PRIVATE KEY")] {
+            let meta =
+                std::fs::metadata(path).map_err(|e| TransportError::Config(format!("{}: {e}", path.display())))?;
+            if !meta.is_file() || meta.len() > 1 << 20 {
+                return Err(TransportError::Config(format!("{}: not a PEM file of at most 1 MiB", path.display())));
+            }
+            let text = std::fs::read_to_string(path).unwrap_or_default();
+            let begin = text.find("-----BEGIN ").map(|i| &text[i + 11..]);
+            let pem = begin.is_some_and(|b| b.split("-----").next().is_some_and(|l| l.ends_with(label)))
+                && text.contains("-----END ");
+            if !pem {
+                let what = if label == "CERTIFICATE" { "certificate" } else { "private key" };
+                return Err(TransportError::Config(format!(
+                    "{}: not a PEM {what} (make the swarm's credentials with `proxform keys`)",
+                    path.display()
+                )));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A router's authenticated links and the access rules it enforces on them

@@ -269,6 +269,12 @@ fn secured(dir: &std::path::Path, swarm: &Swarm, scenario: &Scenario, args: &Net
             dir.display()
         );
     }
+    tls.check()?;
+    if !args.external_agents {
+        for u in (1..=scenario.len() as u32).filter(|u| *u != nav) {
+            Tls::in_folder(dir, Party::Uav(u)).check()?;
+        }
+    }
     Ok(Secured { tls, acl_json5: acl_json5(swarm, scenario.len() as u32, nav) })
 }
 
@@ -323,7 +329,10 @@ fn serve(listen: Option<&str>, secured: Option<Secured>, insecure: bool) -> Resu
             Err(err) => last = Some(err),
         }
     }
-    Err(anyhow::anyhow!("cannot serve the world on a free loopback port: {last:?}"))
+    match last {
+        Some(e) => Err(anyhow::Error::new(e).context("cannot serve the world on a free loopback port")),
+        None => bail!("cannot serve the world on a free loopback port"),
+    }
 }
 
 /// The agent binary: the one named, or `proxform-agent` beside this program.

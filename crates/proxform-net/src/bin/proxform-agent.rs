@@ -151,11 +151,7 @@ fn run(args: Args) -> Result<Ended> {
         }
         (Some(dir), true) => {
             let tls = Tls::in_folder(dir, Party::Uav(uavs[0]));
-            for f in [&tls.ca, &tls.cert, &tls.key] {
-                if !f.is_file() {
-                    bail!("--tls: {} is not a file (make the swarm's credentials with `proxform keys`)", f.display());
-                }
-            }
+            tls.check().context("--tls")?;
             Some(tls)
         }
         (Some(_), false) => bail!("--tls: connect to the world's tls/ endpoint (--connect tls/HOST:PORT)"),
