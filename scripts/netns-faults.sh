@@ -78,6 +78,17 @@ for (sc, fa), rs in groups.items():
         vf, "/".join(f"{v:.2f}" for v in vw) if vw else "-", f"{unc}/{n}",
         f"{miss[len(miss)//2]}/{miss[-1]}", late, lost, hung))))
 print()
+print("timing (flight s, medians over runs): fault start/length est., others first/last outside allowed, victim first outside / back inside for good")
+import statistics
+def med(v):
+    v = [x for x in v if x is not None]
+    return round(statistics.median(v), 2) if v else None
+for (sc, fa), rs in groups.items():
+    print(sc, fa, "fault", med([r.get("fault_at_est_s") for r in rs]), med([r.get("fault_len_s") for r in rs]),
+          "| others out", med([r.get("others_first_out_t") for r in rs]), med([r.get("others_last_out_t") for r in rs]),
+          "steps", med([r.get("others_out_steps") for r in rs]),
+          "| victim", med([r.get("victim_first_out_t") for r in rs]), med([r.get("victim_rejoin_t") for r in rs]))
+print()
 print("per run: scenario fault seed exit FAILs victim_final_maxabs rejoin_t fault_at_est_s distributed | real time")
 for r in rows:
     fails = [u for u, v in r["results"].items() if v != "PASS"]

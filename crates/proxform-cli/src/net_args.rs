@@ -58,6 +58,12 @@ pub struct NetArgs {
     /// the autopilot, setpoints in OFFBOARD), one UAV per agent process.
     #[arg(long, requires = "mavlink_port")]
     pub agents_mavlink: bool,
+    /// Where those agents take their updates: `world` (this world's sensing, the own state
+    /// from the autopilot) or `autopilot` (the autopilot's state alone, neighbours by radio
+    /// from the other agents: as on companion computers with no world; needs
+    /// radio.broadcast_all).
+    #[arg(long, default_value = "world", value_parser = ["world", "autopilot"], requires = "agents_mavlink")]
+    pub agents_sensing: String,
     /// How many times each agent process started here is started again when it exits during
     /// the flight (crashed, killed); every loss is reported, and its UAVs fly uncontrolled
     /// until their agent is back.

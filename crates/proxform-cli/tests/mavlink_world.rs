@@ -209,3 +209,64 @@ fn agents_over_mavlink_refuse_a_vehicle_that_velocity_setpoints_do_not_fly() {
     assert_eq!(o.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("fly a multirotor scenario"), "{stderr}");
 }
+
+#[test]
+fn agents_need_no_world_sensing_their_autopilot_and_the_radio_suffice() {
+    // `--agents-sensing autopilot`: each agent's updates are its autopilot's states on its own
+    // clock and its neighbours what the other agents broadcast (every UAV broadcasts), as on a
+    // companion computer with no world; the world's sensing goes unused. The formation holds
+    // within its allowable errors.
+    let dir = std::env::temp_dir().join(format!("proxform-mavlink-noworld-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a folder");
+    let file = dir.join("v6.toml");
+    std::fs::write(
+        &file,
+        "duration_s = 15.0\n[vehicle]\nmodel = \"multirotor\"\n[formation.shape]\nkind = \"v\"\nuavs = 6\n\
+         spacing_m = 8.0\nangle_deg = 30.0\n[path]\nkind = \"waypoints\"\nspeed_kmh = 18.0\n\
+         points_m = [[100.0, 0.0, 0.0], [100.0, 100.0, 0.0]]\nturn_radius_m = 20.0\n[radio]\nbroadcast_all = true\n",
+    )
+    .expect("written");
+    let base = free_ports_for(6);
+    let world = Command::new(env!("CARGO_BIN_EXE_proxform"))
+        .arg("run")
+        .arg(&file)
+        .args(["--distributed", "--clock", "realtime", "--agents-mavlink", "--agents-sensing", "autopilot"])
+        .args(["--mavlink-port", &base.to_string(), "--no-figures", "--no-trajectories", "-q", "--out"])
+        .arg(dir.join("out"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("proxform runs");
+    let stderr = String::from_utf8_lossy(&world.wait_with_output_bounded(Duration::from_secs(120))).to_string();
+    let agents: Vec<&str> = stderr.lines().filter(|l| l.contains("over MAVLink:")).collect();
+    assert_eq!(agents.len(), 5, "{stderr}");
+    for l in &agents {
+        let sent: u64 = l
+            .split("MAVLink: ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .expect("setpoints");
+        assert!(sent >= 130, "decided about once a period (150): {l}");
+        assert!(l.contains("sensing from autopilot") && !l.contains("(0 updates of a world"), "{l}");
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).expect("summary")).expect("json");
+    assert_eq!(s["pass_fraction"].as_f64(), Some(1.0), "{stderr}");
+    // Without every UAV broadcasting, an agent would hear nobody: refused before anything starts.
+    let plain = dir.join("plain.toml");
+    let text = std::fs::read_to_string(&file).expect("read").replace("broadcast_all = true", "broadcast_all = false");
+    std::fs::write(&plain, text).expect("written");
+    let o = Command::new(env!("CARGO_BIN_EXE_proxform"))
+        .arg("run")
+        .arg(&plain)
+        .args(["--distributed", "--clock", "realtime", "--agents-mavlink", "--agents-sensing", "autopilot"])
+        .args(["--mavlink-port", &base.to_string(), "--no-figures", "-q", "--out"])
+        .arg(dir.join("plain"))
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("radio.broadcast_all = true"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}

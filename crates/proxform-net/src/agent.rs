@@ -7,7 +7,8 @@
 //!   latest update of its UAV (its own state and what it perceived onboard) and the latest
 //!   report of every broadcaster ([`AgentRadio`]: agent to agent over the network, not through
 //!   the world), and decides at its own period on the newest it has: when a new own update is
-//!   there and at least half a period passed since its last decision. Every observation is
+//!   there and at least nine tenths of a period passed since its last decision (once a
+//!   period, whatever rate its updates come at: an autopilot reports at tens of hertz). Every observation is
 //!   brought to the instant of the own state (its age from the times the messages carry); an
 //!   own update older than [`STALE_AFTER_PERIODS`] periods on the shared clock is not stepped
 //!   on (the UAV keeps its last command, which the world or the autopilot holds); a backlog
@@ -50,6 +51,10 @@ pub enum HostError {
     #[error("UAV {0} is the navigator: it flies its path and runs no controller")]
     Navigator(u32),
 }
+
+/// On the own clock an agent decides at most once in this many periods (a little under one:
+/// updates that come once a period with some jitter are each decided on).
+pub const MIN_DECISION_PERIODS: f64 = 0.9;
 
 struct Hosted {
     agent: Agent,
@@ -188,11 +193,11 @@ impl Host {
         }
     }
 
-    /// Own clock: the decisions due at `now` (a hosted UAV with a new update and at least half
-    /// a period since its last decision), each with the state it broadcasts; `age_of` gives an
+    /// Own clock: the decisions due at `now` (a hosted UAV with a new update and at least
+    /// [`MIN_DECISION_PERIODS`] of a period since its last decision), each with the state it broadcasts; `age_of` gives an
     /// update's age on the shared clock (s).
     pub fn decide_due(&mut self, now: Instant, age_of: impl Fn(&SenseMsg) -> f64) -> Vec<(CommandMsg, StateMsg)> {
-        let half = Duration::from_secs_f64(0.5 * self.scenario.dt_s());
+        let half = Duration::from_secs_f64(MIN_DECISION_PERIODS * self.scenario.dt_s());
         let due: Vec<u32> = self
             .agents
             .iter()
@@ -496,10 +501,10 @@ mod tests {
         // An older update after it is not stepped on; nothing new, nothing decided.
         host.keep(update(&sc, 2, 11));
         assert!(host.decide_due(now + Duration::from_millis(100), |_| 0.0).is_empty());
-        // The next one, within half a period of the last decision: not yet; after it: yes.
+        // The next one, within nine tenths of a period of the last decision: not yet; after: yes.
         host.keep(update(&sc, 2, 13));
-        assert!(host.decide_due(now + Duration::from_millis(20), |_| 0.0).is_empty());
-        assert_eq!(host.decide_due(now + Duration::from_millis(60), |_| 0.0).len(), 1);
+        assert!(host.decide_due(now + Duration::from_millis(60), |_| 0.0).is_empty());
+        assert_eq!(host.decide_due(now + Duration::from_millis(95), |_| 0.0).len(), 1);
         // An update older than five periods on the shared clock is not stepped on.
         host.keep(update(&sc, 2, 14));
         assert!(host.decide_due(now + Duration::from_millis(200), |_| 0.51).is_empty());

@@ -80,6 +80,13 @@ impl NetVehicle {
     }
 }
 
+impl NetVehicle {
+    /// The UAVs it runs (from 1).
+    pub fn uavs(&self) -> &[u32] {
+        &self.uavs
+    }
+}
+
 impl Vehicle for NetVehicle {
     fn next(&mut self, timeout: Duration) -> Result<Event, TransportError> {
         let deadline = std::time::Instant::now() + timeout;

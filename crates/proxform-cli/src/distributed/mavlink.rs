@@ -151,11 +151,12 @@ impl MavlinkSwarm {
     }
 }
 
-/// Says where every UAV is, each step.
-pub struct MavlinkTelemetry(pub Rc<RefCell<MavlinkSwarm>>);
+/// Says where every UAV is, each step, at the step's time on the flight's clock.
+pub struct MavlinkTelemetry(pub Rc<RefCell<MavlinkSwarm>>, pub super::world::FlightClock, pub f64);
 
 impl proxform_sim::Observer for MavlinkTelemetry {
     fn on_step(&mut self, _: &Scenario, frame: &proxform_sim::StepFrame<'_>) {
+        self.1.wait_until(frame.t, Duration::from_secs_f64(self.2));
         let mut s = self.0.borrow_mut();
         let s = &mut *s;
         let t = s.start.elapsed().as_secs_f64();

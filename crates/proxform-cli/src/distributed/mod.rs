@@ -120,9 +120,13 @@ pub fn run(
         None => None,
     };
     let (session, endpoint) = serve(args.listen.as_deref(), secured, args.insecure)?;
-    let mut telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
+    let telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
     let mode = if args.clock == "realtime" { ClockMode::RealTime } else { ClockMode::Lockstep };
     let mut net = NetAgents::new(session, swarm, scenario, (mode, deadline, seed))?;
+    let mut telemetry = match mode {
+        ClockMode::RealTime => telemetry.timed(net.clock(), scenario.dt_s()),
+        ClockMode::Lockstep => telemetry,
+    };
     let mavlink = match args.mavlink_port {
         Some(_) if mode != ClockMode::RealTime => {
             bail!("--mavlink-port: MAVLink vehicles fly in real time (add --clock realtime)")
@@ -148,6 +152,12 @@ pub fn run(
         bail!(
             "--agents-mavlink: this scenario's vehicle steers its attitude with its inputs too, which a MAVLink \
              velocity setpoint does not carry: fly a multirotor scenario (vehicle.model = \"multirotor\")"
+        );
+    }
+    if args.agents_sensing == "autopilot" && !scenario.radio().broadcast_all {
+        bail!(
+            "--agents-sensing autopilot: the agents' neighbours reach them only by radio, and this scenario's UAVs \
+             do not all broadcast: set radio.broadcast_all = true"
         );
     }
     if !args.external_agents {
@@ -180,6 +190,8 @@ pub fn run(
                     format!("udpin:127.0.0.1:{port}").into(),
                     "--mavlink-system".into(),
                     uav.to_string().into(),
+                    "--sensing".into(),
+                    args.agents_sensing.clone().into(),
                 ]);
             }
             children.spawn(Recipe { program: bin.clone(), args: a }, format!("agent of UAV(s) {}", list.join(",")))?;
@@ -204,6 +216,7 @@ pub fn run(
         std::thread::sleep(Duration::from_millis(20));
     }
     let flight = Instant::now();
+    let net_clock = net.clock();
     let mut supervised = Supervised::new(&mut net, &mut children, args.agent_restarts, scenario.dt_s());
     let result = match &mavlink {
         Some(swarm) => run_batch_with_agents(
@@ -214,7 +227,7 @@ pub fn run(
             (progress, &INTERRUPTED),
             (
                 &mut mavlink::WithMavlink { agents: &mut supervised, swarm: swarm.clone() },
-                &mut (&mut telemetry, mavlink::MavlinkTelemetry(swarm.clone())),
+                &mut (&mut telemetry, mavlink::MavlinkTelemetry(swarm.clone(), net_clock.clone(), scenario.dt_s())),
             ),
         ),
         None => run_batch_with_agents(

@@ -71,6 +71,34 @@ pub struct NetStats {
     pub mavlink: Option<super::mavlink::MavlinkStats>,
 }
 
+/// Real time: the wall-clock instant of the flight's t = 0 (moved by the world's pauses),
+/// shared by the world's agents and its telemetry.
+#[derive(Debug, Clone, Default)]
+pub struct FlightClock(std::rc::Rc<std::cell::Cell<Option<Instant>>>);
+
+impl FlightClock {
+    fn get(&self) -> Option<Instant> {
+        self.0.get()
+    }
+
+    fn set(&self, start: Instant) {
+        self.0.set(Some(start));
+    }
+
+    /// Waits until the flight's time `t_s` (at most `limit`): a simulated UAV says where it is
+    /// when it is there, not as soon as the world has computed it (its next state is ready
+    /// most of a period early).
+    pub fn wait_until(&self, t_s: f64, limit: Duration) {
+        if let Some(start) = self.get() {
+            let due = start + Duration::from_secs_f64(t_s.max(0.0));
+            let wait = due.saturating_duration_since(Instant::now()).min(limit);
+            if !wait.is_zero() {
+                std::thread::sleep(wait);
+            }
+        }
+    }
+}
+
 /// Followers whose agents answer over the network.
 pub struct NetAgents {
     session: Session,
@@ -81,8 +109,9 @@ pub struct NetAgents {
     dt_s: f64,
     deadline: Duration,
     mode: ClockMode,
-    /// Real time: the wall-clock instant of t = 0.
-    start: Option<Instant>,
+    /// Real time: the wall-clock instant of t = 0 (shared with the telemetry, which says where
+    /// a UAV is only once it is there).
+    start: FlightClock,
     /// The scenario's transport faults, and the seed their draws are keyed by.
     faults: (NetworkFaults, u64),
     /// Messages the transport faults dropped.
@@ -143,7 +172,7 @@ impl NetAgents {
             dt_s: scenario.dt_s(),
             deadline,
             mode,
-            start: None,
+            start: FlightClock::default(),
             faults: (*scenario.network(), seed),
             dropped: 0,
             seen: BTreeMap::new(),
@@ -218,7 +247,9 @@ impl NetAgents {
             Received::Message(_, Message::Command(c)) if self.foreign.contains_key(&c.uav) => {
                 self.stats.foreign += 1;
             }
-            Received::Message(_, Message::Command(c)) if self.mode == ClockMode::RealTime && self.start.is_some() => {
+            Received::Message(_, Message::Command(c))
+                if self.mode == ClockMode::RealTime && self.start.get().is_some() =>
+            {
                 self.seen.insert(c.uav, Instant::now());
                 self.offer(c);
             }
@@ -283,6 +314,11 @@ impl NetAgents {
     /// The session (for closing).
     pub fn into_session(self) -> Session {
         self.session
+    }
+
+    /// The flight's clock (real time).
+    pub fn clock(&self) -> FlightClock {
+        self.start.clone()
     }
 
     /// The swarm's name.
@@ -353,14 +389,14 @@ impl NetAgents {
         if request.k == 0 {
             // t = 0 a little ahead, so that every agent has the clock before the first update.
             let lead = Duration::from_millis(200);
-            self.start = Some(Instant::now() + lead);
+            self.start.set(Instant::now() + lead);
             self.epoch_ns = now_ns() + lead.as_nanos() as u64;
             self.own_clock.clear();
             self.own_clock_run = run;
             self.in_transit.clear();
         }
         let dt = Duration::from_secs_f64(self.dt_s);
-        let start = self.start.unwrap_or_else(Instant::now);
+        let start = self.start.get().unwrap_or_else(Instant::now);
         let mut begin = start + Duration::from_secs_f64(request.t_s.max(0.0));
         let now = Instant::now();
         if now < begin {
@@ -368,7 +404,7 @@ impl NetAgents {
         } else if now - begin >= dt {
             // Behind by a period or more: the flight's time pauses for as long.
             let behind = now - begin;
-            self.start = Some(start + behind);
+            self.start.set(start + behind);
             self.epoch_ns += behind.as_nanos() as u64;
             self.stats.paused = (self.stats.paused.0 + 1, self.stats.paused.1 + behind.as_secs_f64());
             begin = now;
@@ -525,13 +561,13 @@ impl Agents for NetAgents {
         if request.phase == Phase::Fly && request.k == 0 {
             // t = 0 a little ahead, so that every agent has the clock before the first update.
             let lead = Duration::from_millis(200);
-            self.start = Some(Instant::now() + lead);
+            self.start.set(Instant::now() + lead);
             self.epoch_ns = now_ns() + lead.as_nanos() as u64;
         }
         // In real time, step k begins at its wall-clock time and its answers are awaited until
         // the end of its period.
         let mut deadline = Instant::now() + self.deadline;
-        if let (true, Some(start)) = (real_time, self.start) {
+        if let (true, Some(start)) = (real_time, self.start.get()) {
             let begin = start + Duration::from_secs_f64(request.t_s.max(0.0));
             let now = Instant::now();
             if now < begin {
@@ -636,18 +672,29 @@ impl Agents for NetAgents {
 pub struct NavigatorTelemetry {
     publisher: Publisher,
     navigator: usize,
+    /// Real time: the flight's clock, to publish each state at its time.
+    clock: Option<(FlightClock, f64)>,
 }
 
 impl NavigatorTelemetry {
     /// A publisher on the navigator's state key of `swarm`.
     pub fn new(session: &Session, swarm: &Swarm, scenario: &Scenario) -> Result<Self> {
         let navigator = scenario.navigator().index();
-        Ok(Self { publisher: session.publisher(&swarm.state(navigator as u32 + 1))?, navigator })
+        Ok(Self { publisher: session.publisher(&swarm.state(navigator as u32 + 1))?, navigator, clock: None })
+    }
+
+    /// Publishes each state at its time on `clock` (real time; the period `dt_s` bounds a wait).
+    pub fn timed(mut self, clock: FlightClock, dt_s: f64) -> Self {
+        self.clock = Some((clock, dt_s));
+        self
     }
 }
 
 impl proxform_sim::Observer for NavigatorTelemetry {
     fn on_step(&mut self, _: &Scenario, frame: &proxform_sim::StepFrame<'_>) {
+        if let Some((clock, dt_s)) = &self.clock {
+            clock.wait_until(frame.t, Duration::from_secs_f64(*dt_s));
+        }
         let m =
             StateMsg { uav: self.navigator as u32 + 1, k: frame.k, t_s: frame.t, state: frame.states[self.navigator] };
         // Telemetry is best effort: a failed publication loses one sample.

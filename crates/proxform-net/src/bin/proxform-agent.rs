@@ -18,7 +18,7 @@ use proxform_net::keys::Swarm;
 use proxform_net::mavlink::autopilot::Autopilot;
 use proxform_net::mavlink::frame::Frame;
 use proxform_net::mavlink::link::{Endpoint, Link};
-use proxform_net::mavlink::vehicle::MavlinkVehicle;
+use proxform_net::mavlink::vehicle::{MavlinkVehicle, Sensing};
 use proxform_net::transport::{Role, Session, Tls};
 use proxform_net::vehicle::NetVehicle;
 use proxform_scenario::{builtin, load, Scenario};
@@ -62,6 +62,12 @@ struct Args {
     /// OFFBOARD (docs/mavlink.md).
     #[arg(long)]
     mavlink: Option<String>,
+    /// Where the agent's updates come from with --mavlink: `world` (a world's sensing, the own
+    /// state replaced by the autopilot's) or `autopilot` (no world needed: its own state from
+    /// the autopilot on its own clock, its neighbours from their agents' broadcasts; the
+    /// scenario must have every UAV broadcast, radio.broadcast_all).
+    #[arg(long, default_value = "world", value_parser = ["world", "autopilot"], requires = "mavlink")]
+    sensing: String,
     /// The autopilot's system id [default: the first autopilot heard].
     #[arg(long, requires = "mavlink", value_parser = clap::value_parser!(u8).range(1..))]
     mavlink_system: Option<u8>,
@@ -133,6 +139,12 @@ fn run(args: Args) -> Result<Ended> {
             if !(args.course_deg.is_finite() && args.course_deg.abs() <= 360.0) {
                 bail!("--course-deg: not an angle from -360 to 360 degrees");
             }
+            if args.sensing == "autopilot" && !sc.radio().broadcast_all {
+                bail!(
+                    "--sensing autopilot: its neighbours reach the agent only by radio, and this scenario's UAVs \
+                     do not all broadcast: set radio.broadcast_all = true"
+                );
+            }
             if !sc.vehicle().takes_velocity_setpoints() {
                 bail!(
                     "--mavlink: this scenario's vehicle steers its attitude with its inputs too, which a MAVLink \
@@ -165,37 +177,49 @@ fn run(args: Args) -> Result<Ended> {
     let Some(endpoint) = mavlink else {
         let mut vehicle = vehicle;
         let ended = serve(&mut host, &mut vehicle, timing)?;
-        let c = host.counts();
-        if c.dropped + c.refused + c.skipped + c.stale + c.unfollowed + vehicle.garbage > 0 {
-            // One write, so that the lines of agents sharing a terminal do not interleave.
-            let line = format!(
-                "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable or on another \
-                 UAV's key; own clock: {} updates skipped for newer ones, {} too old to step on, {} observations of \
-                 silent neighbours avoided but not followed\n",
-                c.dropped, c.refused, vehicle.garbage, c.skipped, c.stale, c.unfollowed
-            );
-            use std::io::Write;
-            let _ = std::io::stderr().write_all(line.as_bytes());
-        }
+        report(&uavs, &host, vehicle.garbage);
         return Ok(ended);
     };
     // The companion's system id is the UAV's; component 191 (an onboard computer).
     let link = Link::open(endpoint, uavs[0].min(255) as u8, 191)?;
     let autopilot = Autopilot::new(link, args.mavlink_system);
     let frame = Frame { origin_ned: [0.0; 3], course_rad: args.course_deg.to_radians() };
-    let mut vehicle = MavlinkVehicle::new(vehicle, autopilot, frame, (sc.vehicle().clone(), sc.dt_s()));
+    let sensing = if args.sensing == "autopilot" { Sensing::Autopilot } else { Sensing::World };
+    let mut vehicle =
+        MavlinkVehicle::new(vehicle, autopilot, frame, (sc.vehicle().clone(), sc.dt_s())).with_sensing(sensing);
     let ended = serve(&mut host, &mut vehicle, timing)?;
+    report(&uavs, &host, 0);
     let s = vehicle.autopilot().link().stats;
-    eprintln!(
+    let line = format!(
         "proxform-agent {uavs:?} over MAVLink: {} setpoints sent, HOLD asked {} time(s){}; {} frames undecodable, \
-         {} messages from other systems",
+         {} messages from other systems; sensing from {} ({} updates of a world's sensing not used)\n",
         vehicle.setpoints,
         vehicle.holds.0,
         vehicle.holds.1.map(|w| format!(" (last: {w})")).unwrap_or_default(),
         s.bad_crc + s.unknown + s.malformed,
-        vehicle.autopilot().foreign
+        vehicle.autopilot().foreign,
+        args.sensing,
+        vehicle.ignored
     );
+    use std::io::Write;
+    let _ = std::io::stderr().write_all(line.as_bytes());
     Ok(ended)
+}
+
+/// What the agents refused, skipped and left out, when anything (one write, so that the lines
+/// of agents sharing a terminal do not interleave).
+fn report(uavs: &[u32], host: &Host, garbage: u64) {
+    let c = host.counts();
+    if c.dropped + c.refused + c.skipped + c.stale + c.unfollowed + garbage > 0 {
+        let line = format!(
+            "proxform-agent {uavs:?}: {} observations dropped, {} updates refused, {} undecodable or on another \
+             UAV's key; own clock: {} updates skipped for newer ones, {} too old to step on, {} observations of \
+             silent neighbours avoided but not followed\n",
+            c.dropped, c.refused, garbage, c.skipped, c.stale, c.unfollowed
+        );
+        use std::io::Write;
+        let _ = std::io::stderr().write_all(line.as_bytes());
+    }
 }
 
 fn main() -> ExitCode {

@@ -141,6 +141,11 @@ impl Autopilot {
         Some((Ned { position: [p[0], p[1], p[2]], velocity: [p[3], p[4], p[5]], attitude: a }, age))
     }
 
+    /// When the newest position arrived (each one is a new sample of the vehicle's state).
+    pub fn position_at(&self) -> Option<Instant> {
+        self.position.map(|(_, t)| t)
+    }
+
     /// The vehicle's state in the method's frame `frame`, and its age.
     pub fn state(&self, frame: &Frame, now: Instant) -> Option<(State9, Duration)> {
         self.ned(now).map(|(n, age)| (frame.state(&n), age))
