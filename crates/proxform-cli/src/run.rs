@@ -165,6 +165,13 @@ fn distributed(
             list.join(", ")
         );
     }
+    if d.stats.inbox_dropped > 0 {
+        eprintln!(
+            "{} message(s) dropped by the world's full inbox (more than {} MiB waiting: a flood)",
+            d.stats.inbox_dropped,
+            proxform_net::transport::INBOX_MAX_BYTES >> 20
+        );
+    }
     if d.stats.foreign > 0 {
         eprintln!("{} announcement(s) or command(s) of agents running another scenario refused", d.stats.foreign);
     }

@@ -4,6 +4,8 @@
 //! connect to; the key expressions are those of [`crate::keys`].
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
 use zenoh::Wait;
@@ -218,10 +220,25 @@ pub enum Received {
     Misplaced(String, Message),
 }
 
-/// Messages from any number of subscriptions, in arrival order, in one queue.
+/// Most bytes of messages an inbox holds before it drops what arrives (a flood, or a reader
+/// that stopped): the newest value wins on the wire, so what is dropped is counted, never
+/// waited for.
+pub const INBOX_MAX_BYTES: usize = 64 << 20;
+
+/// What an inbox holds beside its messages: their bytes now, and how many it dropped.
+#[derive(Debug, Default)]
+struct Held {
+    bytes: AtomicUsize,
+    dropped: AtomicU64,
+    max_bytes: usize,
+}
+
+/// Messages from any number of subscriptions, in arrival order, in one queue of at most
+/// [`INBOX_MAX_BYTES`].
 pub struct Inbox {
-    rx: std::sync::mpsc::Receiver<Received>,
-    tx: std::sync::mpsc::Sender<Received>,
+    rx: std::sync::mpsc::Receiver<(usize, Received)>,
+    tx: std::sync::mpsc::Sender<(usize, Received)>,
+    held: Arc<Held>,
     /// Kept alive: dropping a subscriber undeclares it.
     _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
 }
@@ -229,20 +246,37 @@ pub struct Inbox {
 impl Inbox {
     /// The next message, waiting at most `timeout`; None when nothing came.
     pub fn recv_timeout(&self, timeout: Duration) -> Option<Received> {
-        self.rx.recv_timeout(timeout).ok()
+        self.rx.recv_timeout(timeout).ok().map(|(n, r)| self.taken(n, r))
     }
 
     /// The next message if one is waiting.
     pub fn try_recv(&self) -> Option<Received> {
-        self.rx.try_recv().ok()
+        self.rx.try_recv().ok().map(|(n, r)| self.taken(n, r))
+    }
+
+    fn taken(&self, bytes: usize, r: Received) -> Received {
+        self.held.bytes.fetch_sub(bytes, Ordering::Relaxed);
+        r
+    }
+
+    /// Messages dropped because the inbox was full.
+    pub fn dropped(&self) -> u64 {
+        self.held.dropped.load(Ordering::Relaxed)
     }
 }
 
 impl Session {
-    /// An inbox receiving every message on `keys` (key expressions: `*` and `**` allowed).
+    /// An inbox receiving every message on `keys` (key expressions: `*` and `**` allowed),
+    /// holding at most [`INBOX_MAX_BYTES`].
     pub fn inbox(&self, keys: &[String]) -> Result<Inbox, TransportError> {
+        self.inbox_bounded(keys, INBOX_MAX_BYTES)
+    }
+
+    /// An inbox holding at most `max_bytes` of messages.
+    pub fn inbox_bounded(&self, keys: &[String], max_bytes: usize) -> Result<Inbox, TransportError> {
         let (tx, rx) = std::sync::mpsc::channel();
-        let mut inbox = Inbox { rx, tx, _subscribers: Vec::with_capacity(keys.len()) };
+        let held = Arc::new(Held { max_bytes, ..Held::default() });
+        let mut inbox = Inbox { rx, tx, held, _subscribers: Vec::with_capacity(keys.len()) };
         self.subscribe(&mut inbox, keys)?;
         Ok(inbox)
     }
@@ -251,18 +285,27 @@ impl Session {
     pub fn subscribe(&self, inbox: &mut Inbox, keys: &[String]) -> Result<(), TransportError> {
         for key in keys {
             let tx = inbox.tx.clone();
+            let held = inbox.held.clone();
             let sub = self
                 .inner
                 .declare_subscriber(key.clone())
                 .callback(move |sample| {
                     let key = sample.key_expr().as_str().to_string();
+                    let bytes = sample.payload().len() + key.len() + 256;
+                    if held.bytes.fetch_add(bytes, Ordering::Relaxed) + bytes > held.max_bytes {
+                        held.bytes.fetch_sub(bytes, Ordering::Relaxed);
+                        held.dropped.fetch_add(1, Ordering::Relaxed);
+                        return;
+                    }
                     let received = match codec::decode(&sample.payload().to_bytes()) {
                         Ok(m) if crate::keys::on_its_key(&key, &m) => Received::Message(key, m),
                         Ok(m) => Received::Misplaced(key, m),
                         Err(e) => Received::Garbage(key, e),
                     };
                     // The inbox is gone only while its owner shuts down.
-                    let _ = tx.send(received);
+                    if tx.send((bytes, received)).is_err() {
+                        held.bytes.fetch_sub(bytes, Ordering::Relaxed);
+                    }
                 })
                 .wait()
                 .map_err(|e| TransportError::Io(e.to_string()))?;

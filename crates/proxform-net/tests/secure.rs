@@ -119,3 +119,33 @@ fn only_certified_peers_connect_and_each_publishes_its_own_uavs_keys_only() {
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&other);
 }
+
+#[test]
+fn a_flood_fills_an_inbox_to_its_bound_and_no_further() {
+    // A peer publishes 8 MiB faster than anyone reads: an inbox bounded to 1 MiB keeps at most
+    // that, counts what it dropped, and takes messages again once read.
+    let endpoint = proxform_net::transport::free_loopback_endpoint().expect("a port");
+    let router = Session::open(&Role::Router { listen: vec![endpoint.clone()], secured: None }).expect("router");
+    let inbox = router.inbox_bounded(&["flood/**".to_string()], 1 << 20).expect("subscribed");
+    let peer =
+        Session::open(&Role::Client { connect: vec![endpoint], wait_for_router: Duration::from_secs(10), tls: None })
+            .expect("peer");
+    std::thread::sleep(Duration::from_millis(300));
+    for _ in 0..128 {
+        peer.inner_put("flood/x", vec![7u8; 64 << 10]);
+    }
+    let start = Instant::now();
+    while inbox.dropped() < 100 && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let dropped = inbox.dropped();
+    let mut kept = 0;
+    while inbox.try_recv().is_some() {
+        kept += 1;
+    }
+    assert!((1..=16).contains(&kept), "{kept} of 64 KiB kept in 1 MiB");
+    assert!(dropped + kept as u64 >= 120, "{dropped} dropped, {kept} kept");
+    peer.inner_put("flood/x", vec![1, 2, 3]);
+    let again = inbox.recv_timeout(Duration::from_secs(5));
+    assert!(again.is_some(), "read, the inbox takes messages again");
+}

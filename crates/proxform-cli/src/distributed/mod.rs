@@ -248,6 +248,7 @@ pub fn run(
     children.finish(Duration::from_secs(2));
     let mut stats = net.stats.clone();
     stats.dropped = net.dropped;
+    stats.inbox_dropped = net.inbox_dropped();
     stats.mavlink = mavlink.map(|m| m.borrow().stats());
     net.into_session().close();
     match result {

@@ -67,6 +67,8 @@ pub struct NetStats {
     /// Announcements of agents that run another scenario than the world's (their UAVs are
     /// not theirs to fly).
     pub foreign: u64,
+    /// Messages the world's inbox dropped, full (a flood).
+    pub inbox_dropped: u64,
     /// The UAVs' MAVLink systems, when served.
     pub mavlink: Option<super::mavlink::MavlinkStats>,
 }
@@ -314,6 +316,11 @@ impl NetAgents {
     /// The session (for closing).
     pub fn into_session(self) -> Session {
         self.session
+    }
+
+    /// Messages dropped by the world's inbox, full.
+    pub fn inbox_dropped(&self) -> u64 {
+        self.inbox.dropped()
     }
 
     /// The flight's clock (real time).
