@@ -118,7 +118,8 @@ fn distributed(
     );
     eprintln!(
         "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} on \
-         another UAV's key, {} refused (a non-finite number; held), {} lost to [network] faults; round trip median \
+         another UAV's key, {} refused (not a number, or for an instant ahead of the flight; held), {} lost to [network] faults; \
+         the network's round trip (before [network] delay_s) median \
          {:.3} ms, p99 {:.3} ms",
         d.processes,
         d.stats.answered,
@@ -138,15 +139,19 @@ fn distributed(
             proxform_sim::measure::stats::quantile_of(&mut ages, 0.99) * 1e3,
         );
         let mut applied = d.stats.applied_ages_s.clone();
-        let (c50, c99) = (
-            proxform_sim::measure::stats::quantile_of(&mut applied, 0.5) * 1e3,
-            proxform_sim::measure::stats::quantile_of(&mut applied, 0.99) * 1e3,
-        );
+        let commands = match applied.is_empty() {
+            true => "no command was applied".to_string(),
+            false => format!(
+                "commands were {:.1} ms old (median), {:.1} ms (p99) of flight time when applied",
+                proxform_sim::measure::stats::quantile_of(&mut applied, 0.5) * 1e3,
+                proxform_sim::measure::stats::quantile_of(&mut applied, 0.99) * 1e3
+            ),
+        };
         eprintln!(
             "real time: {} of {} steps began late (> 0.1 Δt); the world fell a period behind {} time(s) and paused \
              the flight {:.3} s instead of replaying steps; updates were {a50:.3} ms old (median), {a99:.3} ms (p99) \
-             when the agents stepped; commands were {c50:.1} ms old (median), {c99:.1} ms (p99) of flight time when \
-             applied",
+             when the agents stepped; {commands}; the radio went agent to agent (the report's radio line is the \
+             world's model, not what the agents heard)",
             d.stats.late_steps, d.stats.steps, d.stats.paused.0, d.stats.paused.1
         );
     }

@@ -555,3 +555,85 @@ fn damaged_credentials_are_named_before_any_link_is_tried() {
     }
     let _ = std::fs::remove_dir_all(keys);
 }
+
+#[test]
+fn an_agent_of_another_scenario_joining_a_flight_steers_nothing() {
+    // Real time, 12 s of the paper; 3 s in, an agent whose file puts UAV 3's slot 20 m aside
+    // joins for UAV 3 beside the right one. Its announcements and commands carry another digest:
+    // none is applied, and the right agent keeps flying UAV 3.
+    let (swarm, dir) = (format!("intruder-{}", std::process::id()), out("intruder"));
+    std::fs::create_dir_all(&dir).expect("a folder");
+    let printed =
+        Command::new(bin()).args(["run", "--duration-s", "12", "--print-scenario"]).output().expect("printed");
+    let text = String::from_utf8_lossy(&printed.stdout).to_string();
+    let moved = text.replacen("offset_m = [-86.6, -50.0, -10.0]", "offset_m = [-86.6, -70.0, -10.0]", 1);
+    assert_ne!(moved, text, "UAV 3's slot is in the printed scenario");
+    let file = dir.join("moved.toml");
+    std::fs::write(&file, moved).expect("written");
+    let endpoint = free_endpoint();
+    let launcher = launch(&["--duration-s", "12", "--listen", &endpoint], &swarm, &dir.join("out"));
+    let _ = agent3_pid(&swarm);
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    let intruder = Reap(
+        Command::new(agent_bin())
+            .args([
+                "--scenario",
+                file.to_str().expect("utf-8"),
+                "--uav",
+                "3",
+                "--swarm",
+                &swarm,
+                "--connect",
+                &endpoint,
+            ])
+            .args(["--idle-exit-s", "5"])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("the intruder starts"),
+    );
+    let (code, printed) = finish(launcher);
+    drop(intruder);
+    assert_eq!(code, Some(0), "{printed}");
+    assert!(printed.contains("of agents running another scenario refused"), "{printed}");
+    let y = worst(&dir.join("out"), "y_m");
+    assert!(y < 0.6, "UAV 3 kept in its slot: y {y} m");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn agents_that_came_early_wait_for_the_last_one_with_the_world() {
+    // The world waits for its agents and says so once a second: agents that came 4 s before
+    // the last one, with --idle-exit-s 2, are still there when the flight starts.
+    let (endpoint, swarm, dir) = (free_endpoint(), format!("early-{}", std::process::id()), out("early"));
+    let world = Command::new(bin())
+        .args(["world", "--duration-s", "2", "--no-figures", "-q", "--listen", &endpoint])
+        .args(["--swarm", &swarm, "--wait-agents-s", "20", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the world starts");
+    let mut world = Reap(world);
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let early = |u: u32| {
+        Reap(
+            Command::new(agent_bin())
+                .args(["--scenario", "paper", "--uav", &u.to_string(), "--swarm", &swarm, "--connect", &endpoint])
+                .args(["--idle-exit-s", "2"])
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .expect("an agent starts"),
+        )
+    };
+    let mut agents: Vec<Reap> = (2..=5).map(early).collect();
+    std::thread::sleep(std::time::Duration::from_secs(4));
+    agents.push(early(6));
+    let status = world.0.wait().expect("the world ends");
+    let mut stderr = String::new();
+    if let Some(mut e) = world.0.stderr.take() {
+        use std::io::Read;
+        let _ = e.read_to_string(&mut stderr);
+    }
+    assert_eq!(status.code(), Some(0), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -69,6 +69,8 @@ struct Hosted {
     stepped_t_s: Option<f64>,
     /// Own clock: its latest decisions and the instants they act at (the commands on their way).
     in_flight: std::collections::VecDeque<(f64, proxform_core::Decision)>,
+    /// What it runs ([`setup_digest`]), carried by its commands and announcements.
+    digest: u64,
 }
 
 /// What a process's agents refused, skipped and left out ([`Host::counts`]).
@@ -84,8 +86,9 @@ pub struct Counts {
     pub stale: u64,
     /// Own clock: observations of silent neighbours avoided but not followed.
     pub unfollowed: u64,
-    /// Own clock: broadcasts kept by the radio, and not taken.
-    pub radio: (u64, u64),
+    /// Own clock: broadcasts kept by the radio, not taken, and lost to the scenario's radio
+    /// loss.
+    pub radio: (u64, u64, u64),
 }
 
 /// The agents of the UAVs one process runs.
@@ -114,19 +117,19 @@ impl Host {
         let mut agents = BTreeMap::new();
         for &u in uavs {
             let id = Self::follower(&scenario, u)?;
-            agents.insert(
-                u,
-                Hosted {
-                    agent: scenario.agent(id),
-                    run: 0,
-                    flying: false,
-                    pending: None,
-                    decided: None,
-                    last: None,
-                    stepped_t_s: None,
-                    in_flight: Default::default(),
-                },
-            );
+            let digest = setup_digest(&scenario, u);
+            let hosted = Hosted {
+                agent: scenario.agent(id),
+                run: 0,
+                flying: false,
+                pending: None,
+                decided: None,
+                last: None,
+                stepped_t_s: None,
+                in_flight: Default::default(),
+                digest,
+            };
+            agents.insert(u, hosted);
         }
         let (radio, watch) = (AgentRadio::new(&scenario), ControlWatch::new(&scenario));
         Ok(Self {
@@ -156,7 +159,9 @@ impl Host {
     /// A broadcast heard (own clock).
     pub fn hear(&mut self, m: &StateMsg) {
         self.watch.hear(m);
-        self.radio.hear(m);
+        // The scenario's radio loss is drawn per receiving process (its first UAV).
+        let me = self.agents.keys().next().map_or(0, |u| *u as usize - 1);
+        self.radio.hear(me, m);
     }
 
     /// What the agents refused, skipped and left out.
@@ -167,7 +172,7 @@ impl Host {
             skipped: self.skipped,
             stale: self.stale,
             unfollowed: self.watch.unfollowed,
-            radio: (self.radio.heard, self.radio.ignored),
+            radio: (self.radio.heard, self.radio.ignored, self.radio.lost),
         }
     }
 
@@ -245,7 +250,7 @@ impl Host {
 
     /// The UAVs run (from 1), each with the digest of what its agent runs, as announced.
     pub fn members(&self) -> Vec<(u32, u64)> {
-        self.agents.keys().map(|u| (*u, setup_digest(&self.scenario, *u))).collect()
+        self.agents.iter().map(|(u, h)| (*u, h.digest)).collect()
     }
 
     /// Steps the agent of `s.uav` on the update, which reached it `latency_s` after it was
@@ -326,7 +331,9 @@ impl Host {
                     o.age_s += age;
                 }
                 self.radio.observations(UavId(s.uav - 1), t_s, &own, &mut self.heard);
-                self.watch.avoid_only_the_silent(t_s, &mut self.heard);
+                // Silence is judged at the update's own instant (a neighbour's last broadcast
+                // is of an update like this one), not at the instant the command will act.
+                self.watch.avoid_only_the_silent(s.t_s, &mut self.heard);
                 (t_s, own)
             }
         };
@@ -340,7 +347,7 @@ impl Host {
             }
         }
         h.stepped_t_s = Some(t_s);
-        let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s, age_s: latency_s, decision };
+        let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s, age_s: latency_s, decision, digest: h.digest };
         Some((command, StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own }))
     }
 }

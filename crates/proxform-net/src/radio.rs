@@ -9,6 +9,11 @@
 //! and that instant; one measured after it (its sender stepped on a later update) is moved back
 //! along its velocity, so that every observation describes the same instant. A report older
 //! than the controller's track timeout is dropped (its track would be gone anyway).
+//!
+//! The scenario's radio faults are applied on top of what the network does: each report is
+//! lost with probability `radio.loss` (a draw keyed by receiver, sender and the report's time:
+//! the same in every run of the same flight) and heard only `radio.delay_s` after it was
+//! measured. Bursty loss (`radio.burst_*`) is the simulator's only.
 
 use proxform_core::state::{self, State9};
 use proxform_core::{Observation, ObservationSource, UavId};
@@ -21,6 +26,10 @@ use crate::wire::StateMsg;
 pub struct AgentRadio {
     /// Latest report per UAV (index from 0), only for broadcasters.
     latest: Vec<Option<StateMsg>>,
+    /// Reports on their way (the radio's delay), per UAV, oldest first.
+    arriving: Vec<std::collections::VecDeque<StateMsg>>,
+    loss: f64,
+    delay_s: f64,
     broadcaster: Vec<bool>,
     range_m: f64,
     max_age_s: f64,
@@ -30,6 +39,20 @@ pub struct AgentRadio {
     /// Reports not taken: from a UAV that does not broadcast, not newer than the one held, or
     /// with a number that is not finite.
     pub ignored: u64,
+    /// Reports lost to the scenario's radio loss.
+    pub lost: u64,
+}
+
+/// A uniform draw in [0, 1) keyed by the words of `key` (SplitMix64 over them).
+fn uniform(key: [u64; 3]) -> f64 {
+    let mut z = 0x9E37_79B9_7F4A_7C15u64;
+    for w in key {
+        z = z.wrapping_add(w).wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
 impl AgentRadio {
@@ -45,12 +68,16 @@ impl AgentRadio {
         }
         Self {
             latest: vec![None; n],
+            arriving: vec![std::collections::VecDeque::new(); n],
+            loss: radio.loss,
+            delay_s: f64::from(radio.delay_steps) * scenario.dt_s(),
             broadcaster,
             range_m: radio.range_m,
             max_age_s: scenario.controller().track_timeout_s,
             fuse: scenario.fuses_radio(),
             heard: 0,
             ignored: 0,
+            lost: 0,
         }
     }
 
@@ -64,32 +91,56 @@ impl AgentRadio {
         (0..self.broadcaster.len()).filter(|j| self.broadcaster[*j]).map(|j| j as u32 + 1).collect()
     }
 
-    /// Keeps `m` when it is a broadcaster's and newer than what is held.
-    pub fn hear(&mut self, m: &StateMsg) {
+    /// Takes `m` when it is a broadcaster's, newer than what is held and not lost to the
+    /// scenario's radio loss (for receiver `me`, from 0); it is heard once the radio's delay has
+    /// passed.
+    pub fn hear(&mut self, me: usize, m: &StateMsg) {
         let j = (m.uav as usize).wrapping_sub(1);
+        let newest = |q: &std::collections::VecDeque<StateMsg>, held: Option<StateMsg>| {
+            q.back().copied().or(held).is_none_or(|h| m.t_s > h.t_s)
+        };
         let valid = j < self.latest.len()
             && self.broadcaster[j]
             && m.t_s.is_finite()
             && m.state.iter().all(|v| v.is_finite())
-            && self.latest[j].is_none_or(|held| m.t_s > held.t_s);
-        match valid {
-            true => {
-                self.latest[j] = Some(*m);
-                self.heard += 1;
-            }
-            false => self.ignored += 1,
+            && newest(&self.arriving[j], self.latest[j]);
+        if !valid {
+            self.ignored += 1;
+            return;
+        }
+        if self.loss > 0.0 && uniform([me as u64, j as u64, m.t_s.to_bits()]) < self.loss {
+            self.lost += 1;
+            return;
+        }
+        self.heard += 1;
+        self.arriving[j].push_back(*m);
+        // Never more on the way than the delay can hold back (a report a period).
+        while self.arriving[j].len() > 64 {
+            self.arriving[j].pop_front();
         }
     }
 
     /// Forgets every report (a new run).
     pub fn clear(&mut self) {
         self.latest.iter_mut().for_each(|m| *m = None);
+        self.arriving.iter_mut().for_each(|q| q.clear());
+    }
+
+    /// The reports whose delay is over at `t_s` become the latest.
+    fn arrive(&mut self, t_s: f64) {
+        for (q, latest) in self.arriving.iter_mut().zip(self.latest.iter_mut()) {
+            // Without a delay of the scenario's, what the network brought is there now.
+            while q.front().is_some_and(|m| self.delay_s == 0.0 || m.t_s + self.delay_s <= t_s + 1e-9) {
+                *latest = q.pop_front();
+            }
+        }
     }
 
     /// Appends to `out` what UAV `me` (from 0) hears at `t_s`, where it is at `own`; `out`
     /// already holds what it perceived then (onboard reports of a UAV make its radio report
     /// redundant unless the tracks fuse).
-    pub fn observations(&self, me: UavId, t_s: f64, own: &State9, out: &mut Vec<Observation>) {
+    pub fn observations(&mut self, me: UavId, t_s: f64, own: &State9, out: &mut Vec<Observation>) {
+        self.arrive(t_s);
         let perceived = out.len();
         for (j, m) in self.latest.iter().enumerate() {
             let Some(m) = m else { continue };
@@ -142,14 +193,14 @@ mod tests {
     fn it_keeps_the_latest_of_broadcasters_and_brings_each_to_the_agents_instant() {
         let sc = scenario(&format!("{V}[radio]\nbroadcast_all = true\n"));
         let mut radio = AgentRadio::new(&sc);
-        radio.hear(&at(2, 1.0, 10.0, 5.0));
-        radio.hear(&at(2, 0.9, 99.0, 5.0));
+        radio.hear(0, &at(2, 1.0, 10.0, 5.0));
+        radio.hear(0, &at(2, 0.9, 99.0, 5.0));
         assert_eq!(radio.ignored, 1, "an older report does not replace a newer one");
-        radio.hear(&at(3, 1.2, 20.0, 5.0));
-        radio.hear(&at(9, 1.0, 0.0, 0.0));
+        radio.hear(0, &at(3, 1.2, 20.0, 5.0));
+        radio.hear(0, &at(9, 1.0, 0.0, 0.0));
         let mut nan = at(4, 1.0, 0.0, 0.0);
         nan.state[state::Y] = f64::NAN;
-        radio.hear(&nan);
+        radio.hear(0, &nan);
         assert_eq!(radio.ignored, 3, "an unknown UAV and a NaN are not taken");
         let mut out = Vec::new();
         radio.observations(UavId(0), 1.1, &State9::zeros(), &mut out);
@@ -166,13 +217,30 @@ mod tests {
     }
 
     #[test]
+    fn the_scenarios_radio_loss_and_delay_apply_on_top_of_the_network() {
+        let sc = scenario(&format!("{V}[radio]\nbroadcast_all = true\nloss = 0.5\ndelay_s = 0.3\n"));
+        let mut radio = AgentRadio::new(&sc);
+        let mut out = Vec::new();
+        for k in 0..400 {
+            let t = k as f64 * 0.1;
+            radio.hear(0, &at(2, t, k as f64, 1.0));
+            out.clear();
+            radio.observations(UavId(0), t, &State9::zeros(), &mut out);
+            // Nothing newer than 0.3 s: the radio's delay.
+            assert!(out.iter().all(|o| o.age_s >= 0.3 - 1e-9), "{t}: {out:?}");
+            assert!(!(3..=20).contains(&k) || out.is_empty() || out[0].age_s < 2.0);
+        }
+        assert!((150..250).contains(&radio.lost), "{} of 400 lost at 0.5", radio.lost);
+    }
+
+    #[test]
     fn only_broadcasters_in_range_and_not_perceived_onboard_are_heard() {
         let sc = scenario(&format!("{V}[radio]\nbeacons = [1]\nrange_m = 50.0\n"));
         let mut radio = AgentRadio::new(&sc);
         assert_eq!(radio.broadcasters(), vec![1]);
-        radio.hear(&at(2, 1.0, 10.0, 0.0));
+        radio.hear(0, &at(2, 1.0, 10.0, 0.0));
         assert_eq!(radio.ignored, 1, "UAV 2 does not broadcast");
-        radio.hear(&at(1, 1.0, 10.0, 0.0));
+        radio.hear(0, &at(1, 1.0, 10.0, 0.0));
         let mut out = Vec::new();
         let far = at(5, 1.0, 100.0, 0.0).state;
         radio.observations(UavId(4), 1.0, &far, &mut out);

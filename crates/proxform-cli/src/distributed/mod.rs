@@ -213,33 +213,44 @@ pub fn run(
     })?;
     let ready = Instant::now();
     while ready.elapsed() < delay && !INTERRUPTED.load(Ordering::Relaxed) {
+        net.keep_alive();
         std::thread::sleep(Duration::from_millis(20));
     }
     let flight = Instant::now();
     let net_clock = net.clock();
-    let mut supervised = Supervised::new(&mut net, &mut children, args.agent_restarts, scenario.dt_s());
-    let result = match &mavlink {
-        Some(swarm) => run_batch_with_agents(
-            scenario,
-            options,
-            (seed, runs),
-            record,
-            (progress, &INTERRUPTED),
-            (
-                &mut mavlink::WithMavlink { agents: &mut supervised, swarm: swarm.clone() },
-                &mut (&mut telemetry, mavlink::MavlinkTelemetry(swarm.clone(), net_clock.clone(), scenario.dt_s())),
-            ),
-        ),
-        None => run_batch_with_agents(
-            scenario,
-            options,
-            (seed, runs),
-            record,
-            (progress, &INTERRUPTED),
-            (&mut supervised, &mut telemetry),
-        ),
+    // The supervision sees what the engine sees (a follower an outside MAVLink controller
+    // flies is controlled).
+    let (restarts, dt) = (args.agent_restarts, scenario.dt_s());
+    let (result, (losses, uncontrolled)) = match &mavlink {
+        Some(swarm) => {
+            let mut with = mavlink::WithMavlink { agents: &mut net, swarm: swarm.clone() };
+            let mut supervised = Supervised::new(&mut with, &mut children, restarts, dt);
+            let result = run_batch_with_agents(
+                scenario,
+                options,
+                (seed, runs),
+                record,
+                (progress, &INTERRUPTED),
+                (
+                    &mut supervised,
+                    &mut (&mut telemetry, mavlink::MavlinkTelemetry(swarm.clone(), net_clock.clone(), dt)),
+                ),
+            );
+            (result, supervised.finish())
+        }
+        None => {
+            let mut supervised = Supervised::new(&mut net, &mut children, restarts, dt);
+            let result = run_batch_with_agents(
+                scenario,
+                options,
+                (seed, runs),
+                record,
+                (progress, &INTERRUPTED),
+                (&mut supervised, &mut telemetry),
+            );
+            (result, supervised.finish())
+        }
     };
-    let (losses, uncontrolled) = supervised.finish();
     let wall_s = flight.elapsed().as_secs_f64();
     let usage = children.usage();
     // Whatever happened: tell the agents, give them a moment, end the rest by id.

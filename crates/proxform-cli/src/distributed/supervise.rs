@@ -55,8 +55,13 @@ impl<'a, A: Agents> Supervised<'a, A> {
         }
     }
 
-    /// The losses, and per follower (from 1) the time it flew uncontrolled (s).
-    pub fn finish(self) -> (Vec<Loss>, Vec<(u32, f64)>) {
+    /// The losses (a last look included: a process lost in the flight's last moments is one
+    /// too), and per follower (from 1) the time it flew uncontrolled (s).
+    pub fn finish(mut self) -> (Vec<Loss>, Vec<(u32, f64)>) {
+        for e in self.children.restart_exited(0) {
+            let restarted = Err("the flight was over".to_string());
+            self.losses.push(Loss { label: e.label, at: self.at, status: e.status.to_string(), restarted });
+        }
         let dt = self.dt_s;
         (self.losses, self.uncontrolled.into_iter().map(|(u, n)| (u, n as f64 * dt)).collect())
     }
@@ -84,6 +89,10 @@ impl<A: Agents> Agents for Supervised<'_, A> {
             *self.uncontrolled.entry(uav.0 + 1).or_default() += 1;
         }
         here
+    }
+
+    fn navigator(&mut self, t_s: f64, truth: &proxform_core::State9) -> Option<Decision> {
+        self.agents.navigator(t_s, truth)
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {

@@ -134,6 +134,8 @@ pub struct NetAgents {
     own_clock_run: u32,
     /// Real time: the time of the current flight step (s).
     own_clock_t_s: f64,
+    /// When the last Clock before the flight went out ([`NetAgents::keep_alive`]).
+    alive_sent: Option<Instant>,
     /// The digest of what each follower's agent must run (from the world's scenario), and the
     /// UAVs whose agent last announced another.
     digests: BTreeMap<u32, u64>,
@@ -186,6 +188,7 @@ impl NetAgents {
             own_clock: BTreeMap::new(),
             own_clock_run: 0,
             own_clock_t_s: 0.0,
+            alive_sent: None,
             digests: followers.iter().map(|u| (*u, proxform_net::agent::setup_digest(scenario, *u))).collect(),
             foreign: BTreeMap::new(),
             in_transit: std::collections::VecDeque::new(),
@@ -203,6 +206,7 @@ impl NetAgents {
                 return Ok(());
             }
             alive()?;
+            self.keep_alive();
             if start.elapsed() > timeout {
                 let foreign: Vec<String> = missing
                     .iter()
@@ -234,26 +238,30 @@ impl NetAgents {
     fn note(&mut self, r: Received) {
         match r {
             Received::Message(_, Message::Member(m)) if self.digests.get(&m.uav) != Some(&m.digest) => {
-                // Another scenario's agent (or not a follower): its UAV is not its to fly.
+                // Another scenario's agent (or not a follower): its UAV is not its to fly, and it
+                // says nothing of the agent that flies it.
                 self.stats.foreign += 1;
                 self.foreign.insert(m.uav, m.digest);
-                self.seen.remove(&m.uav);
             }
             Received::Message(_, Message::Member(m)) => {
-                self.foreign.remove(&m.uav);
                 match m.presence {
                     Presence::Alive => self.seen.insert(m.uav, Instant::now()),
                     Presence::Leaving => self.seen.remove(&m.uav),
                 };
             }
-            Received::Message(_, Message::Command(c)) if self.foreign.contains_key(&c.uav) => {
+            Received::Message(_, Message::Command(c)) if self.digests.get(&c.uav) != Some(&c.digest) => {
                 self.stats.foreign += 1;
             }
             Received::Message(_, Message::Command(c))
                 if self.mode == ClockMode::RealTime && self.start.get().is_some() =>
             {
                 self.seen.insert(c.uav, Instant::now());
-                self.offer(c);
+                // Whatever its way in, a command comes after the transport's delay.
+                let delay = Duration::from_secs_f64(self.faults.0.delay_s);
+                match delay.is_zero() {
+                    true => self.offer(c),
+                    false => self.in_transit.push_back((Instant::now() + delay, Message::Command(c))),
+                }
             }
             Received::Message(_, Message::Command(c)) => {
                 self.seen.insert(c.uav, Instant::now());
@@ -296,6 +304,17 @@ impl NetAgents {
     /// and it has said something lately (a hung agent goes silent).
     fn live(&self, uav: u32) -> bool {
         self.alive.contains(&uav) && self.seen.get(&uav).is_some_and(|t| t.elapsed() < LIVE_FOR)
+    }
+
+    /// Before the flight, a Clock once a second (no time yet): the agents that came early hear
+    /// the world is there, and do not leave as if it were gone (`--idle-exit-s`).
+    pub fn keep_alive(&mut self) {
+        if self.alive_sent.is_some_and(|t| t.elapsed() < Duration::from_secs(1)) {
+            return;
+        }
+        self.alive_sent = Some(Instant::now());
+        let clock = ClockMsg { mode: self.mode, run: 0, k: 0, t_s: 0.0, dt_s: self.dt_s, epoch_ns: 0, end: false };
+        let _ = self.clock.send(&Message::Clock(clock));
     }
 
     /// Tells every agent that the batch is over.
@@ -413,6 +432,11 @@ impl NetAgents {
             let behind = now - begin;
             self.start.set(start + behind);
             self.epoch_ns += behind.as_nanos() as u64;
+            // The world was not listening meanwhile: what it last heard of each agent is as
+            // recent as it was before the pause.
+            for t in self.seen.values_mut() {
+                *t = (*t + behind).min(now);
+            }
             self.stats.paused = (self.stats.paused.0 + 1, self.stats.paused.1 + behind.as_secs_f64());
             begin = now;
         } else if now - begin > dt.mul_f64(0.1) {
@@ -478,7 +502,9 @@ impl NetAgents {
             match r {
                 // (An agent decides for the instant its command will act: ahead of the step.)
                 Received::Message(_, Message::Command(c))
-                    if c.run == run && c.t_s <= request.t_s + max_ahead && !self.foreign.contains_key(&c.uav) =>
+                    if c.run == run
+                        && c.t_s <= request.t_s + max_ahead
+                        && self.digests.get(&c.uav) == Some(&c.digest) =>
                 {
                     self.seen.insert(c.uav, Instant::now());
                     if self.lost(request, c.uav, 1) {
@@ -633,7 +659,7 @@ impl Agents for NetAgents {
                     if c.run == run
                         && c.k == request.k
                         && c.t_s.to_bits() == request.t_s.to_bits()
-                        && !self.foreign.contains_key(&c.uav) =>
+                        && self.digests.get(&c.uav) == Some(&c.digest) =>
                 {
                     self.seen.insert(c.uav, Instant::now());
                     // A delayed answer arrives `delay_s` later: too late if past the deadline.

@@ -203,7 +203,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
             w.0
         }
         Message::Command(c) => {
-            let mut w = Writer::new(kind::COMMAND, 136);
+            let mut w = Writer::new(kind::COMMAND, 144);
             let d = &c.decision;
             w.u32(c.uav);
             w.u32(c.run);
@@ -229,6 +229,7 @@ pub fn encode(m: &Message) -> Vec<u8> {
                 w.f64(v);
             }
             w.f64(sp.yaw_rad);
+            w.u64(c.digest);
             w.0
         }
         Message::Clock(c) => {
@@ -338,7 +339,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             let yaw_rad = r.f64()?;
             let setpoint = has_setpoint.then_some(Setpoint { velocity_mps, yaw_rad });
             let decision = Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect, setpoint };
-            Message::Command(CommandMsg { uav, run, k, t_s, age_s, decision })
+            Message::Command(CommandMsg { uav, run, k, t_s, age_s, decision, digest: r.u64()? })
         }
         kind::CLOCK => {
             let mode = match r.u8()? {
@@ -432,8 +433,17 @@ mod tests {
                     own_suspect: true,
                     setpoint: Some(Setpoint { velocity_mps: [20.0, -1.5, 0.25], yaw_rad: -3.0 }),
                 },
+                digest: 0x0123_4567_89ab_cdef,
             }),
-            Message::Command(CommandMsg { uav: 5, run: 1, k: 4, t_s: 0.4, age_s: 0.0, decision: Decision::alone() }),
+            Message::Command(CommandMsg {
+                uav: 5,
+                run: 1,
+                k: 4,
+                t_s: 0.4,
+                age_s: 0.0,
+                decision: Decision::alone(),
+                digest: 0,
+            }),
             Message::Clock(ClockMsg {
                 mode: ClockMode::RealTime,
                 run: 2,
@@ -456,7 +466,7 @@ mod tests {
         }
         // Layouts as docs/wire.md gives them.
         let lens: Vec<usize> = samples().iter().map(|m| encode(m).len()).collect();
-        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 144, 144, 48, 28]);
+        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 152, 152, 48, 28]);
         // NaN payloads and signed zeros survive (bits, not values).
         let odd = Message::State(StateMsg {
             uav: 1,

@@ -90,6 +90,9 @@ pub struct CommandMsg {
     pub age_s: f64,
     /// The decision.
     pub decision: Decision,
+    /// What the agent that decided runs ([`crate::agent::setup_digest`]): a world applies only
+    /// the commands of its own scenario's agent for the UAV.
+    pub digest: u64,
 }
 
 /// How the world's clock advances.

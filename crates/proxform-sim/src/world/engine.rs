@@ -117,6 +117,8 @@ struct World<'s> {
     succession_due: Option<f64>,
     /// The successor's take-over, once it leads.
     take_over: Option<proxform_core::succession::TakeOver>,
+    /// An outside controller has flown the navigator in this flight.
+    navigator_flown_outside: bool,
     /// The successor's move to a new slot while it leads.
     moving: Option<proxform_core::succession::TakeOver>,
 }
@@ -205,6 +207,7 @@ impl<'s> Simulation<'s> {
             lead: assignment::Lead::navigator(scenario.navigator()),
             succession_due: None,
             take_over: None,
+            navigator_flown_outside: false,
             moving: None,
         };
         let mut sim = Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] };
@@ -366,6 +369,9 @@ impl<'s> Simulation<'s> {
                     ctx.fly(b, blk)
                 });
             }
+        }
+        if let Some(out) = &self.outside {
+            self.world.navigator_flown_outside |= out.by_uav[out.navigator].is_some();
         }
         std::mem::swap(&mut self.world.current, &mut self.next);
         self.world.k += 1;
@@ -608,6 +614,7 @@ impl<'s> World<'s> {
             formation: self.flown(),
             take_over: self.take_over,
             moving: self.moving,
+            flown_outside: self.navigator_flown_outside,
         }
     }
 

@@ -124,6 +124,9 @@ pub(super) struct Leading<'a> {
     pub take_over: Option<proxform_core::succession::TakeOver>,
     /// Its move to a new slot (a change of formation, a re-assignment) while it leads.
     pub moving: Option<proxform_core::succession::TakeOver>,
+    /// An outside controller has flown the navigator: from then on it flies back to and along
+    /// its path through its vehicle (it is where it was flown, never put back on the path).
+    pub flown_outside: bool,
 }
 
 impl Leading<'_> {
@@ -360,7 +363,7 @@ impl StepContext<'_> {
                 *aux = UavStep::default();
                 continue;
             }
-            if i == self.lead.uav && (i != nav || sc.navigator_flies()) {
+            if i == self.lead.uav && (i != nav || sc.navigator_flies() || self.lead.flown_outside) {
                 // Its autopilot tracks the path (the successor: its own slot on it, from where
                 // it took over) through the vehicle and the wind.
                 let autopilot = sc.agents().controller();
