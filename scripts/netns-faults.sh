@@ -25,7 +25,9 @@
 #   --stop-s S (5)  --cut-s S (10)  --world-stop-s S (1.5)  --loss P (0.05)
 #   --delay-min-ms A (20)  --delay-max-ms B (60)
 #   --out DIR               results folder (default /tmp/ns30/results)
-#   --bin DIR               folder of proxform and proxform-agent (default /tmp/nsbin)
+#   --bin DIR               folder of proxform and proxform-agent (default this checkout's
+#                           target/release: `cargo build --release --features net -p proxform-cli
+#                           -p proxform-net`)
 #   --lead-s L              flight start = all agents' TCP links established + L (default 0.75)
 #
 # The flight's start is not printed by the world; the fault is timed from the moment every
@@ -108,7 +110,8 @@ fi
 # run: options
 # ---------------------------------------------------------------------------------------------
 scenario=paper fault=none seeds=1 duration=40 victim=3 at_s=15 stop_s=5 cut_s=10 wstop_s=1.5
-loss=0.05 dmin=20 dmax=60 out=/tmp/ns30/results bin=/tmp/nsbin lead_s=0.75
+loss=0.05 dmin=20 dmax=60 out=/tmp/ns30/results lead_s=0.75
+bin="$(cd "$(dirname "$0")/.." && pwd)/target/release"
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scenario) scenario=$2; shift 2;;
