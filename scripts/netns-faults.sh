@@ -59,13 +59,14 @@ for d in sys.argv[1:]:
 groups = collections.OrderedDict()
 for r in rows:
     groups.setdefault((r["scenario"], r["fault"]), []).append(r)
-hdr = ("scenario", "fault", "runs", "exit0", "others PASS", "others worst x/y/z m", "others worst a/b/g deg",
+hdr = ("scenario", "fault", "runs", "exit0", "others PASS", "others within allowed", "others worst x/y/z m", "others worst a/b/g deg",
        "victim final<0.5m", "victim worst x/y/z m", "uncontrolled", "missing(med/max)", "late(max)", "lost(max)", "hung")
 print("\t".join(hdr))
 for (sc, fa), rs in groups.items():
     n = len(rs)
     ex0 = sum(1 for r in rs if r["exit"] == 0)
     op = sum(1 for r in rs if r["others_pass"])
+    ow_ = sum(1 for r in rs if r.get("others_within"))
     ow = [max((r["others_worst"][i] for r in rs if r["others_worst"]), default=float("nan")) for i in range(6)]
     vic = [r for r in rs if r.get("victim")]
     vf = f'{sum(1 for r in vic if r["victim_returned"])}/{len(vic)}' if vic else "-"
@@ -75,7 +76,7 @@ for (sc, fa), rs in groups.items():
     late = max(r["distributed"].get("late", -1) for r in rs)
     lost = max(r["distributed"].get("lost", -1) for r in rs)
     hung = sum(1 for r in rs if r.get("hung"))
-    print("\t".join(map(str, (sc, fa, n, f"{ex0}/{n}", f"{op}/{n} = {op/n:.2f}",
+    print("\t".join(map(str, (sc, fa, n, f"{ex0}/{n}", f"{op}/{n} = {op/n:.2f}", f"{ow_}/{n}",
         "/".join(f"{v:.3f}" for v in ow[:3]), "/".join(f"{v:.3f}" for v in ow[3:]),
         vf, "/".join(f"{v:.2f}" for v in vw) if vw else "-", f"{unc}/{n}",
         f"{miss[len(miss)//2]}/{miss[-1]}", late, lost, hung))))
@@ -268,6 +269,15 @@ for l in wout.splitlines():
     m = re.match(r"^UAV(\d+)\s+" + r"\s+".join([num] * 6) + r"\s+(\S+)\s+(\S+)\s*$", l)
     if m:
         u = m.group(1); rows[u] = [float(x) for x in m.groups()[1:7]]; res[u] = m.group(9)
+# summary.json has a row per UAV (the printed table shows at most 10 followers)
+try:
+    with open(os.path.join(rd, "out", "summary.json")) as f: sj = json.load(f)
+    ax = ("x_m", "y_m", "z_m", "alpha_deg", "beta_deg", "gamma_deg")
+    for u, w, fl, ps in zip(sj["per_uav"], sj["per_uav_worst"], sj["per_uav_runs_flown"], sj["per_uav_runs_passed"]):
+        rows[str(u)] = [w[a] for a in ax]; res[str(u)] = "PASS" if ps == fl else "FAIL"
+    allowed = [sj["allowable_error"][a] for a in ax]
+except (OSError, KeyError, ValueError, TypeError):
+    pass
 victim = meta.get("victim") or None
 others = [u for u in res if u != str(victim)]
 r = dict(meta)
@@ -276,6 +286,8 @@ r["rows"] = rows
 r["allowed"] = allowed
 r["others_pass"] = bool(res) and all(res[u] == "PASS" for u in others) and meta["exit_hint"] != "hung"
 r["others_worst"] = [max(rows[u][i] for u in others) for i in range(6)] if others else None
+# the same judged on the numbers: every other UAV's worst |error| within the allowed one, on every axis
+r["others_within"] = bool(others) and allowed is not None and all(rows[u][i] <= allowed[i] + 1e-9 for u in others for i in range(6))
 unc = [l.strip() for l in both.splitlines() if "uncontrolled" in l]
 r["uncontrolled"] = " ".join(unc)
 dl = next((l.strip() for l in werr.splitlines() + wout.splitlines() if l.startswith("distributed:")), "")
