@@ -29,6 +29,8 @@
 #                           target/release: `cargo build --release --features net -p proxform-cli
 #                           -p proxform-net`)
 #   --lead-s L              flight start = all agents' TCP links established + L (default 0.75)
+#   --rto-min-ms R          TCP's minimum retransmission timeout on the links (Linux: 200 ms;
+#                           a route's rto_min), on both ends; default: the kernel's
 #
 # The flight's start is not printed by the world; the fault is timed from the moment every
 # agent's TCP link to the world (or its relay's) is established, plus --lead-s. After the run
@@ -111,7 +113,7 @@ fi
 # run: options
 # ---------------------------------------------------------------------------------------------
 scenario=paper fault=none seeds=1 duration=40 victim=3 at_s=15 stop_s=5 cut_s=10 wstop_s=1.5
-loss=0.05 dmin=20 dmax=60 out=/tmp/ns30/results lead_s=0.75
+loss=0.05 dmin=20 dmax=60 out=/tmp/ns30/results lead_s=0.75 rto_min_ms=""
 bin="$(cd "$(dirname "$0")/.." && pwd)/target/release"
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -130,6 +132,7 @@ while [[ $# -gt 0 ]]; do
     --out) out=$2; shift 2;;
     --bin) bin=$2; shift 2;;
     --lead-s) lead_s=$2; shift 2;;
+    --rto-min-ms) rto_min_ms=$2; shift 2;;
     *) die "unknown option $1";;
   esac
 done
@@ -183,6 +186,14 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
+# Leftovers of a run that was killed (its bridge holds the same address): removed when the
+# script that made them is gone.
+for old in $(ip -o link show type bridge | sed -n 's/^[0-9]*: \(nf[0-9]*\)b[:@].*/\1/p'); do
+  kill -0 "${old#nf}" 2>/dev/null && die "another run ($old) is going on: one at a time"
+  for n in $(ip netns list | awk '{print $1}' | grep "^${old}u"); do ip netns del "$n"; done
+  for l in $(ip -o link show | sed -n "s/^[0-9]*: \(${old}h[0-9]*\)@.*/\1/p"); do ip link del "$l" 2>/dev/null; done
+  ip link del "${old}b" 2>/dev/null
+done
 ip link add "$br" type bridge || die "cannot make the bridge"
 ip addr add "$host_ip/24" dev "$br"; ip link set "$br" up
 for u in "${uavs[@]}"; do
@@ -194,7 +205,13 @@ for u in "${uavs[@]}"; do
   ip netns exec "$ns" ip addr add "10.231.0.$((u + 1))/24" dev "${tag}a$u"
   ip netns exec "$ns" ip link set "${tag}a$u" up
   ip netns exec "$ns" ip link set lo up
+  if [[ -n "$rto_min_ms" ]]; then
+    ip netns exec "$ns" ip route replace 10.231.0.0/24 dev "${tag}a$u" rto_min "${rto_min_ms}ms" || die "rto_min"
+  fi
 done
+if [[ -n "$rto_min_ms" ]]; then
+  ip route replace 10.231.0.0/24 dev "$br" rto_min "${rto_min_ms}ms" || die "rto_min"
+fi
 sleep 1  # bridge ports forwarding
 
 free_port() { python3 -c 'import socket,sys; s=socket.socket(); s.bind((sys.argv[1],0)); print(s.getsockname()[1])' "$host_ip"; }

@@ -122,7 +122,7 @@ pub fn print(
     if let Some(u) = &s.uncontrolled {
         writeln!(
             out,
-            "uncontrolled             in {} run(s) a follower flew uncontrolled, without its agent or its commands (up to {} UAV-s in a run, holding its course): those runs do not pass",
+            "uncontrolled             in {} run(s) a follower flew uncontrolled, without its agent or its commands (up to {} UAV-s in a run, holding its course, a multirotor hovering once its autopilot's failsafe took over): those runs do not pass",
             u.runs,
             number(u.max_s)
         )?;

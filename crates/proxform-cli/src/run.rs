@@ -166,7 +166,7 @@ fn distributed(
         let list: Vec<String> = d.uncontrolled.iter().map(|(u, s)| format!("UAV{u} {s:.1} s")).collect();
         eprintln!(
             "uncontrolled followers: {} (without their agent, or on the own clock without its commands for more than \
-             5 periods; holding their course or their last setpoint)",
+             5 periods; holding their course, a multirotor hovering once its autopilot's failsafe took over)",
             list.join(", ")
         );
     }
@@ -175,6 +175,14 @@ fn distributed(
             "{} message(s) dropped by the world's full inbox (more than {} MiB waiting: a flood)",
             d.stats.inbox_dropped,
             proxform_net::transport::INBOX_MAX_BYTES >> 20
+        );
+    }
+    for (uav, pids) in &d.stats.twins {
+        let pids: Vec<String> = pids.iter().map(u32::to_string).collect();
+        eprintln!(
+            "warning: UAV {uav} had more than one agent at once (processes {}): their commands competed; run one \
+             agent per UAV",
+            pids.join(", ")
         );
     }
     if d.stats.foreign > 0 {

@@ -329,7 +329,8 @@ fn a_stalled_world_pauses_the_flight_instead_of_replaying_it() {
 #[test]
 fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
     // Real time, a multirotor V of six; UAV3's agent stopped for 4 s about 9 s into the flight.
-    // Its UAV flies on its last setpoint, uncontrolled, and the run says so; the others' agents
+    // Its UAV flies on its last setpoint, then, uncontrolled, in its autopilot's failsafe: it
+    // hovers where it is (PX4's HOLD on offboard loss), and the run says so; the others' agents
     // hear it go silent and stop following it (they still avoid it), and keep their errors; its
     // agent back, it returns to its slot.
     let (swarm, dir) = (format!("astall-{}", std::process::id()), out("astall"));
@@ -361,6 +362,16 @@ fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
         .sum();
     assert!(unfollowed >= 30.0, "the others stopped following UAV3 while it was silent: {stderr}");
     let traj = std::fs::read_to_string(out_dir.join("trajectories.csv")).expect("trajectories");
+    // It hovered (the formation flies at 5 m/s).
+    let slowest = traj
+        .lines()
+        .filter(|l| l.split(',').nth(1) == Some("3"))
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').skip(5).take(2).map(|v| v.parse().expect("a number")).collect();
+            v[0].hypot(v[1])
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(slowest < 0.5, "UAV3 hovered while its agent was stopped: slowest {slowest} m/s");
     let last = traj.lines().rfind(|l| l.split(',').nth(1) == Some("3")).expect("UAV3");
     let e: Vec<f64> = last.split(',').skip(11).take(3).map(|v| v.parse().expect("a number")).collect();
     assert!(e.iter().all(|x| x.abs() < 0.3), "UAV3 back in its slot: {last}");
@@ -560,7 +571,8 @@ fn damaged_credentials_are_named_before_any_link_is_tried() {
 fn an_agent_of_another_scenario_joining_a_flight_steers_nothing() {
     // Real time, 12 s of the paper; 3 s in, an agent whose file puts UAV 3's slot 20 m aside
     // joins for UAV 3 beside the right one. Its announcements and commands carry another digest:
-    // none is applied, and the right agent keeps flying UAV 3.
+    // none is applied, and the right agent keeps flying UAV 3. A second agent of the same
+    // scenario for UAV 4 is named: two processes command one UAV.
     let (swarm, dir) = (format!("intruder-{}", std::process::id()), out("intruder"));
     std::fs::create_dir_all(&dir).expect("a folder");
     let printed =
@@ -591,10 +603,13 @@ fn an_agent_of_another_scenario_joining_a_flight_steers_nothing() {
             .spawn()
             .expect("the intruder starts"),
     );
+    let twin = spawn_agent(&endpoint, &swarm, 4);
     let (code, printed) = finish(launcher);
-    drop(intruder);
+    drop((intruder, twin));
     assert_eq!(code, Some(0), "{printed}");
     assert!(printed.contains("of agents running another scenario refused"), "{printed}");
+    assert!(printed.contains("UAV 4 had more than one agent at once"), "{printed}");
+    assert!(!printed.contains("UAV 3 had more than one"), "the intruder is refused, not a twin: {printed}");
     let y = worst(&dir.join("out"), "y_m");
     assert!(y < 0.6, "UAV 3 kept in its slot: y {y} m");
     let _ = std::fs::remove_dir_all(dir);

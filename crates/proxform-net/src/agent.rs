@@ -28,6 +28,7 @@ use std::time::{Duration, Instant};
 use proxform_core::{Agent, Observation, UavId};
 use proxform_scenario::Scenario;
 
+use crate::link::LinkEstimate;
 use crate::radio::AgentRadio;
 use crate::transport::TransportError;
 use crate::vehicle::{Event, Vehicle};
@@ -100,6 +101,8 @@ pub struct Host {
     radio: AgentRadio,
     /// Which neighbours fly under their agents, from their broadcasts (own clock).
     watch: ControlWatch,
+    /// Own clock: how long a command takes back to the world, from the updates' ages.
+    link: LinkEstimate,
     radio_run: u32,
     /// Observations dropped as invalid.
     pub dropped: u64,
@@ -138,6 +141,7 @@ impl Host {
             heard: Vec::new(),
             radio,
             watch,
+            link: LinkEstimate::default(),
             radio_run: 0,
             dropped: 0,
             refused: 0,
@@ -217,12 +221,14 @@ impl Host {
                 self.stale += 1;
                 continue;
             }
+            self.link.observe(age);
+            let way_back = self.link.way_back_s();
             if s.run != self.radio_run {
                 self.radio.clear();
                 self.watch.clear();
                 self.radio_run = s.run;
             }
-            if let Some(answer) = self.step(&s, age, true) {
+            if let Some(answer) = self.step(&s, age, Some(way_back)) {
                 if let Some(h) = self.agents.get_mut(&u) {
                     (h.decided, h.last) = (Some(now), Some((s.run, s.t_s)));
                 }
@@ -263,12 +269,14 @@ impl Host {
     /// is not there: at 70 m/s, 1 ms is 7 cm). The latency is reported with the command; what
     /// it costs is a decision that reaches the vehicle too late for its period.
     pub fn handle(&mut self, s: &SenseMsg, latency_s: f64) -> Option<(CommandMsg, StateMsg)> {
-        self.step(s, latency_s, false)
+        self.step(s, latency_s, None)
     }
 
-    /// Steps on `s`, `latency_s` old on the shared clock: in lockstep at the update's instant;
-    /// on the own clock at the agent's own instant, with what it heard of the broadcasters.
-    fn step(&mut self, s: &SenseMsg, latency_s: f64, own_clock: bool) -> Option<(CommandMsg, StateMsg)> {
+    /// Steps on `s`, `latency_s` old on the shared clock: in lockstep (`way_back_s` None) at the
+    /// update's instant; on the own clock, its command expected to take `way_back_s` to the
+    /// world, at the instant it will act, with what it heard of the broadcasters.
+    fn step(&mut self, s: &SenseMsg, latency_s: f64, way_back_s: Option<f64>) -> Option<(CommandMsg, StateMsg)> {
+        let own_clock = way_back_s.is_some();
         let n = self.scenario.len();
         let Some(h) = self.agents.get_mut(&s.uav) else {
             self.refused += 1;
@@ -307,7 +315,7 @@ impl Host {
             // and what it perceived are brought forward to it, what it heard to the same instant.
             true => {
                 let dt = self.scenario.dt_s();
-                let t_s = acts_at(s.t_s, latency_s, dt);
+                let t_s = acts_at(s.t_s, latency_s + way_back_s.unwrap_or(latency_s), dt);
                 if t_s - s.t_s > STALE_AFTER_PERIODS * dt + 1e-9 {
                     // Its command would act on a state too old to act on.
                     self.stale += 1;
@@ -366,13 +374,13 @@ pub fn setup_digest(scenario: &Scenario, uav: u32) -> u64 {
     description.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
-/// The instant a command decided on an update measured at `t_s` (a step's time), which reached
-/// the agent `latency_s` later, will act at: it takes as long again to reach the world (the link
-/// taken as symmetric), which applies it from the step whose window
+/// The instant a command decided on an update measured at `t_s` (a step's time) will act at,
+/// when the update's way out and the command's way back take `round_trip_s` together (the way
+/// back as [`LinkEstimate`] expects it): the world applies it from the step whose window
 /// ([`crate::wire::COMMAND_WINDOW_PERIODS`]) it reaches in: `t_s` itself while the round trip
 /// fits in the window (the world waits for it: no lag at all), a later step's time otherwise.
-pub fn acts_at(t_s: f64, latency_s: f64, dt_s: f64) -> f64 {
-    let late = 2.0 * latency_s - COMMAND_WINDOW_PERIODS * dt_s;
+pub fn acts_at(t_s: f64, round_trip_s: f64, dt_s: f64) -> f64 {
+    let late = round_trip_s - COMMAND_WINDOW_PERIODS * dt_s;
     match late > 0.0 {
         true => t_s + (late / dt_s).ceil() * dt_s,
         false => t_s,
@@ -476,9 +484,9 @@ mod tests {
     fn a_command_acts_at_the_step_whose_window_it_reaches() {
         // Δt 0.1 s, window 0.09 s: a round trip within it acts at the update's own step.
         assert_eq!(acts_at(2.0, 0.0, 0.1), 2.0);
-        assert_eq!(acts_at(2.0, 0.044, 0.1), 2.0);
-        assert!((acts_at(2.0, 0.06, 0.1) - 2.1).abs() < 1e-12);
-        assert!((acts_at(2.0, 0.2, 0.1) - 2.4).abs() < 1e-12);
+        assert_eq!(acts_at(2.0, 0.088, 0.1), 2.0);
+        assert!((acts_at(2.0, 0.12, 0.1) - 2.1).abs() < 1e-12);
+        assert!((acts_at(2.0, 0.4, 0.1) - 2.4).abs() < 1e-12);
     }
 
     fn paper() -> Arc<Scenario> {
@@ -534,6 +542,14 @@ mod tests {
         host.keep(u.clone());
         let second = host.decide_due(t0 + Duration::from_millis(100), |_| 0.06);
         assert!((second[0].0.t_s - (1.1 + dt)).abs() < 1e-9);
+        // A quick update after slow ones: its command is expected back as slowly as they came
+        // (40 ms out and 60 ms back is past the window), so it is decided for the next step, not
+        // for one it would miss (taken as symmetric, 80 ms, it was decided for its own step).
+        let mut quick = update(&sc, 2, 12);
+        quick.own[state::VY] += 0.3;
+        host.keep(quick);
+        let third = host.decide_due(t0 + Duration::from_millis(200), |_| 0.04);
+        assert!((third[0].0.t_s - (1.2 + dt)).abs() < 1e-9, "{:?}", third[0].0);
         // Lockstep steps on the update's own instant.
         let mut lock = Host::new(sc.clone(), &[2]).expect("a follower");
         let (c, _) = lock.handle(&u, 0.06).expect("stepped");

@@ -13,6 +13,7 @@
 //! - [`radio`]: the formation's radio as an agent on its own clock hears it (other agents'
 //!   broadcasts over the network, by the scenario's rules).
 //! - [`watch`]: which neighbours fly under their agents (a silent one is avoided, not followed).
+//! - [`link`]: how long an agent on its own clock expects its command to take back to the world.
 //! - [`agent`]: the loop that steps the core's [`proxform_core::Agent`] over a vehicle.
 //! - [`mavlink`]: MAVLink 2 to an autopilot (or a simulated vehicle): frames, the UDP link,
 //!   modes, the vehicle's side and the companion's side with its safety policy.
@@ -24,6 +25,7 @@ pub mod access;
 pub mod agent;
 pub mod credentials;
 pub mod keys;
+pub mod link;
 pub mod mavlink;
 pub mod radio;
 pub mod transport;

@@ -5,7 +5,9 @@
 //! GPS_GLOBAL_ORIGIN each second), in local NED whose origin is the method's and whose north is
 //! the method's x (the formation's initial course). A follower whose MAVLink controller has
 //! switched it to OFFBOARD and streams velocity setpoints flies them (the decision is the input
-//! toward the setpoint, within the vehicle's limits) instead of its proxform agent's; without
+//! toward the setpoint, within the vehicle's limits; with the roll and pitch of its attitude
+//! target where the vehicle's attitude is steered apart from its velocity) instead of its
+//! proxform agent's; without
 //! setpoints for a second it falls back to HOLD, and its agent's decisions again. The navigator
 //! likewise flies an outside controller's setpoints instead of its path while in OFFBOARD (the
 //! followers keep their places around it as it flies), and its path again after.
@@ -129,6 +131,10 @@ impl MavlinkSwarm {
         if let Some(beta) = beta {
             target[state::BETA] = beta;
         }
+        // The attitude target, for the vehicle whose attitude is steered apart from its velocity.
+        if let Some([roll, pitch]) = s.attitude {
+            (target[state::GAMMA], target[state::ALPHA]) = (roll, pitch);
+        }
         let r = state::difference(&held, &target);
         Some(Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, self.setup.input_toward(own, &r)))
     }
@@ -195,6 +201,10 @@ pub struct WithMavlink<'a, A: Agents> {
 impl<A: Agents> Agents for WithMavlink<'_, A> {
     fn present(&mut self, uav: proxform_core::UavId) -> bool {
         self.agents.present(uav) || self.swarm.borrow().offboard(uav.index())
+    }
+
+    fn failsafe(&mut self, uav: proxform_core::UavId) -> bool {
+        self.agents.failsafe(uav)
     }
 
     fn navigator(&mut self, _: f64, truth: &State9) -> Option<Decision> {

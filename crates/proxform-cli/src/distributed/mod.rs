@@ -7,6 +7,7 @@
 
 mod children;
 mod mavlink;
+mod pending;
 mod supervise;
 mod world;
 
@@ -148,10 +149,10 @@ pub fn run(
     if args.agents_mavlink && (args.external_agents || args.agents_per_process != 1) {
         bail!("--agents-mavlink: one UAV per agent process, started here (not with --external-agents)");
     }
-    if args.agents_mavlink && !scenario.vehicle().takes_velocity_setpoints() {
+    if args.agents_mavlink && !scenario.vehicle().flown_by_autopilot_targets() {
         bail!(
-            "--agents-mavlink: this scenario's vehicle steers its attitude with its inputs too, which a MAVLink \
-             velocity setpoint does not carry: fly a multirotor scenario (vehicle.model = \"multirotor\")"
+            "--agents-mavlink: this scenario's fixed wing is not flown by MAVLink targets here (its bank and load factor \
+             are its autopilot's): fly a multirotor or the kinematic vehicle (vehicle.model)"
         );
     }
     if args.agents_sensing == "autopilot" && !scenario.radio().broadcast_all {

@@ -91,6 +91,10 @@ impl<A: Agents> Agents for Supervised<'_, A> {
         here
     }
 
+    fn failsafe(&mut self, uav: UavId) -> bool {
+        self.agents.failsafe(uav)
+    }
+
     fn navigator(&mut self, t_s: f64, truth: &proxform_core::State9) -> Option<Decision> {
         self.agents.navigator(t_s, truth)
     }

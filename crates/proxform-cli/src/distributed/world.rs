@@ -8,7 +8,8 @@
 //! - **Real time** (the agents on their own clocks): step k begins at its wall-clock time; the
 //!   world sends each follower what its sensors give (its own state and what it perceives
 //!   onboard: the radio goes agent to agent), then applies, until the end of the period, each
-//!   UAV's newest command not yet applied, whatever update it answered, if it is at most
+//!   UAV's newest command due at the step (one decided for a later step waits for its step
+//!   instead of replacing one for this step), whatever update it answered, if it is at most
 //!   [`COMMAND_MAX_AGE_PERIODS`] periods old; while none comes the UAV holds (a multirotor
 //!   keeps its last setpoint, as its autopilot would). A world that falls a period or more
 //!   behind its clock (a stall of its machine) does not replay the missed steps: the flight's
@@ -25,12 +26,19 @@ use proxform_net::wire::{self, ClockMode, ClockMsg, Message, Presence, SenseMsg,
 use proxform_scenario::{NetworkFaults, Scenario};
 use proxform_sim::world::remote::{holding, Agents, Phase, StepRequest};
 
+use super::pending::{Offered, Pending};
+
 /// How long an agent stays live without a word (its heartbeat comes every 0.5 s).
 const LIVE_FOR: Duration = Duration::from_millis(2000);
 
 /// Real time: a command older than this many periods when its step comes is not applied, and a
 /// UAV without one for longer flies uncontrolled.
 const COMMAND_MAX_AGE_PERIODS: f64 = wire::STALE_AFTER_PERIODS;
+
+/// Real time: a UAV without a command for this long (s) is in its autopilot's failsafe (PX4's
+/// offboard-loss timeout, `COM_OF_LOSS_T`, 1 s by default); uncontrolled before that, it holds
+/// its course.
+const FAILSAFE_AFTER_S: f64 = 1.0;
 
 /// What the world measured of the network.
 #[derive(Debug, Clone, Default)]
@@ -69,6 +77,9 @@ pub struct NetStats {
     pub foreign: u64,
     /// Messages the world's inbox dropped, full (a flood).
     pub inbox_dropped: u64,
+    /// UAVs (from 1) that more than one agent process announced itself for at once, with
+    /// their process ids: their commands compete (each is applied when it is the newest).
+    pub twins: BTreeMap<u32, BTreeSet<u32>>,
     /// The UAVs' MAVLink systems, when served.
     pub mavlink: Option<super::mavlink::MavlinkStats>,
 }
@@ -140,13 +151,16 @@ pub struct NetAgents {
     /// UAVs whose agent last announced another.
     digests: BTreeMap<u32, u64>,
     foreign: BTreeMap<u32, u64>,
+    /// Per UAV, the agent processes (ids) that announced themselves alive, and when last.
+    announced: BTreeMap<u32, BTreeMap<u32, Instant>>,
     /// Real time: updates and commands held by the scenario's `[network] delay_s`, due in order.
     in_transit: std::collections::VecDeque<(Instant, Message)>,
 }
 
 #[derive(Debug, Clone, Default)]
 struct OwnClock {
-    newest: Option<wire::CommandMsg>,
+    /// Commands received and not yet applied, by the instant they act at.
+    pending: Pending,
     applied_t_s: Option<f64>,
     setpoint: Option<Setpoint>,
     /// Steps in a row without a command to apply.
@@ -191,6 +205,7 @@ impl NetAgents {
             alive_sent: None,
             digests: followers.iter().map(|u| (*u, proxform_net::agent::setup_digest(scenario, *u))).collect(),
             foreign: BTreeMap::new(),
+            announced: BTreeMap::new(),
             in_transit: std::collections::VecDeque::new(),
         })
     }
@@ -244,10 +259,23 @@ impl NetAgents {
                 self.foreign.insert(m.uav, m.digest);
             }
             Received::Message(_, Message::Member(m)) => {
+                let now = Instant::now();
+                let pids = self.announced.entry(m.uav).or_default();
                 match m.presence {
-                    Presence::Alive => self.seen.insert(m.uav, Instant::now()),
-                    Presence::Leaving => self.seen.remove(&m.uav),
+                    Presence::Alive => {
+                        self.seen.insert(m.uav, now);
+                        pids.insert(m.pid, now);
+                    }
+                    Presence::Leaving => {
+                        self.seen.remove(&m.uav);
+                        pids.remove(&m.pid);
+                    }
                 };
+                // Another process alive for the same UAV (each announces every 0.5 s).
+                pids.retain(|_, t| now.duration_since(*t) <= LIVE_FOR);
+                if pids.len() > 1 {
+                    self.stats.twins.entry(m.uav).or_default().extend(pids.keys());
+                }
             }
             Received::Message(_, Message::Command(c)) if self.digests.get(&c.uav) != Some(&c.digest) => {
                 self.stats.foreign += 1;
@@ -389,16 +417,8 @@ impl NetAgents {
             return;
         }
         let slot = self.own_clock.entry(c.uav).or_default();
-        let newer = slot.newest.is_none_or(|n| c.t_s > n.t_s) && slot.applied_t_s.is_none_or(|t| c.t_s > t);
-        match newer {
-            true => {
-                if slot.newest.is_some() {
-                    // Replaced before its step came.
-                    self.stats.late += 1;
-                }
-                slot.newest = Some(c);
-            }
-            false => self.stats.late += 1,
+        if slot.pending.offer(c, slot.applied_t_s) != Offered::Kept {
+            self.stats.late += 1;
         }
     }
 
@@ -474,17 +494,11 @@ impl NetAgents {
         }
         // Until the end of the period, or until every live follower's newest command answers
         // this step: what is due goes out or comes in.
-        let half = 0.5 * self.dt_s;
         let max_ahead = COMMAND_MAX_AGE_PERIODS * self.dt_s;
         let answered_now = |me: &Self| {
             s.uavs.iter().all(|u| {
                 let uav = u.0 + 1;
-                !me.live(uav)
-                    || me
-                        .own_clock
-                        .get(&uav)
-                        .and_then(|o| o.newest)
-                        .is_some_and(|c| c.t_s > request.t_s - half && c.t_s <= request.t_s + half)
+                !me.live(uav) || me.own_clock.get(&uav).is_some_and(|o| o.pending.answers(request.t_s, me.dt_s))
             })
         };
         loop {
@@ -528,8 +542,10 @@ impl NetAgents {
             let slot = self.own_clock.entry(uav).or_default();
             // A command acts at the step nearest the instant it was decided for (a later one
             // waits for its step).
-            let due = slot.newest.is_some_and(|c| c.t_s <= request.t_s + half);
-            let fresh = slot.newest.take_if(|_| due).filter(|c| request.t_s - c.t_s <= max_age + 1e-9);
+            // The newest of those due; older due ones were overtaken.
+            let (due, overtaken) = slot.pending.due(request.t_s, self.dt_s);
+            self.stats.late += overtaken;
+            let fresh = due.filter(|c| request.t_s - c.t_s <= max_age + 1e-9);
             let decision = match fresh {
                 Some(c) => {
                     slot.applied_t_s = Some(c.t_s);
@@ -578,6 +594,13 @@ impl Agents for NetAgents {
         self.drain();
         let held = self.own_clock.get(&(uav.0 + 1)).map_or(0, |o| o.held_periods);
         self.live(uav.0 + 1) && f64::from(held) <= COMMAND_MAX_AGE_PERIODS
+    }
+
+    /// At once when its agent is gone; on the own clock once [`FAILSAFE_AFTER_S`] passed
+    /// without a command.
+    fn failsafe(&mut self, uav: proxform_core::UavId) -> bool {
+        let held = self.own_clock.get(&(uav.0 + 1)).map_or(0, |o| o.held_periods);
+        !self.live(uav.0 + 1) || f64::from(held) * self.dt_s >= FAILSAFE_AFTER_S - 1e-9
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {

@@ -193,6 +193,21 @@ impl VehicleModel {
         }
     }
 
+    /// The attitude (α, γ; rad) an autopilot is given beside the velocity setpoint of input `u`
+    /// at `x` over `dt` (a MAVLink attitude target), for the vehicle whose attitude its inputs
+    /// steer apart from its velocity (the paper's kinematic vehicle): the one it reaches with `u`
+    /// after the period. None for the others, whose attitude follows from their velocity.
+    pub fn attitude_setpoint(&self, x: &State9, u: &Input, dt: f64) -> Option<[f64; 2]> {
+        use crate::state::{ALPHA, GAMMA};
+        match self {
+            VehicleModel::Kinematic(_) => {
+                let next = self.propagate(x, u, dt);
+                Some([next[ALPHA], next[GAMMA]])
+            }
+            _ => None,
+        }
+    }
+
     /// How many times the width of the per-step input bounds an outside decision may lie beyond
     /// them ([`Self::plausible`]): an agent bounds its input at the state it believed, not at
     /// the true one, so its decisions lie near, not inside, the bounds at the true state.
@@ -230,6 +245,14 @@ impl VehicleModel {
         matches!(self, VehicleModel::Multirotor(_))
     }
 
+    /// Whether an autopilot's targets carry everything the vehicle's inputs do, so that it can
+    /// be flown over MAVLink: the multirotor's velocity and yaw setpoints; the kinematic
+    /// vehicle's velocity and yaw with its attitude target ([`Self::attitude_setpoint`]). Not
+    /// the fixed wing, whose bank and load factor a velocity target leaves to its autopilot.
+    pub fn flown_by_autopilot_targets(&self) -> bool {
+        !matches!(self, VehicleModel::FixedWing(_))
+    }
+
     /// The setpoint that input `u` chosen at the believed state `x` asks for, where the vehicle
     /// is flown by setpoints (the multirotor; None for the others).
     pub fn setpoint(&self, x: &State9, u: &Input, dt: f64) -> Option<Setpoint> {
@@ -244,6 +267,17 @@ impl VehicleModel {
     /// setpoints).
     pub fn input_flying(&self, x: &State9, sp: &Setpoint) -> Option<Input> {
         self.input_for_setpoint(x, sp.velocity_mps, Some(sp.yaw_rad))
+    }
+
+    /// What the autopilot of a vehicle flown by setpoints flies once its companion's setpoints
+    /// stop (PX4's offboard-loss failsafe, HOLD): zero velocity over the ground, on the heading
+    /// of `x` (a multirotor hovers where it is). None for the vehicles flown by inputs, which
+    /// keep their course.
+    pub fn failsafe_hold(&self, x: &State9) -> Option<Setpoint> {
+        match self {
+            VehicleModel::Multirotor(_) => Some(Setpoint { velocity_mps: [0.0; 3], yaw_rad: x[crate::state::BETA] }),
+            _ => None,
+        }
     }
 
     /// The input that gives an autopilot the velocity setpoint `v` (world frame, m/s) and yaw

@@ -145,10 +145,10 @@ fn run(args: Args) -> Result<Ended> {
                      do not all broadcast: set radio.broadcast_all = true"
                 );
             }
-            if !sc.vehicle().takes_velocity_setpoints() {
+            if !sc.vehicle().flown_by_autopilot_targets() {
                 bail!(
-                    "--mavlink: this scenario's vehicle steers its attitude with its inputs too, which a MAVLink \
-                     velocity setpoint does not carry: fly a multirotor scenario (vehicle.model = \"multirotor\")"
+                    "--mavlink: this scenario's fixed wing is not flown by MAVLink targets here (its bank and load factor \
+                     are its autopilot's): fly a multirotor or the kinematic vehicle (vehicle.model)"
                 );
             }
             Some(endpoint.parse::<Endpoint>()?)

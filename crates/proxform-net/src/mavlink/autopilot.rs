@@ -2,7 +2,8 @@
 //! it flies (the first autopilot heard, or the one named), its state from LOCAL_POSITION_NED
 //! and ATTITUDE (each with the time it arrived), where local NED is on the earth (HOME_POSITION
 //! or GPS_GLOBAL_ORIGIN), its mode and arming from HEARTBEAT; and what it sends:
-//! SET_POSITION_TARGET_LOCAL_NED velocity and yaw setpoints, MAV_CMD_DO_SET_MODE for OFFBOARD
+//! SET_POSITION_TARGET_LOCAL_NED velocity and yaw setpoints (and SET_ATTITUDE_TARGET attitudes for
+//! the vehicle whose attitude is steered apart from its velocity), MAV_CMD_DO_SET_MODE for OFFBOARD
 //! (PX4) or GUIDED (ArduPilot) and for HOLD/LOITER, and a HEARTBEAT of its own. It never arms
 //! the vehicle. Messages from other systems are counted and left alone.
 //!
@@ -12,12 +13,13 @@
 use std::time::{Duration, Instant};
 
 use mavlink::dialects::common::{
-    MavAutopilot, MavCmd, MavFrame, MavMessage, MavModeFlag, MavState, MavType, PositionTargetTypemask,
-    COMMAND_LONG_DATA, HEARTBEAT_DATA, SET_POSITION_TARGET_LOCAL_NED_DATA,
+    AttitudeTargetTypemask, MavAutopilot, MavCmd, MavFrame, MavMessage, MavModeFlag, MavState, MavType,
+    PositionTargetTypemask, COMMAND_LONG_DATA, HEARTBEAT_DATA, SET_ATTITUDE_TARGET_DATA,
+    SET_POSITION_TARGET_LOCAL_NED_DATA,
 };
 use proxform_core::State9;
 
-use super::frame::{Frame, GeoOrigin, Ned};
+use super::frame::{quaternion, Frame, GeoOrigin, Ned};
 use super::link::Link;
 use super::modes::{Flavour, Mode};
 
@@ -149,6 +151,27 @@ impl Autopilot {
     /// The vehicle's state in the method's frame `frame`, and its age.
     pub fn state(&self, frame: &Frame, now: Instant) -> Option<(State9, Duration)> {
         self.ned(now).map(|(n, age)| (frame.state(&n), age))
+    }
+
+    /// Sends an attitude target (roll, pitch, yaw; rad), body rates and thrust ignored; refuses
+    /// non-finite values (nothing is sent).
+    pub fn send_attitude(&mut self, attitude: [f64; 3], time_boot_ms: u32) -> std::io::Result<bool> {
+        let Some(target) = self.target else { return Ok(false) };
+        if !attitude.iter().all(|v| v.is_finite()) {
+            return Ok(false);
+        }
+        let m = MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+            time_boot_ms,
+            q: quaternion(attitude).map(|v| v as f32),
+            type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
+                | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE
+                | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE
+                | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE,
+            target_system: target,
+            target_component: 1,
+            ..Default::default()
+        });
+        self.link.send(&m).map(|()| true)
     }
 
     /// Sends a velocity (NED, m/s) and yaw (clockwise from north, rad) setpoint; refuses

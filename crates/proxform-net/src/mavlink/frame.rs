@@ -27,6 +27,29 @@ pub struct Ned {
     pub attitude: [f64; 3],
 }
 
+/// The quaternion (w, x, y, z; local NED to body FRD, as MAVLink's attitude messages carry it)
+/// of roll, pitch and yaw (rad).
+pub fn quaternion([roll, pitch, yaw]: [f64; 3]) -> [f64; 4] {
+    let (sr, cr) = (0.5 * roll).sin_cos();
+    let (sp, cp) = (0.5 * pitch).sin_cos();
+    let (sy, cy) = (0.5 * yaw).sin_cos();
+    [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
+}
+
+/// Roll, pitch and yaw (rad) of quaternion `q` (w, x, y, z), normalised first; None when it is
+/// not a rotation (a non-finite or near-zero quaternion).
+pub fn euler(q: [f64; 4]) -> Option<[f64; 3]> {
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if !(n.is_finite() && n > 0.5) {
+        return None;
+    }
+    let [w, x, y, z] = q.map(|v| v / n);
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+    Some([roll, pitch, yaw])
+}
+
 /// The method's world frame in the autopilot's local NED frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Frame {
@@ -230,5 +253,19 @@ mod tests {
         let p = [100.0, 200.0, -1.0];
         let back = o.ned(&o.geo(p));
         assert!((0..3).all(|k| close(back[k], p[k], 1e-6)), "{back:?}");
+    }
+
+    #[test]
+    fn a_quaternion_carries_roll_pitch_and_yaw_both_ways() {
+        for a in [[0.0, 0.0, 0.0], [0.2, -0.3, 1.0], [-0.5, 0.4, -2.5], [0.1, 0.05, 3.0]] {
+            let back = euler(quaternion(a)).expect("a rotation");
+            for k in 0..3 {
+                assert!(wrap_pi(back[k] - a[k]).abs() < 1e-12, "{a:?} -> {back:?}");
+            }
+        }
+        // Scaled, it is the same rotation; zero or NaN is none.
+        let q = quaternion([0.2, -0.3, 1.0]).map(|v| 3.0 * v);
+        assert!((euler(q).expect("a rotation")[1] + 0.3).abs() < 1e-12);
+        assert!(euler([0.0; 4]).is_none() && euler([f64::NAN, 0.0, 0.0, 1.0]).is_none());
     }
 }

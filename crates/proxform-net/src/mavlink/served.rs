@@ -3,18 +3,20 @@
 //! ATTITUDE, GLOBAL_POSITION_INT, HOME_POSITION and GPS_GLOBAL_ORIGIN from a state in NED) and
 //! what it accepts: MAV_CMD_DO_SET_MODE and MAV_CMD_COMPONENT_ARM_DISARM addressed to it (each
 //! answered by COMMAND_ACK), SET_POSITION_TARGET_LOCAL_NED velocity setpoints addressed to it
-//! with finite values in the local NED frame. OFFBOARD is accepted only while setpoints stream
+//! with finite values in the local NED frame, and SET_ATTITUDE_TARGET attitudes addressed to it
+//! (a rotation; its roll and pitch go with the velocity setpoint while they are as fresh).
+//! OFFBOARD is accepted only while setpoints stream
 //! (as PX4 does), and falls back to HOLD when they stop for [`SETPOINT_LOSS_S`]. Anything
 //! addressed to another system, or with values it cannot apply, is counted and never applied.
 
 use mavlink::dialects::common::{
-    MavCmd, MavFrame, MavMessage, MavModeFlag, MavResult, MavState, MavType, PositionTargetTypemask, ATTITUDE_DATA,
-    COMMAND_ACK_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA, HEARTBEAT_DATA, HOME_POSITION_DATA,
-    LOCAL_POSITION_NED_DATA,
+    AttitudeTargetTypemask, MavCmd, MavFrame, MavMessage, MavModeFlag, MavResult, MavState, MavType,
+    PositionTargetTypemask, ATTITUDE_DATA, COMMAND_ACK_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA,
+    HEARTBEAT_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA,
 };
 use mavlink::MavHeader;
 
-use super::frame::{GeoOrigin, Ned};
+use super::frame::{euler, GeoOrigin, Ned};
 use super::modes::{Flavour, Mode};
 
 /// Offboard setpoints older than this (s) put the vehicle in HOLD (PX4's COM_OF_LOSS_T is 1 s).
@@ -27,6 +29,9 @@ pub struct Setpoint {
     pub velocity_ned: [f64; 3],
     /// Yaw, clockwise from north (rad); None: keep the present one.
     pub yaw: Option<f64>,
+    /// Roll and pitch (rad) of an attitude target heard within [`SETPOINT_LOSS_S`]; None: the
+    /// ones the velocity brings.
+    pub attitude: Option<[f64; 2]>,
     /// When it arrived (the vehicle's time, s).
     pub at_s: f64,
 }
@@ -36,7 +41,8 @@ pub struct Setpoint {
 pub struct Refused {
     /// Commands or setpoints addressed to another system.
     pub foreign: u64,
-    /// Setpoints with a non-finite value, another frame, or no velocity.
+    /// Setpoints with a non-finite value, another frame, or no velocity; attitude targets that
+    /// are no rotation.
     pub invalid: u64,
     /// Commands this vehicle does not carry out (answered UNSUPPORTED or DENIED).
     pub commands: u64,
@@ -51,6 +57,8 @@ pub struct Served {
     armed: bool,
     mode: Mode,
     setpoint: Option<Setpoint>,
+    /// The last attitude target's roll and pitch (rad) and when it arrived (s).
+    attitude: Option<([f64; 2], f64)>,
     /// Whether an outside controller may fly it (OFFBOARD).
     offboard: bool,
     /// What it refused.
@@ -69,6 +77,7 @@ impl Served {
             armed: true,
             mode: Mode::Hold,
             setpoint: None,
+            attitude: None,
             offboard: true,
             refused: Refused::default(),
             setpoints: 0,
@@ -93,7 +102,8 @@ impl Served {
         if self.mode == Mode::Offboard && self.setpoint.is_none_or(|s| now_s - s.at_s > SETPOINT_LOSS_S) {
             self.mode = Mode::Hold;
         }
-        (self.mode == Mode::Offboard).then_some(self.setpoint).flatten()
+        let attitude = self.attitude.filter(|(_, at)| now_s - at <= SETPOINT_LOSS_S).map(|(a, _)| a);
+        (self.mode == Mode::Offboard).then_some(self.setpoint).flatten().map(|s| Setpoint { attitude, ..s })
     }
 
     /// Takes message `m` from `from` at `now_s`; the answer to send back, if any.
@@ -120,8 +130,22 @@ impl Served {
                     self.refused.invalid += 1;
                     return None;
                 }
-                self.setpoint = Some(Setpoint { velocity_ned: v, yaw, at_s: now_s });
+                self.setpoint = Some(Setpoint { velocity_ned: v, yaw, attitude: None, at_s: now_s });
                 self.setpoints += 1;
+                None
+            }
+            MavMessage::SET_ATTITUDE_TARGET(a) => {
+                if a.target_system != self.system_id {
+                    self.refused.foreign += 1;
+                    return None;
+                }
+                let rotation = euler(a.q.map(f64::from)).filter(|_| {
+                    !a.type_mask.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE)
+                });
+                match rotation {
+                    Some([roll, pitch, _]) => self.attitude = Some(([roll, pitch], now_s)),
+                    None => self.refused.invalid += 1,
+                }
                 None
             }
             MavMessage::COMMAND_LONG(c) => {
@@ -323,6 +347,31 @@ mod tests {
         assert_eq!(nav.setpoint(0.1), None);
         assert_eq!(v.setpoint(0.2).expect("still offboard").velocity_ned, [1.0, 0.0, 0.0]);
         assert_eq!(v.mode(), Mode::Offboard);
+    }
+
+    #[test]
+    fn an_attitude_target_goes_with_the_setpoint_while_it_is_fresh() {
+        use mavlink::dialects::common::SET_ATTITUDE_TARGET_DATA;
+        let attitude = |target: u8, q: [f32; 4]| {
+            MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA { q, target_system: target, ..Default::default() })
+        };
+        let mut v = Served::new(3, Flavour::Px4, MavType::MAV_TYPE_QUADROTOR);
+        v.handle(&from(), &velocity(3, [1.0, 0.0, 0.0]), 0.0);
+        v.handle(&from(), &set_mode(3, Mode::Offboard), 0.0);
+        assert_eq!(v.setpoint(0.0).expect("offboard").attitude, None);
+        let q = super::super::frame::quaternion([0.1, -0.2, 0.7]).map(|x| x as f32);
+        v.handle(&from(), &attitude(3, q), 0.1);
+        v.handle(&from(), &velocity(3, [1.0, 0.0, 0.0]), 0.9);
+        let [roll, pitch] = v.setpoint(0.9).expect("offboard").attitude.expect("fresh");
+        assert!((roll - 0.1).abs() < 1e-6 && (pitch + 0.2).abs() < 1e-6, "{roll} {pitch}");
+        // Older than the setpoint loss time, it is not flown; another system's, or no rotation, never.
+        v.handle(&from(), &velocity(3, [1.0, 0.0, 0.0]), 1.2);
+        assert_eq!(v.setpoint(1.2).expect("offboard").attitude, None);
+        v.handle(&from(), &attitude(4, q), 1.2);
+        v.handle(&from(), &attitude(3, [0.0; 4]), 1.2);
+        v.handle(&from(), &attitude(3, [f32::NAN, 0.0, 0.0, 1.0]), 1.2);
+        assert_eq!(v.refused, Refused { foreign: 1, invalid: 2, commands: 0 });
+        assert_eq!(v.setpoint(1.2).expect("offboard").attitude, None);
     }
 
     #[test]

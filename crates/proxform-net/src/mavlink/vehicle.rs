@@ -3,7 +3,9 @@
 //! frame), what it perceived and heard from its sensing over the network as before, and each
 //! decision goes to the autopilot as its velocity and yaw setpoint (the decision's
 //! [`proxform_core::Setpoint`], absolute, chosen at the state the agent believed it had;
-//! SET_POSITION_TARGET_LOCAL_NED), with OFFBOARD asked
+//! SET_POSITION_TARGET_LOCAL_NED; for the paper's kinematic vehicle, whose inputs steer its
+//! attitude apart from its velocity, also the attitude it reaches, SET_ATTITUDE_TARGET), with
+//! OFFBOARD asked
 //! while it is not in it.
 //! The safety policy ([`Safety`]) asks for HOLD instead when the autopilot's position is stale
 //! or no update came for its timeout; the decision also goes to the world as before (a world
@@ -238,6 +240,12 @@ impl Vehicle for MavlinkVehicle {
             let ms = now.duration_since(self.boot).as_millis() as u32;
             if self.autopilot.send_velocity(v, yaw, ms).map_err(io)? {
                 self.setpoints += 1;
+                // The attitude too, where the vehicle's inputs steer it apart from its velocity.
+                if let Some([alpha, gamma]) =
+                    self.model.attitude_setpoint(&state.state, &command.decision.input, self.dt_s)
+                {
+                    self.autopilot.send_attitude([gamma, alpha, yaw], ms).map_err(io)?;
+                }
                 self.ask(Mode::Offboard, now)?;
             }
         } else {

@@ -70,7 +70,8 @@ pub struct UavStep {
     pub isolated: u16,
     /// It flew on its own prediction, its own measurement failing the own-sensor check.
     pub own_suspect: bool,
-    /// Its agent (outside the engine) was gone: it flew on without one, holding its course.
+    /// Its agent (outside the engine) was gone: it flew on without one, holding its course (a
+    /// multirotor hovering once its autopilot's failsafe took over).
     pub uncontrolled: bool,
 }
 

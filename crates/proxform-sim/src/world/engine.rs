@@ -79,6 +79,8 @@ struct Outside<'s> {
     by_uav: Vec<Option<Decision>>,
     /// Followers taken out of the flight because their agent is gone.
     absent: Vec<bool>,
+    /// Of those, the ones whose autopilot is in its failsafe by now.
+    failsafe: Vec<bool>,
     /// The navigator (an outside controller may fly it).
     navigator: usize,
 }
@@ -164,6 +166,7 @@ impl<'s> Simulation<'s> {
             decisions: Vec::new(),
             by_uav: vec![None; n],
             absent: vec![false; n],
+            failsafe: vec![false; n],
             navigator: scenario.navigator().index(),
         };
         let none = (0..n).map(|_| None).collect();
@@ -545,6 +548,7 @@ impl Outside<'_> {
         let nav = w.scenario.navigator().index();
         for i in (0..w.scenario.len()).filter(|i| *i != nav) {
             self.absent[i] = w.active[i] && !self.agents.present(proxform_core::UavId(i as u32));
+            self.failsafe[i] = self.absent[i] && self.agents.failsafe(proxform_core::UavId(i as u32));
         }
     }
 
@@ -564,13 +568,18 @@ impl Outside<'_> {
         for (j, u) in self.sensed.uavs.iter().enumerate() {
             // A decision with a non-finite number in it, or one no agent of this vehicle could
             // have made (far beyond what it can do in a period), is never applied: the UAV
-            // holds. So does a UAV whose agent is gone.
+            // holds. So does a UAV whose agent is gone, until its autopilot's failsafe takes
+            // over: one flown by setpoints then hovers where it is (PX4's offboard loss), the
+            // others hold their course.
+            let i = u.index();
             let d = self.decisions.get(j).copied().filter(|d| {
-                !self.absent[u.index()]
-                    && d.is_finite()
-                    && vehicle.plausible(&truth[u.index()], &d.input, d.setpoint.as_ref(), dt)
+                !self.absent[i] && d.is_finite() && vehicle.plausible(&truth[i], &d.input, d.setpoint.as_ref(), dt)
             });
-            self.by_uav[u.index()] = Some(d.unwrap_or_else(holding));
+            let failsafe = || Decision { setpoint: vehicle.failsafe_hold(&truth[i]), ..holding() };
+            self.by_uav[i] = Some(match self.failsafe[i] {
+                true => failsafe(),
+                false => d.unwrap_or_else(holding),
+            });
         }
         // An outside controller in charge of the navigator flies it (checked as a follower's
         // decision is; one that is not valid leaves it on its path).

@@ -93,6 +93,16 @@ pub trait Agents {
         true
     }
 
+    /// Whether the autopilot of UAV `uav`, whose agent is not there ([`Agents::present`] false),
+    /// is in its failsafe by now: its own timeout since the last command it had has passed (PX4's
+    /// offboard loss, 1 s by default). In its failsafe it flies what
+    /// [`proxform_core::VehicleModel::failsafe_hold`] says (a multirotor hovers); before, it
+    /// holds its course. By default at once.
+    fn failsafe(&mut self, uav: UavId) -> bool {
+        let _ = uav;
+        true
+    }
+
     /// A decision that flies the navigator this flight step instead of its path (an outside
     /// controller in charge of it: a MAVLink offboard program), given its true state `truth`
     /// at time `t_s` (s); None (the default) while it flies its path.
@@ -109,6 +119,10 @@ impl<A: Agents + ?Sized> Agents for &mut A {
 
     fn present(&mut self, uav: UavId) -> bool {
         (**self).present(uav)
+    }
+
+    fn failsafe(&mut self, uav: UavId) -> bool {
+        (**self).failsafe(uav)
     }
 
     fn navigator(&mut self, t_s: f64, truth: &State9) -> Option<Decision> {
