@@ -529,6 +529,7 @@ fn the_launcher_starts_a_crashed_agent_again_and_reports_every_loss() {
         match restarts {
             "3" => {
                 assert!(printed.contains("started again (restart 1)"), "{printed}");
+                assert!(!printed.contains("more than one agent"), "a restarted agent is not a second: {printed}");
                 assert!(gone < 1.5, "UAV3 {gone} s without its agent: {printed}");
                 let traj = std::fs::read_to_string(dir.join("trajectories.csv")).expect("trajectories");
                 let last = traj.lines().rfind(|l| l.split(',').nth(1) == Some("3")).expect("UAV3");

@@ -322,7 +322,12 @@ impl NetAgents {
             if let Some(uav) = l.key.rsplit('/').next().and_then(|n| n.parse::<u32>().ok()) {
                 match l.alive {
                     true => self.alive.insert(uav),
-                    false => self.alive.remove(&uav),
+                    false => {
+                        // Its process is gone: what it announced no longer counts (a restarted
+                        // agent is not a second one).
+                        self.announced.remove(&uav);
+                        self.alive.remove(&uav)
+                    }
                 };
             }
         }
@@ -524,7 +529,10 @@ impl NetAgents {
                     if self.lost(request, c.uav, 1) {
                         continue;
                     }
-                    self.stats.round_trips_s.push(sent.elapsed().as_secs_f64());
+                    // From the moment the update it answers left (the step it was measured at,
+                    // after the transport's delay), whichever step this is.
+                    let left = start + Duration::from_secs_f64(c.k as f64 * self.dt_s) + delay;
+                    self.stats.round_trips_s.push(Instant::now().saturating_duration_since(left).as_secs_f64());
                     self.stats.ages_s.push(c.age_s);
                     let due = Instant::now() + delay;
                     match delay.is_zero() {
