@@ -379,6 +379,27 @@ fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
 }
 
 #[test]
+fn a_uav_back_from_a_stall_is_not_followed_until_it_is_near_its_slot() {
+    // Real time, 25 s of the paper (its method, no robust fusion); UAV3's agent stopped for 3 s
+    // about 10 s in. Its UAV holds its course (the kinematic vehicle's failsafe) and ends up
+    // more than 10 m off; back, its agent says it is rejoining until it is near its slot again,
+    // and the others do not follow it meanwhile (they did: up to 13.6 m off, every one failed).
+    let (swarm, dir) = (format!("rejoin-{}", std::process::id()), out("rejoin"));
+    let launcher = launch(&["--duration-s", "25", "--seed", "1"], &swarm, &dir);
+    let pid = agent3_pid(&swarm);
+    std::thread::sleep(std::time::Duration::from_secs(11));
+    stall(pid, 3.0);
+    let (code, stderr) = finish(launcher);
+    assert_eq!(code, Some(1), "a follower flew uncontrolled: {stderr}");
+    let row = |uav: u32| stderr.lines().find(|l| l.starts_with(&format!("UAV{uav} "))).expect("a row per UAV");
+    assert!(row(3).ends_with("FAIL"), "UAV3 went off while its agent was stopped: {stderr}");
+    for uav in [2, 4, 5, 6] {
+        assert!(row(uav).ends_with("PASS"), "UAV{uav} did not follow UAV3 off: {}\n{stderr}", row(uav));
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
 fn relaying_the_navigator_is_refused_before_anything_starts() {
     let dir = out("relay");
     std::fs::create_dir_all(&dir).expect("temp dir");

@@ -57,6 +57,14 @@ pub enum HostError {
 /// updates that come once a period with some jitter are each decided on).
 pub const MIN_DECISION_PERIODS: f64 = 0.9;
 
+/// An agent rejoining (back after more than [`STALE_AFTER_PERIODS`] periods without a decision:
+/// stopped, cut off, restarted mid-flight) is back once a decision finds its course-keeping
+/// state inside its envelope, or its position within `Σ (g/Δ)² ≤` this of where its neighbours
+/// place it ([`proxform_core::Decision::gap_sq`]: three permissible errors); until then its
+/// broadcasts say it is rejoining and the others do not follow it (wherever its uncontrolled
+/// flight took it, they would be drawn there).
+pub const REJOINED_GAP_SQ: f64 = 9.0;
+
 struct Hosted {
     agent: Agent,
     run: u32,
@@ -72,6 +80,9 @@ struct Hosted {
     in_flight: std::collections::VecDeque<(f64, proxform_core::Decision)>,
     /// What it runs ([`setup_digest`]), carried by its commands and announcements.
     digest: u64,
+    /// Own clock: back after flying without decisions, and not yet near its slot
+    /// ([`REJOINED_GAP_SQ`]).
+    rejoining: bool,
 }
 
 /// What a process's agents refused, skipped and left out ([`Host::counts`]).
@@ -131,6 +142,7 @@ impl Host {
                 stepped_t_s: None,
                 in_flight: Default::default(),
                 digest,
+                rejoining: false,
             };
             agents.insert(u, hosted);
         }
@@ -288,7 +300,7 @@ impl Host {
         }
         if s.run != h.run {
             h.agent = self.scenario.agent(UavId(s.uav - 1));
-            (h.run, h.flying, h.stepped_t_s) = (s.run, false, None);
+            (h.run, h.flying, h.stepped_t_s, h.rejoining) = (s.run, false, None, false);
             h.in_flight.clear();
         }
         if s.phase == Phase::Fly && !h.flying {
@@ -326,6 +338,11 @@ impl Host {
                     self.skipped += 1;
                     return None;
                 }
+                // Back after flying without decisions (or started in the middle of a flight).
+                let since = h.stepped_t_s.unwrap_or(0.0);
+                if s.phase == Phase::Fly && s.t_s - since > STALE_AFTER_PERIODS * dt + 1e-9 {
+                    h.rejoining = true;
+                }
                 // Through the commands that act before it (holding where none was sent).
                 let periods = ((t_s - s.t_s) / dt).round() as usize;
                 let mut own = s.own;
@@ -346,6 +363,12 @@ impl Host {
             }
         };
         let decision = h.agent.step(t_s, &own, &self.heard);
+        let back = match decision.outcome {
+            proxform_core::Outcome::Held => true,
+            proxform_core::Outcome::Adjusted { .. } => decision.gap_sq <= REJOINED_GAP_SQ,
+            proxform_core::Outcome::Alone => false,
+        };
+        h.rejoining &= !back;
         if own_clock {
             let dt = self.scenario.dt_s();
             h.in_flight.retain(|(t, _)| *t > s.t_s - 0.5 * dt);
@@ -356,7 +379,7 @@ impl Host {
         }
         h.stepped_t_s = Some(t_s);
         let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s, age_s: latency_s, decision, digest: h.digest };
-        Some((command, StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own }))
+        Some((command, StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own, rejoining: h.rejoining }))
     }
 }
 
@@ -524,6 +547,42 @@ mod tests {
         host.keep(update(&sc, 2, 14));
         assert!(host.decide_due(now + Duration::from_millis(200), |_| 0.51).is_empty());
         assert_eq!(host.counts().stale, 1);
+    }
+
+    #[test]
+    fn back_after_a_gap_an_agent_says_it_is_rejoining_until_it_is_near_its_slot_again() {
+        let sc = paper();
+        let mut host = Host::new(sc.clone(), &[2]).expect("a follower");
+        // Its update at step k, `dy` m off its slot, with the navigator on its path and UAV 3
+        // in its slot.
+        let at = |k: u64, dy: f64| {
+            let t_s = k as f64 * sc.dt_s();
+            let s0 = sc.initial()[0];
+            let nav = sc.path().state_at(t_s, [s0[0], s0[1], s0[2]]);
+            let mut own = sc.slot_state(1, &nav);
+            own[state::Y] += dy;
+            let seen = |id: u32, state| Observation {
+                id: UavId(id),
+                state,
+                age_s: 0.0,
+                source: proxform_core::ObservationSource::Onboard,
+            };
+            let heard = vec![seen(0, nav), seen(2, sc.slot_state(2, &nav))];
+            SenseMsg { uav: 2, run: 0, phase: Phase::Fly, k, t_s, own, heard }
+        };
+        let t0 = Instant::now();
+        let mut decide = |k: u64, dy: f64, after_ms: u64| {
+            host.keep(at(k, dy));
+            let out = host.decide_due(t0 + Duration::from_millis(after_ms), |_| 0.0);
+            out[0].1.rejoining
+        };
+        for k in 0..5 {
+            assert!(!decide(k, 0.0, 100 * k), "in its slot from the start");
+        }
+        // Three seconds without a decision (its agent was stopped), 20 m off: rejoining.
+        assert!(decide(35, 20.0, 600));
+        assert!(decide(36, 15.0, 700), "still far");
+        assert!(!decide(37, 0.0, 800), "back in its slot");
     }
 
     #[test]

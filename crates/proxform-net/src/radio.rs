@@ -184,7 +184,7 @@ mod tests {
         let mut state = State9::zeros();
         state[state::X] = x;
         state[state::VX] = vx;
-        StateMsg { uav, k: 0, t_s, state }
+        StateMsg { uav, k: 0, t_s, state, rejoining: false }
     }
 
     const V: &str = "[formation.shape]\nkind = \"v\"\nuavs = 5\nspacing_m = 80.0\n";

@@ -1,11 +1,13 @@
 //! Which neighbours fly under their agents, as an agent on its own clock can tell: a
 //! follower's agent broadcasts its state with every decision, so a follower whose agent has
 //! broadcast nothing measured within [`STALE_AFTER_PERIODS`] periods of the instant an agent
-//! steps at (stopped, cut off, crashed) flies uncontrolled, holding what it had. Such a
-//! neighbour is still seen and avoided, but not followed: its onboard observations are passed as
-//! close-range detections (collision avoidance only), its radio reports are dropped. A
-//! follower never heard is taken as flying under control (a world may run agents that do not
-//! broadcast); the navigator flies its path and is always followed.
+//! steps at (stopped, cut off, crashed) flies uncontrolled, holding what it had. Nor is one
+//! whose agent is back but says it is rejoining (its newest broadcast's `rejoining`: not yet
+//! near its slot again, wherever its uncontrolled flight took it). Such a neighbour is still
+//! seen and avoided, but not followed: its onboard observations are passed as close-range
+//! detections (collision avoidance only), its radio reports are dropped. A follower never
+//! heard is taken as flying under control (a world may run agents that do not broadcast); the
+//! navigator flies its path and is always followed.
 
 use proxform_core::{Observation, ObservationSource};
 use proxform_scenario::Scenario;
@@ -16,6 +18,8 @@ use crate::wire::{StateMsg, STALE_AFTER_PERIODS};
 #[derive(Debug, Clone)]
 pub struct ControlWatch {
     newest: Vec<Option<f64>>,
+    /// Whether the newest broadcast of each follower said it is rejoining.
+    rejoining: Vec<bool>,
     navigator: usize,
     silent_after_s: f64,
     /// Observations of silent neighbours passed for avoidance only or dropped.
@@ -27,6 +31,7 @@ impl ControlWatch {
     pub fn new(scenario: &Scenario) -> Self {
         Self {
             newest: vec![None; scenario.len()],
+            rejoining: vec![false; scenario.len()],
             navigator: scenario.navigator().index(),
             silent_after_s: STALE_AFTER_PERIODS * scenario.dt_s(),
             unfollowed: 0,
@@ -37,6 +42,9 @@ impl ControlWatch {
     pub fn hear(&mut self, m: &StateMsg) {
         let j = (m.uav as usize).wrapping_sub(1);
         if let Some(t) = self.newest.get_mut(j).filter(|_| m.t_s.is_finite()) {
+            if t.is_none_or(|t| m.t_s >= t) {
+                self.rejoining[j] = m.rejoining;
+            }
             *t = Some(t.map_or(m.t_s, |t| t.max(m.t_s)));
         }
     }
@@ -44,11 +52,15 @@ impl ControlWatch {
     /// Forgets what was heard (a new run).
     pub fn clear(&mut self) {
         self.newest.iter_mut().for_each(|t| *t = None);
+        self.rejoining.iter_mut().for_each(|r| *r = false);
     }
 
-    /// Whether follower `j` (from 0) has been silent at `t_s`.
+    /// Whether follower `j` (from 0) has been silent at `t_s`, or says it is rejoining: not to
+    /// be followed.
     pub fn silent(&self, j: usize, t_s: f64) -> bool {
-        j != self.navigator && self.newest.get(j).copied().flatten().is_some_and(|t| t_s - t > self.silent_after_s)
+        j != self.navigator
+            && (self.newest.get(j).copied().flatten().is_some_and(|t| t_s - t > self.silent_after_s)
+                || self.rejoining.get(j).copied().unwrap_or(false))
     }
 
     /// What an agent stepping at `t_s` keeps of `heard`: a silent neighbour's onboard
@@ -83,7 +95,7 @@ mod tests {
         let mut w = ControlWatch::new(&sc);
         let nav = sc.navigator().index();
         let (a, b) = ((nav + 1) % 4, (nav + 2) % 4);
-        let msg = |j: usize, t_s| StateMsg { uav: j as u32 + 1, k: 0, t_s, state: State9::zeros() };
+        let msg = |j: usize, t_s| StateMsg { uav: j as u32 + 1, k: 0, t_s, state: State9::zeros(), rejoining: false };
         w.hear(&msg(a, 1.0));
         w.hear(&msg(b, 1.0));
         w.hear(&msg(b, 3.0));
@@ -105,5 +117,13 @@ mod tests {
         // Heard again: followed again; never heard: followed.
         w.hear(&msg(a, 3.0));
         assert!(!w.silent(a, 3.2) && !w.silent((nav + 3) % 4, 100.0) && !w.silent(nav, 100.0));
+        // Back but rejoining: not followed until its newest broadcast says it is back; an older
+        // broadcast arriving late changes nothing.
+        w.hear(&StateMsg { rejoining: true, ..msg(a, 3.3) });
+        assert!(w.silent(a, 3.3));
+        w.hear(&msg(a, 3.1));
+        assert!(w.silent(a, 3.4), "a late older broadcast");
+        w.hear(&msg(a, 3.5));
+        assert!(!w.silent(a, 3.5));
     }
 }

@@ -759,8 +759,13 @@ impl proxform_sim::Observer for NavigatorTelemetry {
         if let Some((clock, dt_s)) = &self.clock {
             clock.wait_until(frame.t, Duration::from_secs_f64(*dt_s));
         }
-        let m =
-            StateMsg { uav: self.navigator as u32 + 1, k: frame.k, t_s: frame.t, state: frame.states[self.navigator] };
+        let m = StateMsg {
+            uav: self.navigator as u32 + 1,
+            k: frame.k,
+            t_s: frame.t,
+            state: frame.states[self.navigator],
+            rejoining: false,
+        };
         // Telemetry is best effort: a failed publication loses one sample.
         let _ = self.publisher.send(&Message::State(m));
     }

@@ -45,6 +45,11 @@ pub struct Decision {
     /// The UAV did not trust its own measurement this period and flew on its own prediction
     /// (`ControllerParams::own_gate_m`; always false without it).
     pub own_suspect: bool,
+    /// How far the UAV was from where its neighbours place it: `Σ (g_k/Δ_k)²` over x, y, z of
+    /// the gap `g` to the envelope centre's position (before a wide gap's closing velocity
+    /// replaces it; after separation keeping), in permissible errors. 0 when nothing was
+    /// perceived, and for decisions that do not say (the baselines', one read from the wire).
+    pub gap_sq: f64,
     /// For a vehicle flown by velocity and yaw setpoints (the multirotor), what its autopilot
     /// flies from now on: the input applied to the state the agent believed it had when it
     /// adjusted, the last such setpoint while it holds (an autopilot keeps flying its last
@@ -75,6 +80,15 @@ impl Decision {
     /// A decision that reports no areas, references or isolation (the baselines', a held
     /// placeholder's).
     pub fn without_areas(outcome: Outcome, input: Input) -> Self {
-        Decision { outcome, input, occupied_areas: 0, main_refs: 0, isolated: 0, own_suspect: false, setpoint: None }
+        Decision {
+            outcome,
+            input,
+            occupied_areas: 0,
+            main_refs: 0,
+            isolated: 0,
+            own_suspect: false,
+            gap_sq: 0.0,
+            setpoint: None,
+        }
     }
 }

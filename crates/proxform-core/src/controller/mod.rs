@@ -365,6 +365,7 @@ impl ProximityController {
         let x_hold_minus_o = -o_i;
         let envelope = &params.envelope;
         let (occupied_areas, main_refs, isolated) = (est.n_bar, est.main_refs, est.isolated);
+        let gap_sq = (0..3).map(|k| (goal[k] / envelope.thresholds[X + k]).powi(2)).sum();
         let decide = |outcome, input| Decision {
             outcome,
             input,
@@ -372,6 +373,7 @@ impl ProximityController {
             main_refs,
             isolated,
             own_suspect: false,
+            gap_sq,
             setpoint: None,
         };
         if envelope.contains(&x_hold_minus_o) {

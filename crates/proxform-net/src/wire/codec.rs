@@ -168,11 +168,13 @@ impl Reader<'_> {
 pub fn encode(m: &Message) -> Vec<u8> {
     match m {
         Message::State(s) => {
-            let mut w = Writer::new(kind::STATE, 92);
+            let mut w = Writer::new(kind::STATE, 100);
             w.u32(s.uav);
             w.u64(s.k);
             w.f64(s.t_s);
             w.state(&s.state);
+            w.u8(u8::from(s.rejoining));
+            w.pad(7);
             w.0
         }
         Message::Sense(s) => {
@@ -273,7 +275,16 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
         return Err(DecodeError::Version(head[3]));
     }
     let m = match head[4] {
-        kind::STATE => Message::State(StateMsg { uav: r.uav("uav")?, k: r.u64()?, t_s: r.f64()?, state: r.state()? }),
+        kind::STATE => {
+            let (uav, k, t_s, state) = (r.uav("uav")?, r.u64()?, r.f64()?, r.state()?);
+            let rejoining = match r.u8()? {
+                0 => false,
+                1 => true,
+                v => return Err(DecodeError::Field { field: "rejoining", value: v.into() }),
+            };
+            r.skip(7)?;
+            Message::State(StateMsg { uav, k, t_s, state, rejoining })
+        }
         kind::SENSE => {
             let uav = r.uav("uav")?;
             let run = r.u32()?;
@@ -338,7 +349,9 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             let velocity_mps = [r.f64()?, r.f64()?, r.f64()?];
             let yaw_rad = r.f64()?;
             let setpoint = has_setpoint.then_some(Setpoint { velocity_mps, yaw_rad });
-            let decision = Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect, setpoint };
+            // (How far the UAV was from its place is the agent's own: not on the wire.)
+            let decision =
+                Decision { outcome, input, occupied_areas, main_refs, isolated, own_suspect, gap_sq: 0.0, setpoint };
             Message::Command(CommandMsg { uav, run, k, t_s, age_s, decision, digest: r.u64()? })
         }
         kind::CLOCK => {
@@ -390,7 +403,7 @@ mod tests {
     fn samples() -> Vec<Message> {
         let obs = |id, source| Observation { id: UavId(id), state: state(id as f64 + 0.5), age_s: 0.1, source };
         vec![
-            Message::State(StateMsg { uav: 3, k: 17, t_s: 1.7, state: state(1.0) }),
+            Message::State(StateMsg { uav: 3, k: 17, t_s: 1.7, state: state(1.0), rejoining: true }),
             Message::Sense(SenseMsg {
                 uav: 2,
                 run: 4,
@@ -431,6 +444,7 @@ mod tests {
                     main_refs: 2,
                     isolated: 1,
                     own_suspect: true,
+                    gap_sq: 0.0,
                     setpoint: Some(Setpoint { velocity_mps: [20.0, -1.5, 0.25], yaw_rad: -3.0 }),
                 },
                 digest: 0x0123_4567_89ab_cdef,
@@ -466,13 +480,14 @@ mod tests {
         }
         // Layouts as docs/wire.md gives them.
         let lens: Vec<usize> = samples().iter().map(|m| encode(m).len()).collect();
-        assert_eq!(lens, [100, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 152, 152, 48, 28]);
+        assert_eq!(lens, [108, 112 + 2 * OBSERVATION_BYTES, 112 + 2 * OBSERVATION_BYTES, 112, 152, 152, 48, 28]);
         // NaN payloads and signed zeros survive (bits, not values).
         let odd = Message::State(StateMsg {
             uav: 1,
             k: 0,
             t_s: -0.0,
             state: State9::repeat(f64::from_bits(0x7ff8_dead_beef_0001)),
+            rejoining: false,
         });
         match decode(&encode(&odd)) {
             Ok(Message::State(s)) => {

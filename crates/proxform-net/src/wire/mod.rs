@@ -51,6 +51,10 @@ pub struct StateMsg {
     pub t_s: f64,
     /// The state.
     pub state: State9,
+    /// Its agent is rejoining: it came back after flying without decisions (stopped, cut off,
+    /// restarted) and is not yet back near its slot. Others avoid it but do not follow it
+    /// ([`crate::watch::ControlWatch`]). Always false for the navigator.
+    pub rejoining: bool,
 }
 
 /// What reached one UAV's agent in one update period: its own measured state, what it
