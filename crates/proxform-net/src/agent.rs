@@ -59,10 +59,13 @@ pub const MIN_DECISION_PERIODS: f64 = 0.9;
 
 /// An agent rejoining (back after more than [`STALE_AFTER_PERIODS`] periods without a decision:
 /// stopped, cut off, restarted mid-flight) is back once a decision finds its course-keeping
-/// state inside its envelope, or its position within `Σ (g/Δ)² ≤` this of where its neighbours
-/// place it ([`proxform_core::Decision::gap_sq`]: three permissible errors); until then its
-/// broadcasts say it is rejoining and the others do not follow it (wherever its uncontrolled
-/// flight took it, they would be drawn there).
+/// state inside its envelope, or both its position within `Σ (g/Δ)² ≤` this of where its
+/// neighbours place it ([`proxform_core::Decision::gap_sq`]) and its whole state (velocity
+/// and attitude too) within `Σ ((X − O)/Δ)² ≤` this of its envelope's centre: three
+/// permissible errors. Until then its broadcasts say it is rejoining and the others do not
+/// follow it (wherever its uncontrolled flight took it, they would be drawn there; followed
+/// as soon as its position was back, its attitude, still pitched from the way back, pitched
+/// them all 2-4° out of 0.4°).
 pub const REJOINED_GAP_SQ: f64 = 9.0;
 
 struct Hosted {
@@ -358,14 +361,16 @@ impl Host {
                 self.radio.observations(UavId(s.uav - 1), t_s, &own, &mut self.heard);
                 // Silence is judged at the update's own instant (a neighbour's last broadcast
                 // is of an update like this one), not at the instant the command will act.
-                self.watch.avoid_only_the_silent(s.t_s, &mut self.heard);
+                self.watch.avoid_only_the_silent(s.t_s, &mut self.heard, h.rejoining);
                 (t_s, own)
             }
         };
         let decision = h.agent.step(t_s, &own, &self.heard);
         let back = match decision.outcome {
             proxform_core::Outcome::Held => true,
-            proxform_core::Outcome::Adjusted { .. } => decision.gap_sq <= REJOINED_GAP_SQ,
+            proxform_core::Outcome::Adjusted { normalised_sq } => {
+                decision.gap_sq <= REJOINED_GAP_SQ && normalised_sq <= REJOINED_GAP_SQ
+            }
             proxform_core::Outcome::Alone => false,
         };
         h.rejoining &= !back;

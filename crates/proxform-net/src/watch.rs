@@ -1,13 +1,15 @@
 //! Which neighbours fly under their agents, as an agent on its own clock can tell: a
 //! follower's agent broadcasts its state with every decision, so a follower whose agent has
 //! broadcast nothing measured within [`STALE_AFTER_PERIODS`] periods of the instant an agent
-//! steps at (stopped, cut off, crashed) flies uncontrolled, holding what it had. Nor is one
-//! whose agent is back but says it is rejoining (its newest broadcast's `rejoining`: not yet
-//! near its slot again, wherever its uncontrolled flight took it). Such a neighbour is still
-//! seen and avoided, but not followed: its onboard observations are passed as close-range
-//! detections (collision avoidance only), its radio reports are dropped. A follower never
-//! heard is taken as flying under control (a world may run agents that do not broadcast); the
-//! navigator flies its path and is always followed.
+//! steps at (stopped, cut off, crashed) flies uncontrolled, holding what it had: it is still
+//! seen and avoided, but not followed (its onboard observations are passed as close-range
+//! detections, for collision avoidance only; its radio reports are dropped). Nor is one whose
+//! agent is back but says it is rejoining (its newest broadcast's `rejoining`: not yet near
+//! its slot again, wherever its uncontrolled flight took it), and it is left to avoid the
+//! others: it is the one out of its place, closing fast, and its own avoidance brakes for them
+//! (UAVs in their places that fled it were pushed 10 m out of theirs). Only a UAV rejoining
+//! too avoids it. A follower never heard is taken as flying under control (a world may run
+//! agents that do not broadcast); the navigator flies its path and is always followed.
 
 use proxform_core::{Observation, ObservationSource};
 use proxform_scenario::Scenario;
@@ -55,24 +57,35 @@ impl ControlWatch {
         self.rejoining.iter_mut().for_each(|r| *r = false);
     }
 
-    /// Whether follower `j` (from 0) has been silent at `t_s`, or says it is rejoining: not to
-    /// be followed.
+    /// Whether follower `j` (from 0) has been silent at `t_s` (uncontrolled).
     pub fn silent(&self, j: usize, t_s: f64) -> bool {
-        j != self.navigator
-            && (self.newest.get(j).copied().flatten().is_some_and(|t| t_s - t > self.silent_after_s)
-                || self.rejoining.get(j).copied().unwrap_or(false))
+        j != self.navigator && self.newest.get(j).copied().flatten().is_some_and(|t| t_s - t > self.silent_after_s)
+    }
+
+    /// Whether follower `j` (from 0) says it is rejoining.
+    pub fn rejoining(&self, j: usize) -> bool {
+        j != self.navigator && self.rejoining.get(j).copied().unwrap_or(false)
     }
 
     /// What an agent stepping at `t_s` keeps of `heard`: a silent neighbour's onboard
-    /// observations for avoidance only, its radio reports and relays not at all.
-    pub fn avoid_only_the_silent(&mut self, t_s: f64, heard: &mut Vec<Observation>) {
+    /// observations for avoidance only; a rejoining one's none, unless this agent is
+    /// rejoining itself (`me_rejoining`: then for avoidance only); neither one's radio reports
+    /// and relays.
+    pub fn avoid_only_the_silent(&mut self, t_s: f64, heard: &mut Vec<Observation>, me_rejoining: bool) {
         let before = heard.len();
         heard.retain(|o| {
-            !self.silent(o.id.index(), t_s) || matches!(o.source, ObservationSource::Onboard | ObservationSource::Close)
+            let j = o.id.index();
+            let onboard = matches!(o.source, ObservationSource::Onboard | ObservationSource::Close);
+            match (self.silent(j, t_s), self.rejoining(j)) {
+                (false, false) => true,
+                (true, _) => onboard,
+                (false, true) => onboard && me_rejoining,
+            }
         });
         let mut unfollowed = (before - heard.len()) as u64;
         for o in heard.iter_mut() {
-            if o.source == ObservationSource::Onboard && self.silent(o.id.index(), t_s) {
+            let j = o.id.index();
+            if o.source == ObservationSource::Onboard && (self.silent(j, t_s) || self.rejoining(j)) {
                 o.source = ObservationSource::Close;
                 unfollowed += 1;
             }
@@ -107,7 +120,7 @@ mod tests {
             obs(nav, ObservationSource::Onboard),
         ];
         // At 3 s, a was last heard 2 s ago (more than 5 periods of 0.1 s), b just now.
-        w.avoid_only_the_silent(3.0, &mut heard);
+        w.avoid_only_the_silent(3.0, &mut heard, false);
         let got: Vec<(usize, ObservationSource)> = heard.iter().map(|o| (o.id.index(), o.source)).collect();
         assert_eq!(
             got,
@@ -117,13 +130,19 @@ mod tests {
         // Heard again: followed again; never heard: followed.
         w.hear(&msg(a, 3.0));
         assert!(!w.silent(a, 3.2) && !w.silent((nav + 3) % 4, 100.0) && !w.silent(nav, 100.0));
-        // Back but rejoining: not followed until its newest broadcast says it is back; an older
-        // broadcast arriving late changes nothing.
+        // Back but rejoining: neither followed nor avoided (it avoids the others), except by a
+        // UAV rejoining too; until its newest broadcast says it is back (an older broadcast
+        // arriving late changes nothing).
         w.hear(&StateMsg { rejoining: true, ..msg(a, 3.3) });
-        assert!(w.silent(a, 3.3));
+        let seen = || vec![obs(a, ObservationSource::Onboard), obs(a, ObservationSource::Radio)];
+        let (mut mine, mut theirs) = (seen(), seen());
+        w.avoid_only_the_silent(3.3, &mut mine, false);
+        w.avoid_only_the_silent(3.3, &mut theirs, true);
+        assert!(mine.is_empty(), "{mine:?}");
+        assert_eq!(theirs.iter().map(|o| o.source).collect::<Vec<_>>(), [ObservationSource::Close]);
         w.hear(&msg(a, 3.1));
-        assert!(w.silent(a, 3.4), "a late older broadcast");
+        assert!(w.rejoining(a), "a late older broadcast");
         w.hear(&msg(a, 3.5));
-        assert!(!w.silent(a, 3.5));
+        assert!(!w.rejoining(a) && !w.silent(a, 3.5));
     }
 }
