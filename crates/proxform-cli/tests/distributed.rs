@@ -5,6 +5,14 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// One at a time, the flights whose checks are the paper's tight errors in real time: several
+/// flights with their agents at once on two cores make each one late.
+static ONE_FLIGHT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_flight() -> std::sync::MutexGuard<'static, ()> {
+    ONE_FLIGHT.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_proxform")
 }
@@ -226,6 +234,7 @@ fn worst(dir: &Path, axis: &str) -> f64 {
 
 #[test]
 fn on_their_own_clocks_agents_make_up_a_transport_delay_and_never_act_on_stale_updates() {
+    let _flight = one_flight();
     // Real time, the paper with the world ↔ agent messages delayed each way (queued, never
     // slept). 1 ms costs nothing. 60 ms: the round trip misses the world's 90 ms window, so
     // every command acts a step after its update; the agent decides for that step, through the
@@ -311,6 +320,7 @@ fn finish(mut launcher: Reap) -> (Option<i32>, String) {
 
 #[test]
 fn a_stalled_world_pauses_the_flight_instead_of_replaying_it() {
+    let _flight = one_flight();
     // Real time, 20 s of the paper; the world's process stopped for 1.5 s about 6 s in. It does
     // not run the missed steps back to back on held decisions: the flight's time pauses, the
     // clock's epoch moves, and the run passes.
@@ -328,6 +338,7 @@ fn a_stalled_world_pauses_the_flight_instead_of_replaying_it() {
 
 #[test]
 fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
+    let _flight = one_flight();
     // Real time, a multirotor V of six; UAV3's agent stopped for 4 s about 9 s into the flight.
     // Its UAV flies on its last setpoint, then, uncontrolled, in its autopilot's failsafe: it
     // hovers where it is (PX4's HOLD on offboard loss), and the run says so; the others' agents
@@ -380,6 +391,7 @@ fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
 
 #[test]
 fn a_uav_back_from_a_stall_is_not_followed_until_it_is_near_its_slot() {
+    let _flight = one_flight();
     // Real time, 25 s of the paper (its method, no robust fusion); UAV3's agent stopped for 3 s
     // about 10 s in. Its UAV holds its course (the kinematic vehicle's failsafe) and ends up
     // more than 10 m off; back, its agent says it is rejoining until it is near its slot again,

@@ -419,6 +419,10 @@ fn unix_ns() -> u64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
 }
 
+/// A pass of the agent's loop this much longer than its longest wait
+/// (`Timing::announce_every`) means its process was stopped, not that the world fell silent.
+const STOPPED_AFTER: Duration = Duration::from_secs(2);
+
 /// How long an agent waits.
 #[derive(Debug, Clone, Copy)]
 pub struct Timing {
@@ -458,7 +462,16 @@ pub fn serve(host: &mut Host, vehicle: &mut impl Vehicle, timing: Timing) -> Res
         (Some(e), Phase::Fly) => (unix_ns() as f64 - e as f64) * 1e-9 - s.t_s,
         _ => 0.0,
     };
+    let mut awake = Instant::now();
     loop {
+        // A pass takes at most the wait below and its work; one that took seconds means this
+        // process was stopped (or starved): that silence was its own, not the world's, and it
+        // does not count toward leaving (a 10 s stop made it leave at once on resuming).
+        let gap = awake.elapsed();
+        if gap > timing.announce_every + STOPPED_AFTER {
+            last_heard = (last_heard + gap).min(Instant::now());
+        }
+        awake = Instant::now();
         let own_clock = epoch_ns.is_some();
         let mut event = vehicle.next(if own_clock { tick } else { timing.announce_every })?;
         // Everything that is waiting, before deciding: the newest counts.
