@@ -20,8 +20,9 @@ import zenoh
 
 #: Header: magic "PXF", schema version, kind, three zero bytes.
 HEADER = struct.Struct("<3sBB3x")
-#: A state message's body: UAV (from 1), step, time (s), 9 state numbers (SI, radians).
-STATE = struct.Struct("<IQd9d")
+#: A state message's body: UAV (from 1), step, time (s), 9 state numbers (SI, radians), and
+#: whether its agent is rejoining (back after flying without decisions), 7 zero bytes.
+STATE = struct.Struct("<IQd9dB7x")
 VERSION, KIND_STATE = 1, 1
 
 
@@ -32,7 +33,7 @@ def decode_state(payload: bytes) -> tuple[int, int, float, tuple[float, ...]] | 
     magic, version, kind = HEADER.unpack_from(payload)
     if magic != b"PXF" or version != VERSION or kind != KIND_STATE:
         return None
-    uav, k, t, *state = STATE.unpack_from(payload, HEADER.size)
+    uav, k, t, *state, _rejoining = STATE.unpack_from(payload, HEADER.size)
     return uav, k, t, tuple(state)
 
 
