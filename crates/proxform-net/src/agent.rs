@@ -323,14 +323,14 @@ impl Host {
             }
         }
         let latency_s = if latency_s.is_finite() { latency_s.max(0.0) } else { 0.0 };
-        let (t_s, own) = match own_clock {
+        let (t_s, own) = match way_back_s {
             // In lockstep the agent steps at the update's instant, as the simulator does.
-            false => (s.t_s, s.own),
+            None => (s.t_s, s.own),
             // On its own clock, for the instant its command will act ([`acts_at`]). The update
             // and what it perceived are brought forward to it, what it heard to the same instant.
-            true => {
+            Some(way_back_s) => {
                 let dt = self.scenario.dt_s();
-                let t_s = acts_at(s.t_s, latency_s + way_back_s.unwrap_or(latency_s), dt);
+                let t_s = acts_at(s.t_s, latency_s + way_back_s, dt);
                 if t_s - s.t_s > STALE_AFTER_PERIODS * dt + 1e-9 {
                     // Its command would act on a state too old to act on.
                     self.stale += 1;
@@ -361,7 +361,7 @@ impl Host {
                 self.radio.observations(UavId(s.uav - 1), t_s, &own, &mut self.heard);
                 // Silence is judged at the update's own instant (a neighbour's last broadcast
                 // is of an update like this one), not at the instant the command will act.
-                self.watch.avoid_only_the_silent(s.t_s, &mut self.heard, h.rejoining);
+                self.watch.leave_out_the_unfollowed(s.t_s, &mut self.heard, h.rejoining);
                 (t_s, own)
             }
         };

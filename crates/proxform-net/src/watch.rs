@@ -71,7 +71,7 @@ impl ControlWatch {
     /// observations for avoidance only; a rejoining one's none, unless this agent is
     /// rejoining itself (`me_rejoining`: then for avoidance only); neither one's radio reports
     /// and relays.
-    pub fn avoid_only_the_silent(&mut self, t_s: f64, heard: &mut Vec<Observation>, me_rejoining: bool) {
+    pub fn leave_out_the_unfollowed(&mut self, t_s: f64, heard: &mut Vec<Observation>, me_rejoining: bool) {
         let before = heard.len();
         heard.retain(|o| {
             let j = o.id.index();
@@ -120,7 +120,7 @@ mod tests {
             obs(nav, ObservationSource::Onboard),
         ];
         // At 3 s, a was last heard 2 s ago (more than 5 periods of 0.1 s), b just now.
-        w.avoid_only_the_silent(3.0, &mut heard, false);
+        w.leave_out_the_unfollowed(3.0, &mut heard, false);
         let got: Vec<(usize, ObservationSource)> = heard.iter().map(|o| (o.id.index(), o.source)).collect();
         assert_eq!(
             got,
@@ -136,8 +136,8 @@ mod tests {
         w.hear(&StateMsg { rejoining: true, ..msg(a, 3.3) });
         let seen = || vec![obs(a, ObservationSource::Onboard), obs(a, ObservationSource::Radio)];
         let (mut mine, mut theirs) = (seen(), seen());
-        w.avoid_only_the_silent(3.3, &mut mine, false);
-        w.avoid_only_the_silent(3.3, &mut theirs, true);
+        w.leave_out_the_unfollowed(3.3, &mut mine, false);
+        w.leave_out_the_unfollowed(3.3, &mut theirs, true);
         assert!(mine.is_empty(), "{mine:?}");
         assert_eq!(theirs.iter().map(|o| o.source).collect::<Vec<_>>(), [ObservationSource::Close]);
         w.hear(&msg(a, 3.1));
