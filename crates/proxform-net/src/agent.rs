@@ -31,7 +31,7 @@ use proxform_scenario::Scenario;
 use crate::link::LinkEstimate;
 use crate::radio::AgentRadio;
 use crate::transport::TransportError;
-use crate::vehicle::{Event, Vehicle};
+use crate::vehicle::{Answer, Event, Vehicle};
 use crate::watch::ControlWatch;
 use crate::wire::{
     ClockMode, CommandMsg, Phase, Presence, SenseMsg, StateMsg, COMMAND_WINDOW_PERIODS, STALE_AFTER_PERIODS,
@@ -220,7 +220,7 @@ impl Host {
     /// Own clock: the decisions due at `now` (a hosted UAV with a new update and at least
     /// [`MIN_DECISION_PERIODS`] of a period since its last decision), each with the state it broadcasts; `age_of` gives an
     /// update's age on the shared clock (s).
-    pub fn decide_due(&mut self, now: Instant, age_of: impl Fn(&SenseMsg) -> f64) -> Vec<(CommandMsg, StateMsg)> {
+    pub fn decide_due(&mut self, now: Instant, age_of: impl Fn(&SenseMsg) -> f64) -> Vec<Answer> {
         let half = Duration::from_secs_f64(MIN_DECISION_PERIODS * self.scenario.dt_s());
         let due: Vec<u32> = self
             .agents
@@ -283,14 +283,14 @@ impl Host {
     /// predicted to a later instant than the own state would be compared with a state that
     /// is not there: at 70 m/s, 1 ms is 7 cm). The latency is reported with the command; what
     /// it costs is a decision that reaches the vehicle too late for its period.
-    pub fn handle(&mut self, s: &SenseMsg, latency_s: f64) -> Option<(CommandMsg, StateMsg)> {
+    pub fn handle(&mut self, s: &SenseMsg, latency_s: f64) -> Option<Answer> {
         self.step(s, latency_s, None)
     }
 
     /// Steps on `s`, `latency_s` old on the shared clock: in lockstep (`way_back_s` None) at the
     /// update's instant; on the own clock, its command expected to take `way_back_s` to the
     /// world, at the instant it will act, with what it heard of the broadcasters.
-    fn step(&mut self, s: &SenseMsg, latency_s: f64, way_back_s: Option<f64>) -> Option<(CommandMsg, StateMsg)> {
+    fn step(&mut self, s: &SenseMsg, latency_s: f64, way_back_s: Option<f64>) -> Option<Answer> {
         let own_clock = way_back_s.is_some();
         let n = self.scenario.len();
         let Some(h) = self.agents.get_mut(&s.uav) else {
@@ -384,7 +384,8 @@ impl Host {
         }
         h.stepped_t_s = Some(t_s);
         let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s, age_s: latency_s, decision, digest: h.digest };
-        Some((command, StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own, rejoining: h.rejoining }))
+        let state = StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own, rejoining: h.rejoining };
+        Some(Answer { command, state, decided_at: own })
     }
 }
 
@@ -482,8 +483,8 @@ pub fn serve(host: &mut Host, vehicle: &mut impl Vehicle, timing: Timing) -> Res
                     last_heard = Instant::now();
                     if epoch_ns.is_some() && s.phase == Phase::Fly {
                         host.keep(s);
-                    } else if let Some((command, state)) = host.handle(&s, age(epoch_ns, &s)) {
-                        vehicle.command(&command, &state)?;
+                    } else if let Some(answer) = host.handle(&s, age(epoch_ns, &s)) {
+                        vehicle.command(&answer)?;
                     }
                 }
                 Event::State(m) => host.hear(&m),
@@ -503,8 +504,8 @@ pub fn serve(host: &mut Host, vehicle: &mut impl Vehicle, timing: Timing) -> Res
             }
             event = vehicle.next(Duration::ZERO)?;
         }
-        for (command, state) in host.decide_due(Instant::now(), |s| age(epoch_ns, s)) {
-            vehicle.command(&command, &state)?;
+        for answer in host.decide_due(Instant::now(), |s| age(epoch_ns, s)) {
+            vehicle.command(&answer)?;
         }
         if last_heard.elapsed() >= timing.idle_exit {
             return Ok(Ended::Idle);
@@ -553,7 +554,7 @@ mod tests {
         }
         let out = host.decide_due(now, |_| 0.0);
         assert_eq!(out.len(), 1);
-        assert_eq!((out[0].0.k, host.counts().skipped), (12, 2));
+        assert_eq!((out[0].command.k, host.counts().skipped), (12, 2));
         // An older update after it is not stepped on; nothing new, nothing decided.
         host.keep(update(&sc, 2, 11));
         assert!(host.decide_due(now + Duration::from_millis(100), |_| 0.0).is_empty());
@@ -592,7 +593,7 @@ mod tests {
         let mut decide = |k: u64, dy: f64, after_ms: u64| {
             host.keep(at(k, dy));
             let out = host.decide_due(t0 + Duration::from_millis(after_ms), |_| 0.0);
-            out[0].1.rejoining
+            out[0].state.rejoining
         };
         for k in 0..5 {
             assert!(!decide(k, 0.0, 100 * k), "in its slot from the start");
@@ -612,13 +613,17 @@ mod tests {
         host.keep(update(&sc, 2, 10));
         let first = host.decide_due(t0, |_| 0.06);
         // 2 × 60 ms is past the 90 ms window: the command acts one step later, at 1.1 s.
-        assert!((first[0].0.t_s - 1.1).abs() < 1e-9, "{:?}", first[0].0);
+        assert!((first[0].command.t_s - 1.1).abs() < 1e-9, "{:?}", first[0].command);
         // The next update's own state is brought through that command to 1.2 s.
         let mut u = update(&sc, 2, 11);
         u.own[state::VY] += 0.3;
         host.keep(u.clone());
         let second = host.decide_due(t0 + Duration::from_millis(100), |_| 0.06);
-        assert!((second[0].0.t_s - (1.1 + dt)).abs() < 1e-9);
+        assert!((second[0].command.t_s - (1.1 + dt)).abs() < 1e-9);
+        // Decided at that state: what an autopilot's absolute targets start from.
+        let through = sc.agent(UavId(1)).predict_period(&u.own, Some(&first[0].command.decision));
+        assert_eq!(second[0].decided_at, through);
+        assert_ne!(second[0].decided_at, u.own);
         // A quick update after slow ones: its command is expected back as slowly as they came
         // (40 ms out and 60 ms back is past the window), so it is decided for the next step, not
         // for one it would miss (taken as symmetric, 80 ms, it was decided for its own step).
@@ -626,10 +631,10 @@ mod tests {
         quick.own[state::VY] += 0.3;
         host.keep(quick);
         let third = host.decide_due(t0 + Duration::from_millis(200), |_| 0.04);
-        assert!((third[0].0.t_s - (1.2 + dt)).abs() < 1e-9, "{:?}", third[0].0);
+        assert!((third[0].command.t_s - (1.2 + dt)).abs() < 1e-9, "{:?}", third[0].command);
         // Lockstep steps on the update's own instant.
         let mut lock = Host::new(sc.clone(), &[2]).expect("a follower");
-        let (c, _) = lock.handle(&u, 0.06).expect("stepped");
-        assert_eq!(c.t_s, u.t_s);
+        let a = lock.handle(&u, 0.06).expect("stepped");
+        assert_eq!((a.command.t_s, a.decided_at), (u.t_s, u.own));
     }
 }

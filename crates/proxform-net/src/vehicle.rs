@@ -1,10 +1,13 @@
 //! What an agent sees of the UAVs it runs: each update period, a UAV's own measured state and
-//! what it perceived and heard ([`SenseMsg`]) in; its decision ([`CommandMsg`]) out. The
+//! what it perceived and heard ([`SenseMsg`]) in; its answer ([`Answer`]: the decision, its
+//! broadcast and the state it was decided at) out. The
 //! network world implements it here ([`NetVehicle`]); a MAVLink autopilot
 //! ([`crate::mavlink::vehicle::MavlinkVehicle`]: own state from the autopilot, the command as a
 //! setpoint) implements the same trait.
 
 use std::time::Duration;
+
+use proxform_core::State9;
 
 use crate::keys::Swarm;
 use crate::transport::{Inbox, Publisher, Received, Session, Token, TransportError};
@@ -23,13 +26,27 @@ pub enum Event {
     Idle,
 }
 
+/// What an agent answers an update with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Answer {
+    /// The decision, for the instant it acts at (`command.t_s`).
+    pub command: CommandMsg,
+    /// The state its UAV broadcasts: the update's own state, at the update's instant.
+    pub state: StateMsg,
+    /// The own state the decision was made at: the update's, brought forward to the instant
+    /// the command acts at (through the commands still on their way). An autopilot's absolute
+    /// targets are this state after the decision's input; from the update's own state they
+    /// would undo the commands on their way.
+    pub decided_at: State9,
+}
+
 /// The UAVs an agent process runs, as it sees them.
 pub trait Vehicle {
     /// The next event, waiting at most `timeout`.
     fn next(&mut self, timeout: Duration) -> Result<Event, TransportError>;
-    /// The decision for an update of UAV `command.uav`, and the state the UAV now believes it
-    /// has (its broadcast).
-    fn command(&mut self, command: &CommandMsg, state: &StateMsg) -> Result<(), TransportError>;
+    /// The answer to an update of UAV `answer.command.uav`: its decision, and the state the UAV
+    /// now believes it has (its broadcast).
+    fn command(&mut self, answer: &Answer) -> Result<(), TransportError>;
     /// Says that the UAVs are alive (or leaving).
     fn announce(&mut self, presence: Presence) -> Result<(), TransportError>;
     /// From now on, also delivers the broadcasts of `uavs` (from 1) as [`Event::State`]: an
@@ -107,10 +124,10 @@ impl Vehicle for NetVehicle {
         }
     }
 
-    fn command(&mut self, command: &CommandMsg, state: &StateMsg) -> Result<(), TransportError> {
-        if let Some((_, cmd, st)) = self.commands.iter().find(|(u, _, _)| *u == command.uav) {
-            cmd.send(&Message::Command(*command))?;
-            st.send(&Message::State(*state))?;
+    fn command(&mut self, answer: &Answer) -> Result<(), TransportError> {
+        if let Some((_, cmd, st)) = self.commands.iter().find(|(u, _, _)| *u == answer.command.uav) {
+            cmd.send(&Message::Command(answer.command))?;
+            st.send(&Message::State(answer.state))?;
         }
         Ok(())
     }

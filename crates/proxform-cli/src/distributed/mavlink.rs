@@ -108,35 +108,39 @@ impl MavlinkSwarm {
         }
     }
 
-    /// The decision that flies UAV `i` (from 0) at `own` toward its outside setpoint, if an
-    /// outside controller flies it now.
+    /// The decision that flies UAV `i` (from 0), truly at `own`, toward its outside targets, if
+    /// an outside controller flies it now.
     fn decision(&mut self, i: usize, own: &State9) -> Option<Decision> {
         let t = self.start.elapsed().as_secs_f64();
         let s = self.vehicles.get_mut(i)?.served.setpoint(t)?;
         let v = self.frame.velocity_xyz(s.velocity_ned);
         let beta = s.yaw.map(|y| self.frame.yaw(y));
         self.offboard_steps[i] += 1;
-        // A vehicle flown by velocity setpoints (the multirotor) flies them as they are.
-        if let Some(u) = self.setup.vehicle().input_for_setpoint(own, v, beta) {
-            let yaw_rad = beta.unwrap_or(own[state::BETA]);
-            let mut d = Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, u);
-            d.setpoint = Some(proxform_core::Setpoint { velocity_mps: v, yaw_rad });
-            return Some(d);
-        }
-        let [vx, vy, vz] = v;
         let dt = self.setup.params().dt_s;
-        let held = self.setup.vehicle().hold(own, dt);
-        let mut target = held;
-        (target[state::VX], target[state::VY], target[state::VZ]) = (vx, vy, vz);
-        if let Some(beta) = beta {
-            target[state::BETA] = beta;
+        let vehicle = self.setup.vehicle();
+        // The attitude target's roll and pitch, as the vehicle's (α, γ).
+        let attitude = s.attitude.map(|[roll, pitch]| [pitch, roll]);
+        let u = match vehicle.input_for_targets(own, v, beta, attitude, dt) {
+            Some(u) => u,
+            // Targets that do not say what the vehicle's inputs do (the fixed wing): the input
+            // that brings it nearest to them.
+            None => {
+                let held = vehicle.hold(own, dt);
+                let mut target = held;
+                (target[state::VX], target[state::VY], target[state::VZ]) = (v[0], v[1], v[2]);
+                if let Some(beta) = beta {
+                    target[state::BETA] = beta;
+                }
+                self.setup.input_toward(own, &state::difference(&held, &target))
+            }
+        };
+        let mut d = Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, u);
+        // A vehicle flown by velocity setpoints (the multirotor) flies them as they are.
+        if vehicle.takes_velocity_setpoints() {
+            let yaw_rad = beta.unwrap_or(own[state::BETA]);
+            d.setpoint = Some(proxform_core::Setpoint { velocity_mps: v, yaw_rad });
         }
-        // The attitude target, for the vehicle whose attitude is steered apart from its velocity.
-        if let Some([roll, pitch]) = s.attitude {
-            (target[state::GAMMA], target[state::ALPHA]) = (roll, pitch);
-        }
-        let r = state::difference(&held, &target);
-        Some(Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, self.setup.input_toward(own, &r)))
+        Some(d)
     }
 
     /// What the MAVLink side saw.
@@ -220,11 +224,103 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
         if request.phase != proxform_sim::world::remote::Phase::Fly {
             return;
         }
-        let s = request.sensed;
-        for j in 0..s.len() {
-            if let Some(d) = swarm.decision(s.uavs[j].index(), &s.own[j]) {
+        // The autopilot flies its targets from where its vehicle is, not from where the agent
+        // sensed it (that would put the sensor's noise into the flight).
+        for (j, u) in request.sensed.uavs.iter().enumerate() {
+            let Some(truth) = request.truth.get(u.index()) else { continue };
+            if let Some(d) = swarm.decision(u.index(), truth) {
                 out[j] = d;
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proxform_net::mavlink::messages::{
+        AttitudeTargetTypemask, MavCmd, MavFrame, MavMessage, PositionTargetTypemask, COMMAND_LONG_DATA,
+        SET_ATTITUDE_TARGET_DATA, SET_POSITION_TARGET_LOCAL_NED_DATA,
+    };
+    use proxform_net::mavlink::MavHeader;
+    use proxform_sim::world::remote::{holding, Phase, Sensed};
+
+    /// Agents that always hold.
+    struct Holding;
+
+    impl Agents for Holding {
+        fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+            out.clear();
+            out.resize(request.sensed.len(), holding());
+        }
+    }
+
+    #[test]
+    fn a_served_vehicle_flies_its_targets_from_where_it_is_not_from_where_it_was_sensed() {
+        let sc = proxform_scenario::builtin::paper();
+        let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, 47_610).expect("loopback ports")));
+        let (vehicle, dt) = (sc.vehicle().clone(), sc.dt_s());
+        let nav = sc.path().state_at(1.0, [0.0; 3]);
+        let truth: Vec<State9> = (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect();
+        // What UAV 2's agent decided at its true state, as an autopilot is given it.
+        let (lo, hi) = vehicle.input_bounds(&truth[1], dt);
+        let u = lo.zip_map(&hi, |l, h| l + 0.8 * (h - l));
+        let frame = swarm.borrow().frame;
+        let (v, beta) = vehicle.velocity_setpoint(&truth[1], &u, dt);
+        let [alpha, gamma] = vehicle.attitude_setpoint(&truth[1], &u, dt).expect("the paper's vehicle");
+        let vn = frame.velocity_ned(v);
+        let from = MavHeader { system_id: 2, component_id: 191, sequence: 0 };
+        let messages = [
+            MavMessage::SET_POSITION_TARGET_LOCAL_NED(SET_POSITION_TARGET_LOCAL_NED_DATA {
+                vx: vn[0] as f32,
+                vy: vn[1] as f32,
+                vz: vn[2] as f32,
+                yaw: frame.yaw(beta) as f32,
+                type_mask: PositionTargetTypemask::from_bits_truncate(0b1001_1100_0111),
+                target_system: 2,
+                target_component: 1,
+                coordinate_frame: MavFrame::MAV_FRAME_LOCAL_NED,
+                ..Default::default()
+            }),
+            MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+                param1: 1.0,
+                param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
+                param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
+                command: MavCmd::MAV_CMD_DO_SET_MODE,
+                target_system: 2,
+                target_component: 1,
+                ..Default::default()
+            }),
+            MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+                q: proxform_net::mavlink::frame::quaternion([gamma, alpha, frame.yaw(beta)]).map(|x| x as f32),
+                type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE,
+                target_system: 2,
+                target_component: 1,
+                ..Default::default()
+            }),
+        ];
+        {
+            let mut s = swarm.borrow_mut();
+            let t = s.start.elapsed().as_secs_f64();
+            for m in &messages {
+                s.vehicles[1].served.handle(&from, m, t);
+            }
+            assert!(s.offboard(1));
+        }
+        // Its agent sensed it 0.3 m and 0.2 m/s off, 0.01 rad pitched: what it flies does not
+        // carry that error into the flight.
+        let mut sensed = Sensed::default();
+        let mut off = truth[1];
+        (off[state::Y], off[state::VY], off[state::ALPHA]) =
+            (off[state::Y] + 0.3, off[state::VY] + 0.2, off[state::ALPHA] + 0.01);
+        sensed.uavs.push(proxform_core::UavId(1));
+        sensed.own.push(off);
+        sensed.spans.push(0..0);
+        let request = StepRequest { run: 0, k: 10, t_s: 1.0, phase: Phase::Fly, sensed: &sensed, truth: &truth };
+        let mut out = Vec::new();
+        WithMavlink { agents: &mut Holding, swarm: swarm.clone() }.decide(&request, &mut out);
+        for j in 0..vehicle.n_inputs() {
+            assert!((out[0].input[j] - u[j]).abs() < 1e-5, "input {j}: {} for {}", out[0].input[j], u[j]);
         }
     }
 }

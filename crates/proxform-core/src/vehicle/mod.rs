@@ -280,6 +280,42 @@ impl VehicleModel {
         }
     }
 
+    /// The input with which an autopilot at the true state `x` flies its targets: velocity `v`
+    /// (world frame, m/s), yaw (β, rad; None: keep the present one) and, for the vehicle whose
+    /// attitude its inputs steer apart from its velocity (the paper's kinematic vehicle), an
+    /// attitude (pitch α, roll γ; rad; as [`Self::attitude_setpoint`] gives it; None: keep the
+    /// present one). The multirotor's are its
+    /// setpoints ([`Self::input_for_setpoint`]); the kinematic vehicle's reach the targets in
+    /// one period as far as its per-step bounds at `x` allow (an agent's own input, given
+    /// back, where it decided at `x`) over the period `dt`. None for the fixed wing, whose bank and load factor the
+    /// targets do not say.
+    pub fn input_for_targets(
+        &self,
+        x: &State9,
+        v: [f64; 3],
+        yaw: Option<f64>,
+        attitude: Option<[f64; 2]>,
+        dt: f64,
+    ) -> Option<Input> {
+        use crate::state::{ALPHA, BETA, GAMMA, VX};
+        match self {
+            VehicleModel::Multirotor(_) => self.input_for_setpoint(x, v, yaw),
+            VehicleModel::Kinematic(m) => {
+                let mut u = Input::zeros();
+                for k in 0..3 {
+                    u[k] = v[k] - x[VX + k];
+                }
+                if let Some([alpha, gamma]) = attitude {
+                    (u[3], u[5]) = (alpha - x[ALPHA], gamma - x[GAMMA]);
+                }
+                u[4] = yaw.map_or(0.0, |y| crate::angle::wrap_pi(y - x[BETA]));
+                let (lo, hi) = m.input_bounds(x, dt);
+                Some(u.zip_map(&lo, f64::max).zip_map(&hi, f64::min))
+            }
+            VehicleModel::FixedWing(_) => None,
+        }
+    }
+
     /// The input that gives an autopilot the velocity setpoint `v` (world frame, m/s) and yaw
     /// `yaw` (β, rad; None: keep the present one) at `x`, where the vehicle is flown by such
     /// setpoints (the multirotor; None for the others, whose inputs steer their attitude too:
@@ -436,5 +472,35 @@ mod tests {
         assert!(!m.plausible(&x, &Input::zeros(), Some(&fast), dt), "1 km/s");
         let spin = Setpoint { velocity_mps: [1.0, 0.0, 0.0], yaw_rad: 1e9 };
         assert!(!m.plausible(&x, &Input::zeros(), Some(&spin), dt), "not an angle");
+    }
+
+    #[test]
+    fn an_autopilot_given_the_targets_of_an_input_flies_that_input() {
+        use crate::state::{ALPHA, BETA, GAMMA, VX};
+        let dt = 0.1;
+        let mut x = State9::zeros();
+        (x[VX], x[VX + 1], x[ALPHA], x[BETA], x[GAMMA]) = (60.0, 0.4, 0.01, 3.1, -0.02);
+        for v in
+            [VehicleModel::Kinematic(KinematicModel::default()), VehicleModel::Multirotor(MultirotorModel::default())]
+        {
+            let (lo, hi) = v.input_bounds(&x, dt);
+            let u = lo.zip_map(&hi, |l, h| l + 0.7 * (h - l));
+            let (vel, yaw) = v.velocity_setpoint(&x, &u, dt);
+            let back = v.input_for_targets(&x, vel, Some(yaw), v.attitude_setpoint(&x, &u, dt), dt).expect("targets");
+            for j in 0..v.n_inputs() {
+                assert!((back[j] - u[j]).abs() < 1e-12, "{v:?}: input {j}: {} for {}", back[j], u[j]);
+            }
+        }
+        // Targets beyond what the kinematic vehicle does in a period are flown as far as it can;
+        // a velocity target alone keeps the attitude.
+        let k = VehicleModel::Kinematic(KinematicModel::default());
+        let (lo, hi) = k.input_bounds(&x, dt);
+        let far = k.input_for_targets(&x, [90.0, -50.0, 0.4], None, Some([-1.0, 1.0]), dt).expect("targets");
+        assert_eq!((far[0], far[1], far[3], far[4], far[5]), (hi[0], lo[1], lo[3], 0.0, hi[5]));
+        let level = k.input_for_targets(&x, [60.0, 0.4, 0.0], None, None, dt).expect("targets");
+        assert_eq!((level[3], level[4], level[5]), (0.0, 0.0, 0.0));
+        assert!(VehicleModel::FixedWing(FixedWingModel::default())
+            .input_for_targets(&x, [19.0, 0.0, 0.0], None, None, dt)
+            .is_none());
     }
 }

@@ -13,3 +13,5 @@ pub mod vehicle;
 
 /// The messages of the common dialect, as the `mavlink` crate generates them.
 pub use ::mavlink::dialects::common as messages;
+/// Who sent a message (system, component, sequence).
+pub use ::mavlink::MavHeader;

@@ -24,8 +24,8 @@ use super::autopilot::{Autopilot, Safety, Verdict};
 use super::frame::Frame;
 use super::modes::Mode;
 use crate::transport::TransportError;
-use crate::vehicle::{Event, NetVehicle, Vehicle};
-use crate::wire::{ClockMode, CommandMsg, Phase, Presence, SenseMsg, StateMsg};
+use crate::vehicle::{Answer, Event, NetVehicle, Vehicle};
+use crate::wire::{ClockMode, Phase, Presence, SenseMsg};
 
 /// How often a mode is asked for again while the autopilot is not in it.
 const ASK_EVERY: Duration = Duration::from_millis(500);
@@ -224,26 +224,28 @@ impl Vehicle for MavlinkVehicle {
         }
     }
 
-    fn command(&mut self, command: &CommandMsg, state: &StateMsg) -> Result<(), TransportError> {
+    fn command(&mut self, answer: &Answer) -> Result<(), TransportError> {
         let now = Instant::now();
+        let command = &answer.command;
         if self.sensing == Sensing::Autopilot && self.clock.is_none() {
             // Before the flight: nothing for the autopilot.
-            return self.net.command(command, state);
+            return self.net.command(answer);
         }
         if self.verdict(now) == Verdict::Fly {
-            // The agent's setpoint (absolute); before its first, the state it was given held.
+            // The agent's setpoint (absolute), or the velocity and yaw its input reaches from
+            // the state it was decided at (not the update's: that would undo the commands
+            // still on their way).
+            let at = &answer.decided_at;
             let (v, beta) = match command.decision.setpoint {
                 Some(sp) => (sp.velocity_mps, sp.yaw_rad),
-                None => self.model.velocity_setpoint(&state.state, &command.decision.input, self.dt_s),
+                None => self.model.velocity_setpoint(at, &command.decision.input, self.dt_s),
             };
             let (v, yaw) = (self.frame.velocity_ned(v), self.frame.yaw(beta));
             let ms = now.duration_since(self.boot).as_millis() as u32;
             if self.autopilot.send_velocity(v, yaw, ms).map_err(io)? {
                 self.setpoints += 1;
                 // The attitude too, where the vehicle's inputs steer it apart from its velocity.
-                if let Some([alpha, gamma]) =
-                    self.model.attitude_setpoint(&state.state, &command.decision.input, self.dt_s)
-                {
+                if let Some([alpha, gamma]) = self.model.attitude_setpoint(at, &command.decision.input, self.dt_s) {
                     self.autopilot.send_attitude([gamma, alpha, yaw], ms).map_err(io)?;
                 }
                 self.ask(Mode::Offboard, now)?;
@@ -251,7 +253,7 @@ impl Vehicle for MavlinkVehicle {
         } else {
             self.guard(now)?;
         }
-        self.net.command(command, state)
+        self.net.command(answer)
     }
 
     fn announce(&mut self, presence: Presence) -> Result<(), TransportError> {

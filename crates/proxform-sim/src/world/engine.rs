@@ -562,7 +562,7 @@ impl Outside<'_> {
     /// The agents' decisions on what was sensed, by UAV; `truth` is every UAV's true state and
     /// `(vehicle, dt)` what flies them.
     fn ask(&mut self, k: u64, t_s: f64, phase: Phase, truth: &[State9], (vehicle, dt): (&VehicleModel, f64)) {
-        let request = StepRequest { run: self.run, k, t_s, phase, sensed: &self.sensed };
+        let request = StepRequest { run: self.run, k, t_s, phase, sensed: &self.sensed, truth };
         self.agents.decide(&request, &mut self.decisions);
         self.by_uav.iter_mut().for_each(|d| *d = None);
         for (j, u) in self.sensed.uavs.iter().enumerate() {

@@ -72,6 +72,9 @@ pub struct StepRequest<'a> {
     pub phase: Phase,
     /// What each active follower sensed.
     pub sensed: &'a Sensed,
+    /// Every UAV's true state, by UAV: for the world's own simulated autopilots, which fly
+    /// their targets from where their vehicle is (never sent to an agent).
+    pub truth: &'a [State9],
 }
 
 /// The decision of an agent that did not answer in time: hold the course (no new input).
