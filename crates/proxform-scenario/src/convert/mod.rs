@@ -173,6 +173,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         let reassign_on_loss = reassign_on_loss.then(|| placement::assign_by(&spec.initial)).transpose()?;
+        placement::assignment_within_bounds(&placement, reassign_on_loss, n)?;
         feasibility::path_within_vehicle(&path, &vehicle, duration_s, dt_s)?;
         feasibility::course_defined(&path, &formation, duration_s)?;
         feasibility::slots_within_vehicle(

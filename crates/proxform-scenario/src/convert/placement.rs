@@ -209,3 +209,52 @@ pub fn placement(
         )),
     }
 }
+
+/// Refuses a scenario whose slot assignments (at the start with `initial.assign_slots`, after
+/// each loss with `formation.reassign_on_loss`) would take more than seconds for its `n` UAVs
+/// ([`proxform_core::assignment::max_assigned`]).
+pub fn assignment_within_bounds(
+    placement: &Placement,
+    reassign_on_loss: Option<AssignBy>,
+    n: usize,
+) -> Result<(), SpecError> {
+    use proxform_core::assignment::{max_assigned, MAX_CANDIDATES};
+    let at_start = match placement {
+        Placement::Box { assign, .. } | Placement::Disc { assign, .. } | Placement::Row { assign, .. } => *assign,
+        Placement::Slots | Placement::Explicit(_) => None,
+    };
+    let followers = n.saturating_sub(1);
+    if let Some(by) = at_start {
+        let max = max_assigned(by, false);
+        if followers > max {
+            return Err(err(
+                "initial.assign_slots",
+                format!(
+                    "{followers} followers are more than the {max} an assignment by the {} distance takes \
+                     (its work grows with the cube of their number: 10 000 would take hours); \
+                     assign_slots = false flies them to the slots in draw order{}",
+                    by.label(),
+                    match by {
+                        AssignBy::Largest =>
+                            format!(", and assign_by = \"total\" takes up to {}", max_assigned(AssignBy::Total, false)),
+                        AssignBy::Total => String::new(),
+                    }
+                ),
+            ));
+        }
+    }
+    if let Some(by) = reassign_on_loss {
+        let max = max_assigned(by, true);
+        if n > max {
+            return Err(err(
+                "formation.reassign_on_loss",
+                format!(
+                    "{n} UAVs are more than the {max} re-assigned after a loss by the {} distance \
+                     (each loss solves up to {MAX_CANDIDATES} assignments, whose work grows with the cube of their number)",
+                    by.label()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
