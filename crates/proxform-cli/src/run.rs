@@ -118,7 +118,7 @@ fn distributed(
     );
     eprintln!(
         "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} on \
-         another UAV's key, {} refused (not a number, or for an instant ahead of the flight; held), {} lost to [network] faults; \
+         another UAV's key, {} refused (not a number, beyond what the vehicle can do, or for an instant ahead of the flight; held), {} lost to [network] faults; \
          the network's round trip (before [network] delay_s) median \
          {:.3} ms, p99 {:.3} ms",
         d.processes,

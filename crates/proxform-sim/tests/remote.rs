@@ -111,9 +111,15 @@ struct Poisoned {
     inner: LocalAgents,
     uav: u32,
     value: f64,
+    /// The UAVs whose decisions the world refused, as it said.
+    refused: std::rc::Rc<std::cell::RefCell<Vec<u32>>>,
 }
 
 impl Agents for Poisoned {
+    fn refused(&mut self, uav: proxform_core::UavId) {
+        self.refused.borrow_mut().push(uav.0);
+    }
+
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
         self.inner.decide(request, out);
         for (j, u) in request.sensed.uavs.iter().enumerate() {
@@ -131,12 +137,15 @@ fn a_decision_with_a_non_finite_or_impossible_number_is_never_applied() {
     // Non-finite, and finite far beyond what the vehicle can do in a period (a UAV flown on
     // 1e300 ended at 2.9e303 m, then NaN).
     for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300, -1e6] {
-        let agents = Poisoned { inner: LocalAgents::new(&sc), uav: 2, value };
+        let refused = std::rc::Rc::default();
+        let agents = Poisoned { inner: LocalAgents::new(&sc), uav: 2, value, refused: std::rc::Rc::clone(&refused) };
         let mut sim = Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents));
         let start = sim.states()[2];
         for _ in 0..50 {
             sim.step();
         }
+        // Each refusal was said, for that UAV alone, every flight step.
+        assert_eq!(*refused.borrow(), vec![2; 50], "{value}");
         // UAV3 held its course (as a UAV whose agent does not answer), its state finite.
         let now = sim.states()[2];
         assert!(now.iter().all(|v| v.is_finite()), "{value}: {now:?}");

@@ -211,6 +211,10 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
         self.agents.failsafe(uav)
     }
 
+    fn refused(&mut self, uav: proxform_core::UavId) {
+        self.agents.refused(uav);
+    }
+
     fn navigator(&mut self, _: f64, truth: &State9) -> Option<Decision> {
         let mut swarm = self.swarm.borrow_mut();
         let nav = swarm.navigator;

@@ -95,6 +95,10 @@ impl<A: Agents> Agents for Supervised<'_, A> {
         self.agents.failsafe(uav)
     }
 
+    fn refused(&mut self, uav: UavId) {
+        self.agents.refused(uav);
+    }
+
     fn navigator(&mut self, t_s: f64, truth: &proxform_core::State9) -> Option<Decision> {
         self.agents.navigator(t_s, truth)
     }

@@ -54,7 +54,9 @@ pub struct NetStats {
     /// Messages on another UAV's key than their own (a Command for UAV 3 put on UAV 2's key):
     /// never taken.
     pub misplaced: u64,
-    /// Decisions refused for a non-finite number (held instead; also counted as missing).
+    /// Decisions refused: a non-finite number (also counted as missing), far beyond what the
+    /// vehicle can do in a period (the world's check, [`Agents::refused`]), or for an instant
+    /// ahead of the flight. The UAV holds instead.
     pub refused: u64,
     /// Round trips (send of a step's first sense message to each answer), seconds.
     pub round_trips_s: Vec<f64>,
@@ -609,6 +611,10 @@ impl Agents for NetAgents {
     fn failsafe(&mut self, uav: proxform_core::UavId) -> bool {
         let held = self.own_clock.get(&(uav.0 + 1)).map_or(0, |o| o.held_periods);
         !self.live(uav.0 + 1) || f64::from(held) * self.dt_s >= FAILSAFE_AFTER_S - 1e-9
+    }
+
+    fn refused(&mut self, _: proxform_core::UavId) {
+        self.stats.refused += 1;
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {

@@ -572,9 +572,13 @@ impl Outside<'_> {
             // over: one flown by setpoints then hovers where it is (PX4's offboard loss), the
             // others hold their course.
             let i = u.index();
-            let d = self.decisions.get(j).copied().filter(|d| {
-                !self.absent[i] && d.is_finite() && vehicle.plausible(&truth[i], &d.input, d.setpoint.as_ref(), dt)
-            });
+            let valid = |d: &Decision| d.is_finite() && vehicle.plausible(&truth[i], &d.input, d.setpoint.as_ref(), dt);
+            let given = self.decisions.get(j).copied().filter(|_| !self.absent[i]);
+            let d = given.filter(valid);
+            // (In the warm-up the inputs are discarded anyway.)
+            if given.is_some() && d.is_none() && phase == Phase::Fly {
+                self.agents.refused(*u);
+            }
             let failsafe = || Decision { setpoint: vehicle.failsafe_hold(&truth[i]), ..holding() };
             self.by_uav[i] = Some(match self.failsafe[i] {
                 true => failsafe(),
@@ -585,12 +589,11 @@ impl Outside<'_> {
         // decision is; one that is not valid leaves it on its path).
         if phase == Phase::Fly {
             let nav = self.navigator;
-            if let Some(d) = self
-                .agents
-                .navigator(t_s, &truth[nav])
-                .filter(|d| d.is_finite() && vehicle.plausible(&truth[nav], &d.input, d.setpoint.as_ref(), dt))
-            {
-                self.by_uav[nav] = Some(d);
+            if let Some(d) = self.agents.navigator(t_s, &truth[nav]) {
+                match d.is_finite() && vehicle.plausible(&truth[nav], &d.input, d.setpoint.as_ref(), dt) {
+                    true => self.by_uav[nav] = Some(d),
+                    false => self.agents.refused(proxform_core::UavId(nav as u32)),
+                }
             }
         }
     }

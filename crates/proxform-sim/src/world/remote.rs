@@ -106,6 +106,14 @@ pub trait Agents {
         true
     }
 
+    /// Says that UAV `uav`'s decision this step was refused: a non-finite number in it, or far
+    /// beyond what its vehicle can do in a period ([`proxform_core::VehicleModel::plausible`]).
+    /// The UAV holds, as if its agent had not answered. For those that report on the agents
+    /// (by default nothing is done).
+    fn refused(&mut self, uav: UavId) {
+        let _ = uav;
+    }
+
     /// A decision that flies the navigator this flight step instead of its path (an outside
     /// controller in charge of it: a MAVLink offboard program), given its true state `truth`
     /// at time `t_s` (s); None (the default) while it flies its path.
@@ -126,6 +134,10 @@ impl<A: Agents + ?Sized> Agents for &mut A {
 
     fn failsafe(&mut self, uav: UavId) -> bool {
         (**self).failsafe(uav)
+    }
+
+    fn refused(&mut self, uav: UavId) {
+        (**self).refused(uav);
     }
 
     fn navigator(&mut self, t_s: f64, truth: &State9) -> Option<Decision> {
