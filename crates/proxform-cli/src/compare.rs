@@ -87,7 +87,7 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
 pub fn run(args: &CompareArgs) -> Result<ExitCode> {
     let cmp = load(args)?;
     let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(&cmp.name));
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let _folder = crate::files::OutputFolder::new(&out, "output directory")?;
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
     let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(flights(&cmp)) };

@@ -108,6 +108,33 @@ pub fn lock_folder(dir: &Path) -> Result<FolderLock> {
     }
 }
 
+/// A command's output folder, made (with its parents) when it was not there. A folder this
+/// command made and left empty (it failed before writing anything: a refused merge, a
+/// scenario refused after the folder was made) is removed again when the value is dropped, so
+/// that an error leaves nothing behind; one that was there, or holds anything, is left.
+pub struct OutputFolder {
+    path: PathBuf,
+    made: bool,
+}
+
+impl OutputFolder {
+    /// Makes `path` if needed; `what` names it in errors.
+    pub fn new(path: &Path, what: &str) -> Result<Self> {
+        let made = !path.exists();
+        std::fs::create_dir_all(path).with_context(|| format!("cannot create {what} {}", path.display()))?;
+        Ok(Self { path: path.to_path_buf(), made })
+    }
+}
+
+impl Drop for OutputFolder {
+    fn drop(&mut self) {
+        if self.made {
+            // Removes an empty folder only.
+            let _ = std::fs::remove_dir(&self.path);
+        }
+    }
+}
+
 /// A folder of this process's own in the temporary folder, readable by its owner only (0700),
 /// made fresh (never one that was there: a name another user planted is passed over) and removed
 /// with all it holds when dropped: on every return and error, and on Ctrl-C, which ends the

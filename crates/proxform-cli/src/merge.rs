@@ -32,8 +32,7 @@ pub fn run(args: &MergeArgs) -> Result<ExitCode> {
             bail!("{} does not exist (a shard's output folder holds its runs.journal)", j.display());
         }
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create output directory {}", args.out.display()))?;
+    let _folder = crate::files::OutputFolder::new(&args.out, "output directory")?;
     let out = args.out.canonicalize().with_context(|| format!("cannot open {}", args.out.display()))?;
     let _lock = crate::files::lock_folder(&out)?;
     for j in &journals {

@@ -351,7 +351,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     };
     let at_once = workers.min(usize::try_from(args.runs).unwrap_or(usize::MAX)).max(1);
     crate::memory::check_flights(&scenario, engine, at_once, crate::memory::available_bytes())?;
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let _folder = crate::files::OutputFolder::new(&out, "output directory")?;
     let _lock = crate::files::lock_folder(&out)?;
     // Outputs a link or FIFO would take are refused before anything flies.
     for f in ["summary.json", "runs.csv", "trajectories.csv", crate::batch::JOURNAL] {

@@ -121,8 +121,10 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
     }
     let name = cells.first().map_or("sweep", |c| c.1.name()).to_string();
     let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(&format!("sweep-{name}")));
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let _folder = crate::files::OutputFolder::new(&out, "output directory")?;
     let _lock = crate::files::lock_folder(&out)?;
+    let digits = cells.len().to_string().len().max(3);
+    remove_stale_cells(&out, cells.len())?;
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(args.threads).build().context("cannot start worker threads")?;
     let total = args.runs.saturating_mul(cells.len() as u64);
@@ -133,7 +135,6 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let digits = cells.len().to_string().len().max(3);
     let csv_path = out.join("sweep.csv");
     let mut table = csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(&csv_path)?));
     let mut all_pass = true;
@@ -193,4 +194,41 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
         out.display()
     )?;
     Ok(if all_pass { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// Removes the cells an earlier sweep into `out` left beyond this one's `cells`
+/// (`cell-004` after a sweep of three): the folder then holds this sweep's cells alone. Only a
+/// folder named as a cell that holds nothing but a batch's outputs is removed; another is
+/// refused, named, before anything is removed or runs.
+fn remove_stale_cells(out: &std::path::Path, cells: usize) -> Result<()> {
+    const OUTPUTS: [&str; 4] = ["runs.csv", "runs.journal", "summary.json", "trajectories.csv"];
+    let Ok(entries) = std::fs::read_dir(out) else { return Ok(()) };
+    let mut stale = Vec::new();
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let Some(k) = name.strip_prefix("cell-").and_then(|n| n.parse::<usize>().ok()) else { continue };
+        if k >= 1 && k <= cells {
+            continue;
+        }
+        let path = e.path();
+        let ours = e.file_type().is_ok_and(|t| t.is_dir())
+            && std::fs::read_dir(&path).is_ok_and(|inside| {
+                inside.flatten().all(|f| {
+                    f.file_type().is_ok_and(|t| t.is_file())
+                        && OUTPUTS.contains(&f.file_name().to_string_lossy().as_ref())
+                })
+            });
+        if !ours {
+            bail!(
+                "{} is left from an earlier sweep with more cells and holds more than a batch's outputs: \
+                 move it away, or give another --out",
+                path.display()
+            );
+        }
+        stale.push(path);
+    }
+    for path in stale {
+        std::fs::remove_dir_all(&path).with_context(|| format!("cannot remove {}", path.display()))?;
+    }
+    Ok(())
 }

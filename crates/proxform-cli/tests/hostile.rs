@@ -154,3 +154,45 @@ fn strange_files_and_arguments_are_refused_at_once() {
         assert!(started.elapsed() < Duration::from_secs(20), "{args:?} took {:?}", started.elapsed());
     }
 }
+
+#[test]
+fn a_refused_command_leaves_no_folder_and_a_sweep_none_of_an_earlier_ones_cells() {
+    let dir = scratch("folders");
+    let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    let short = ["--duration-s", "1", "--no-figures", "-q"];
+    let a = run(&dir, &[s(&["run", "--runs", "2", "--out", "a"]), s(&short)].concat());
+    let b = run(
+        &dir,
+        &[s(&["run", "--scenario", "swarm", "--uavs", "10", "--first-run", "2", "--out", "b"]), s(&short)].concat(),
+    );
+    assert!(a.status.code().is_some() && b.status.code().is_some());
+    // Shards of two scenarios: refused, and the --out it made is gone again.
+    let m = run(&dir, &s(&["merge", "a", "b", "--out", "merged"]));
+    assert_eq!(m.status.code(), Some(2), "{}", text(&m));
+    assert!(!dir.join("merged").exists(), "a refused merge left its folder");
+    // A folder that was there is left.
+    std::fs::create_dir_all(dir.join("there")).expect("folder");
+    run(&dir, &s(&["merge", "a", "b", "--out", "there"]));
+    assert!(dir.join("there").is_dir());
+    // A sweep of one cell after one of three: only its own cell is left.
+    let sweep = |values: &str| {
+        run(&dir, &s(&["sweep", "--set", values, "--set", "duration_s=1", "--runs", "1", "-q", "--out", "sw"]))
+    };
+    sweep("controller.lambda=0.3,0.5,0.7");
+    assert!(dir.join("sw/cell-003/summary.json").is_file());
+    std::fs::write(dir.join("sw/cell-003/notes.txt"), "mine").expect("written");
+    let refused = sweep("controller.lambda=0.3");
+    assert_eq!(refused.status.code(), Some(2), "{}", text(&refused));
+    assert!(text(&refused).contains("cell-003 is left from an earlier sweep"), "{}", text(&refused));
+    assert!(dir.join("sw/cell-002").is_dir(), "nothing removed before the refusal");
+    std::fs::remove_file(dir.join("sw/cell-003/notes.txt")).expect("removed");
+    let o = sweep("controller.lambda=0.3");
+    assert!(o.status.code().is_some_and(|c| c < 2), "{}", text(&o));
+    let mut left: Vec<String> = std::fs::read_dir(dir.join("sw"))
+        .expect("sw")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["cell-001", "sweep.csv"]);
+}
