@@ -25,7 +25,7 @@ use crate::spec::ScenarioSpec;
 
 pub use controller::{method_from, paper_method, PAPER};
 pub use values::SpecError;
-use values::{err, non_negative, or_default, positive, uav};
+use values::{err, non_negative, or_default, positive, show, uav};
 
 /// Longest flight accepted, in update periods.
 pub const MAX_STEPS: f64 = 1e8;
@@ -443,7 +443,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             .map_err(|e| err("controller.method", e.to_string()))?
             .with_schedule(schedule)
             .map_err(|e| err("formation.change", e.to_string()))?;
-        Ok(Scenario {
+        let sc = Scenario {
             spec,
             name,
             dt_s,
@@ -470,6 +470,44 @@ impl TryFrom<ScenarioSpec> for Scenario {
             radio,
             network,
             warnings,
-        })
+        };
+        joins_clear_of_the_others(&sc)?;
+        Ok(sc)
     }
+}
+
+/// Refuses a UAV that joins (`[[fault]] kind = "join"`) closer than the safety distance to
+/// where another UAV flies then (its slot in the formation flown at that time): it would
+/// appear on top of it.
+fn joins_clear_of_the_others(sc: &Scenario) -> Result<(), SpecError> {
+    use crate::faults::{is_active, Fault};
+    for (k, f) in sc.faults().iter().enumerate() {
+        let Fault::Join { uav, at_s, offset_m } = *f else { continue };
+        let formation = sc.formation_at(at_s);
+        let nav_slot = &formation.slots[sc.navigator().index()];
+        let nav = sc.path().state_at(at_s, [0.0; 3]);
+        let at = |i: usize| nav + formation.w(&formation.slots[i], nav_slot, &nav);
+        let own = at(uav.index());
+        let appears = [own[0] + offset_m.x, own[1] + offset_m.y, own[2] + offset_m.z];
+        for j in (0..sc.len()).filter(|&j| j != uav.index() && is_active(sc.faults(), j, at_s)) {
+            let other = at(j);
+            let d =
+                ((appears[0] - other[0]).powi(2) + (appears[1] - other[1]).powi(2) + (appears[2] - other[2]).powi(2))
+                    .sqrt();
+            if d < sc.safety_distance_m() {
+                return Err(err(
+                    format!("fault[{}].offset_m", k + 1),
+                    format!(
+                        "UAV {} joins at {} s {d:.3} m from where UAV {} flies then (its slot), closer than the \
+                         safety distance {} m",
+                        uav.0 + 1,
+                        show(at_s),
+                        j + 1,
+                        show(sc.safety_distance_m())
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
