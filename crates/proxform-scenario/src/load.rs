@@ -106,11 +106,6 @@ pub fn plain_words(message: &str) -> String {
         let end = m[i + 16..].find(|c: char| !c.is_alphanumeric()).map_or(m.len(), |e| i + 16 + e);
         m.replace_range(i..end, "expected a table");
     }
-    if m.contains("did not match any variant of untagged enum MethodSpec") {
-        m = "each method is a name (\"proximity\", \"leader_follower\", \"consensus\", \"flocking\") or a table \
-             with the keys method (required), name, horizon, gains, predictor, controller, broadcast"
-            .into();
-    }
     m.replace("missing field", "missing key").replace('`', "")
 }
 

@@ -52,9 +52,9 @@ fn value_error(file: &str, key: &str, message: String) -> CompareError {
     CompareError::File(LoadError { source_name: file.into(), line: None, key: Some(key.into()), message })
 }
 
-/// A method entry of a comparison file: a label, or a table with options.
-#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
-#[serde(untagged, deny_unknown_fields)]
+/// A method entry of a comparison file: a label, or a table with options. A table's errors
+/// name its key (`methods[2]: broadcast: invalid type: string "yes", expected a boolean`).
+#[derive(Debug, Clone, PartialEq)]
 pub enum MethodSpec {
     /// `"proximity"`, `"leader_follower"`, `"consensus"` or `"flocking"`, default gains.
     Label(String),
@@ -79,6 +79,61 @@ pub enum MethodSpec {
         /// method also hears its neighbours over the radio. Default false.
         broadcast: Option<bool>,
     },
+}
+
+/// A method table, as written.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MethodTableSpec {
+    method: String,
+    name: Option<String>,
+    horizon: Option<u32>,
+    gains: Option<toml::Table>,
+    predictor: Option<String>,
+    controller: Option<toml::Table>,
+    broadcast: Option<bool>,
+}
+
+impl<'de> serde::Deserialize<'de> for MethodSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        const KEYS: &str = "method (required), name, horizon, gains, predictor, controller, broadcast";
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(l) => Ok(MethodSpec::Label(l)),
+            toml::Value::Table(t) => {
+                // Each key alone first, so that an error names it.
+                for (k, v) in &t {
+                    let mut one = toml::Table::new();
+                    one.insert("method".into(), toml::Value::String("proximity".into()));
+                    one.insert(k.clone(), v.clone());
+                    if let Err(e) = MethodTableSpec::deserialize(toml::Value::Table(one)) {
+                        let why = e.message().trim().to_string();
+                        return Err(match why.starts_with("unknown field") {
+                            true => {
+                                D::Error::custom(format!("unknown key {k} in a method table, expected one of {KEYS}"))
+                            }
+                            false => D::Error::custom(format!("{k}: {why}")),
+                        });
+                    }
+                }
+                let m = MethodTableSpec::deserialize(toml::Value::Table(t)).map_err(|e| {
+                    D::Error::custom(format!("a method table has the keys {KEYS}: {}", e.message().trim()))
+                })?;
+                let MethodTableSpec { method, name, horizon, gains, predictor, controller, broadcast } = m;
+                Ok(MethodSpec::Table { method, name, horizon, gains, predictor, controller, broadcast })
+            }
+            other => Err(D::Error::custom(format!(
+                "each method is a name (\"proximity\", \"leader_follower\", \"consensus\", \"flocking\") or a table \
+                 with the keys {KEYS}, found {}",
+                match other {
+                    toml::Value::Integer(_) | toml::Value::Float(_) => "a number",
+                    toml::Value::Boolean(_) => "true or false",
+                    toml::Value::Array(_) => "a list",
+                    _ => "a date",
+                }
+            ))),
+        }
+    }
 }
 
 /// A condition of a comparison file; every key is optional.
@@ -122,8 +177,8 @@ pub struct ComparisonSpec {
     pub seed: Option<u64>,
     /// The methods.
     pub methods: Vec<MethodSpec>,
-    /// The conditions.
-    #[serde(rename = "condition")]
+    /// The conditions (none is refused by name, not as a missing key).
+    #[serde(rename = "condition", default)]
     pub conditions: Vec<ConditionSpec>,
 }
 
@@ -288,8 +343,16 @@ impl Comparison {
                         ));
                     }
                 }
-                crate::spec::ControllerSpec::deserialize(toml::Value::Table(t.clone()))
-                    .map_err(|e| bad(format!("{key}.controller"), e.message().to_string()))?;
+                crate::spec::ControllerSpec::deserialize(toml::Value::Table(t.clone())).map_err(|e| {
+                    // Named by the key at fault: the first that fails alone.
+                    let alone = |k: &String, v: &toml::Value| {
+                        let one = toml::Table::from_iter([(k.clone(), v.clone())]);
+                        crate::spec::ControllerSpec::deserialize(toml::Value::Table(one)).is_err()
+                    };
+                    let at = t.iter().find(|(k, v)| alone(k, v)).map(|(k, _)| k.clone());
+                    let key = at.map_or_else(|| format!("{key}.controller"), |k| format!("{key}.controller.{k}"));
+                    bad(key, crate::load::plain_words(e.message().trim()))
+                })?;
             }
             methods.push(MethodEntry {
                 name,
@@ -443,11 +506,29 @@ mod tests {
                 "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
                  methods = [{ method = 'proximity', controler = { isolation_gate = 1.0 } }]\n[[condition]]\nname = 'a'\n"
                     .into(),
-                "methods: each method is a name",
+                "methods: unknown key controler in a method table",
             ),
             (
                 "name = 'x'\nscenario = 'moon'\nseeds = 2\nmethods = ['proximity']\n[[condition]]\nname = 'a'\n".into(),
                 "scenario",
+            ),
+            // A method table's key of the wrong type is named, inside the table and out.
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = [{ method = 'proximity', broadcast = 'yes' }]\n\
+                 [[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods: broadcast: found the text \"yes\", expected true or false",
+            ),
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\n\
+                 methods = [{ method = 'proximity', controller = { own_gate_m = 2.0, isolation_gate = 'high' } }]\n\
+                 [[condition]]\nname = 'a'\n"
+                    .into(),
+                "methods[1].controller.isolation_gate: found the text \"high\", expected a number",
+            ),
+            (
+                "name = 'x'\nscenario = 'paper'\nseeds = 2\nmethods = ['proximity', 7]\n[[condition]]\nname = 'a'\n".into(),
+                "methods: each method is a name",
             ),
         ];
         for (text, key) in cases {
@@ -468,6 +549,9 @@ mod tests {
                     [[condition]]\nname = 'a'\n[[condition]]\nname = 'b'\n";
         let e = parse(many).expect_err("too many runs").to_string();
         assert!(e.contains("6000000 runs, more than the 2000000"), "{e}");
+        // No condition at all: said so, not as a key missing at line 1.
+        let e = parse(head).expect_err("no condition").to_string();
+        assert_eq!(e, "test.toml: condition: give at least one [[condition]]");
     }
 
     #[test]
