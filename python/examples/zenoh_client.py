@@ -24,11 +24,14 @@ HEADER = struct.Struct("<3sBB3x")
 #: whether its agent is rejoining (back after flying without decisions), 7 zero bytes.
 STATE = struct.Struct("<IQd9dB7x")
 VERSION, KIND_STATE = 1, 1
+#: A sealed flight's messages end with a 32-byte HMAC-SHA256 tag (docs/wire.md, "Sealed
+#: flights"): readable by anyone, writable only with the flight's key.
+TAG = 32
 
 
 def decode_state(payload: bytes) -> tuple[int, int, float, tuple[float, ...]] | None:
-    """(uav, step, t_s, state) of a state message, or None for anything else."""
-    if len(payload) != HEADER.size + STATE.size:
+    """(uav, step, t_s, state) of a state message (sealed or not), or None for anything else."""
+    if len(payload) not in (HEADER.size + STATE.size, HEADER.size + STATE.size + TAG):
         return None
     magic, version, kind = HEADER.unpack_from(payload)
     if magic != b"PXF" or version != VERSION or kind != KIND_STATE:

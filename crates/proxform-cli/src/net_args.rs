@@ -41,6 +41,13 @@ pub struct NetArgs {
     /// "Security"). Agents started here connect with their own certificates from it.
     #[arg(long)]
     pub tls: Option<PathBuf>,
+    /// The flight's key file (docs/wire.md, "Sealed flights"): every message is sealed with
+    /// the key in it, written there (readable by its owner only) if the file is new; give the
+    /// same file to the agents started elsewhere (`proxform agent --flight-key FILE`). Agents
+    /// started here always get a key of the flight's own; agents started elsewhere without one
+    /// speak plain, and then any process that reaches the port can steer a UAV.
+    #[arg(long)]
+    pub flight_key: Option<PathBuf>,
     /// Listen beyond loopback without TLS: any peer that reaches the port can then join,
     /// publish commands and end the flight.
     #[arg(long, conflicts_with = "tls")]

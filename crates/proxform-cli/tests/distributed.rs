@@ -70,10 +70,15 @@ impl Drop for Reap {
 }
 
 fn spawn_agent(endpoint: &str, swarm: &str, uav: u32) -> Reap {
+    spawn_agent_with(endpoint, swarm, uav, &[])
+}
+
+fn spawn_agent_with(endpoint: &str, swarm: &str, uav: u32, extra: &[&str]) -> Reap {
     Reap(
         Command::new(agent_bin())
             .args(["--scenario", "paper", "--uav", &uav.to_string(), "--swarm", swarm, "--connect", endpoint])
             .args(["--idle-exit-s", "5"])
+            .args(extra)
             .stderr(std::process::Stdio::null())
             .spawn()
             .expect("proxform-agent starts"),
@@ -617,7 +622,12 @@ fn an_agent_of_another_scenario_joining_a_flight_steers_nothing() {
     let file = dir.join("moved.toml");
     std::fs::write(&file, moved).expect("written");
     let endpoint = free_endpoint();
-    let launcher = launch(&["--duration-s", "12", "--listen", &endpoint], &swarm, &dir.join("out"));
+    // The flight's key in a file the test holds: the others come with it (without it, nothing
+    // they say is taken at all: see outsiders_without_the_flight_key_change_nothing).
+    let key = dir.join("flight.key");
+    let key = key.to_str().expect("utf-8");
+    let launcher =
+        launch(&["--duration-s", "12", "--listen", &endpoint, "--flight-key", key], &swarm, &dir.join("out"));
     let _ = agent3_pid(&swarm);
     std::thread::sleep(std::time::Duration::from_secs(3));
     let intruder = Reap(
@@ -631,13 +641,15 @@ fn an_agent_of_another_scenario_joining_a_flight_steers_nothing() {
                 &swarm,
                 "--connect",
                 &endpoint,
+                "--flight-key",
+                key,
             ])
             .args(["--idle-exit-s", "5"])
             .stderr(std::process::Stdio::null())
             .spawn()
             .expect("the intruder starts"),
     );
-    let twin = spawn_agent(&endpoint, &swarm, 4);
+    let twin = spawn_agent_with(&endpoint, &swarm, 4, &["--flight-key", key]);
     let (code, printed) = finish(launcher);
     drop((intruder, twin));
     assert_eq!(code, Some(0), "{printed}");
@@ -685,4 +697,80 @@ fn agents_that_came_early_wait_for_the_last_one_with_the_world() {
     }
     assert_eq!(status.code(), Some(0), "{stderr}");
     let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn outsiders_without_the_flight_key_change_nothing_in_a_lockstep_flight() {
+    // Throughout a lockstep flight a process on the same machine, without the flight's key,
+    // publishes on every key an agent or the world listens to: the Clock's end, UAV 3 leaving,
+    // commands for UAV 3 of 1e300 and NaN, senses a step ahead, and a flood. The flight is the
+    // in-process one, byte for byte; what the rogue said is counted as undecodable.
+    use proxform_net::keys::Swarm;
+    use proxform_net::transport::{Role, Session};
+    use proxform_net::wire::{ClockMode, ClockMsg, CommandMsg, MemberMsg, Message, Phase, Presence, SenseMsg};
+    let _flight = one_flight();
+    let (a, b) = (out("clean"), out("attacked"));
+    run(&["--seed", "3", "--duration-s", "20"], &a);
+    let (swarm, endpoint) = (format!("attacked-{}", std::process::id()), free_endpoint());
+    let mut launcher = Reap(
+        Command::new(bin())
+            .args(["run", "--seed", "3", "--duration-s", "20", "--distributed", "--no-figures", "-q"])
+            // Time for the rogue to be there from the start.
+            .args(["--start-delay-s", "3", "--swarm", &swarm, "--listen", &endpoint, "--out"])
+            .arg(&b)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("the launcher starts"),
+    );
+    // The router comes up with the launcher: the rogue tries for up to 20 s.
+    let rogue = (0..20)
+        .find_map(|_| {
+            std::thread::sleep(std::time::Duration::from_millis(500));
+            let role = Role::Client {
+                connect: vec![endpoint.clone()],
+                wait_for_router: std::time::Duration::from_secs(1),
+                tls: None,
+            };
+            Session::open(&role).ok()
+        })
+        .expect("the rogue reaches the router");
+    let keys = Swarm::new(&swarm).expect("a swarm name");
+    let start = std::time::Instant::now();
+    let mut k = 0u64;
+    while launcher.0.try_wait().expect("wait").is_none() && start.elapsed().as_secs() < 120 {
+        let t_s = k as f64 * 0.1;
+        let end = ClockMsg { mode: ClockMode::Lockstep, run: 0, k, t_s, dt_s: 0.1, epoch_ns: 0, end: true };
+        let _ = rogue.put(&keys.clock(), &Message::Clock(end));
+        let leaving = MemberMsg { uav: 3, presence: Presence::Leaving, pid: 1, digest: 0 };
+        let _ = rogue.put(&keys.member(3), &Message::Member(leaving));
+        for value in [1e300, f64::NAN] {
+            let mut decision = proxform_core::Decision::without_areas(
+                proxform_core::Outcome::Adjusted { normalised_sq: 1.0 },
+                proxform_core::Input::zeros(),
+            );
+            decision.input[1] = value;
+            let c = CommandMsg { uav: 3, run: 0, k, t_s, age_s: 0.0, decision, digest: 0 };
+            let _ = rogue.put(&keys.command(3), &Message::Command(c));
+        }
+        let mut own = proxform_core::State9::zeros();
+        own[1] = 60.0;
+        let ahead = SenseMsg { uav: 3, run: 0, phase: Phase::Fly, k: k + 1, t_s: t_s + 0.1, own, heard: vec![] };
+        let _ = rogue.put(&keys.sense(3), &Message::Sense(ahead));
+        for _ in 0..20 {
+            rogue.inner_put(&keys.command(2), vec![0u8; 4096]);
+        }
+        k += 1;
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let (code, stderr) = finish(launcher);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stderr.contains(" 0 missing"), "{stderr}");
+    let garbage = count_before(&stderr, " undecodable");
+    assert!(garbage > 100.0, "the rogue's messages are counted: {stderr}");
+    for f in ["trajectories.csv", "summary.json", "runs.csv"] {
+        let (x, y) = (std::fs::read(a.join(f)).expect("clean"), std::fs::read(b.join(f)).expect("attacked"));
+        assert!(x == y, "{f} differs between the clean and the attacked flight");
+    }
+    let _ = (std::fs::remove_dir_all(a), std::fs::remove_dir_all(b));
 }

@@ -79,6 +79,9 @@ struct Hosted {
     last: Option<(u32, f64)>,
     /// The instant the agent last stepped at (s).
     stepped_t_s: Option<f64>,
+    /// Lockstep: the newest update answered (run, in flight, step): each is stepped on once,
+    /// in order (a replayed or older one would step the agent twice).
+    answered: Option<(u32, bool, u64)>,
     /// Own clock: its latest decisions and the instants they act at (the commands on their way).
     in_flight: std::collections::VecDeque<(f64, proxform_core::Decision)>,
     /// What it runs ([`setup_digest`]), carried by its commands and announcements.
@@ -143,6 +146,7 @@ impl Host {
                 decided: None,
                 last: None,
                 stepped_t_s: None,
+                answered: None,
                 in_flight: Default::default(),
                 digest,
                 rejoining: false,
@@ -278,12 +282,24 @@ impl Host {
     /// measured (0 in lockstep); its command and the state it broadcasts, or None when the
     /// update is not for this host or not valid.
     ///
+    /// Each update is answered once, in order: one not newer than the last answered (in run,
+    /// warm-up before flight, and step) is skipped.
+    ///
     /// The agent steps at the update's time t_s: its own state and its observations were
     /// measured together then, and their ages are relative to that instant (a neighbour
     /// predicted to a later instant than the own state would be compared with a state that
     /// is not there: at 70 m/s, 1 ms is 7 cm). The latency is reported with the command; what
     /// it costs is a decision that reaches the vehicle too late for its period.
     pub fn handle(&mut self, s: &SenseMsg, latency_s: f64) -> Option<Answer> {
+        if let Some(h) = self.agents.get_mut(&s.uav) {
+            let at = (s.run, s.phase == Phase::Fly, s.k);
+            if h.answered.is_some_and(|last| at <= last) {
+                // Stepped on already (a replay), or older than one that was.
+                self.skipped += 1;
+                return None;
+            }
+            h.answered = Some(at);
+        }
         self.step(s, latency_s, None)
     }
 
@@ -541,6 +557,23 @@ mod tests {
         let nav =
             proxform_core::state::State9::from_column_slice(&[20.0 * t_s, 0.0, 100.0, 20.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
         SenseMsg { uav, run: 0, phase: Phase::Fly, k, t_s, own: sc.slot_state((uav - 1) as usize, &nav), heard: vec![] }
+    }
+
+    #[test]
+    fn in_lockstep_each_update_is_answered_once_and_in_order() {
+        let sc = paper();
+        let mut host = Host::new(sc.clone(), &[2]).expect("a follower");
+        let first = host.handle(&update(&sc, 2, 10), 0.0).expect("answered");
+        // A replay of it, or an older one, steps nothing; the next one is answered.
+        assert!(host.handle(&update(&sc, 2, 10), 0.0).is_none());
+        assert!(host.handle(&update(&sc, 2, 9), 0.0).is_none());
+        assert_eq!(host.counts().skipped, 2);
+        let next = host.handle(&update(&sc, 2, 11), 0.0).expect("answered");
+        assert_eq!((first.command.k, next.command.k), (10, 11));
+        // A warm-up update of the next run comes after the flight's last.
+        let warm = SenseMsg { run: 1, phase: Phase::Warm, k: 0, ..update(&sc, 2, 0) };
+        assert!(host.handle(&warm, 0.0).is_some());
+        assert!(host.handle(&update(&sc, 2, 12), 0.0).is_none(), "the earlier run's");
     }
 
     #[test]

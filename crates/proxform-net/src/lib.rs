@@ -5,6 +5,8 @@
 //! - [`keys`]: the key expressions under which they travel (`proxform/v1/<swarm>/…`).
 //! - [`transport`]: a Zenoh session on the given endpoints (multicast scouting off), with the
 //!   publishers and subscribers of an agent or a world; mutual TLS where secured.
+//! - [`seal`]: a flight's key, with which every message of a sealed flight is tagged (a
+//!   process without it cannot speak in the flight).
 //! - [`access`]: the parties of a swarm and the access rules the world's router enforces;
 //!   [`credentials`]: the swarm's authority and its parties' certificates.
 //! - [`vehicle`]: what an agent sees of its UAV (its own state and observations in, a command
@@ -28,6 +30,7 @@ pub mod keys;
 pub mod link;
 pub mod mavlink;
 pub mod radio;
+pub mod seal;
 pub mod transport;
 pub mod vehicle;
 pub mod watch;

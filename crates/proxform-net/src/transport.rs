@@ -11,6 +11,7 @@ use std::time::Duration;
 use zenoh::Wait;
 
 use crate::access::Party;
+use crate::seal::FlightKey;
 use crate::wire::codec::{self, DecodeError};
 use crate::wire::Message;
 
@@ -118,6 +119,9 @@ pub fn free_loopback_endpoint() -> Result<String, TransportError> {
 /// An open session.
 pub struct Session {
     inner: zenoh::Session,
+    /// The flight's key: every message sent is sealed with it, and only messages sealed with it
+    /// are received (None: plain messages both ways).
+    seal: Option<Arc<FlightKey>>,
 }
 
 impl std::fmt::Debug for Session {
@@ -169,14 +173,33 @@ impl Session {
     /// Opens a session in `role`.
     pub fn open(role: &Role) -> Result<Self, TransportError> {
         let inner = zenoh::open(config(role)?).wait().map_err(|e| TransportError::Open(e.to_string()))?;
-        Ok(Self { inner })
+        Ok(Self { inner, seal: None })
+    }
+
+    /// The session sealing with `key` what it sends and taking only what `key` sealed
+    /// ([`crate::seal`]); None leaves it plain.
+    pub fn sealed(mut self, key: Option<FlightKey>) -> Self {
+        self.seal = key.map(Arc::new);
+        self
+    }
+
+    /// Whether it seals.
+    pub fn is_sealed(&self) -> bool {
+        self.seal.is_some()
+    }
+
+    fn bytes(&self, key: &str, m: &Message) -> Vec<u8> {
+        match &self.seal {
+            Some(k) => k.seal(key, codec::encode(m)),
+            None => codec::encode(m),
+        }
     }
 
     /// A publisher of messages on `key`.
     pub fn publisher(&self, key: &str) -> Result<Publisher, TransportError> {
         let inner =
             self.inner.declare_publisher(key.to_string()).wait().map_err(|e| TransportError::Io(e.to_string()))?;
-        Ok(Publisher { inner })
+        Ok(Publisher { inner, key: key.to_string(), seal: self.seal.clone() })
     }
 
     /// Puts raw bytes on `key` (for tests of what a broken sender does; a failed put is
@@ -187,7 +210,7 @@ impl Session {
 
     /// Puts one message on `key` without declaring a publisher.
     pub fn put(&self, key: &str, m: &Message) -> Result<(), TransportError> {
-        self.inner.put(key.to_string(), codec::encode(m)).wait().map_err(|e| TransportError::Io(e.to_string()))
+        self.inner.put(key.to_string(), self.bytes(key, m)).wait().map_err(|e| TransportError::Io(e.to_string()))
     }
 
     /// Closes the session (also done on drop).
@@ -199,12 +222,18 @@ impl Session {
 /// Publishes messages on one key.
 pub struct Publisher {
     inner: zenoh::pubsub::Publisher<'static>,
+    key: String,
+    seal: Option<Arc<FlightKey>>,
 }
 
 impl Publisher {
-    /// Sends `m`.
+    /// Sends `m` (sealed, on a sealed session).
     pub fn send(&self, m: &Message) -> Result<(), TransportError> {
-        self.inner.put(codec::encode(m)).wait().map_err(|e| TransportError::Io(e.to_string()))
+        let bytes = match &self.seal {
+            Some(k) => k.seal(&self.key, codec::encode(m)),
+            None => codec::encode(m),
+        };
+        self.inner.put(bytes).wait().map_err(|e| TransportError::Io(e.to_string()))
     }
 }
 
@@ -286,6 +315,7 @@ impl Session {
         for key in keys {
             let tx = inbox.tx.clone();
             let held = inbox.held.clone();
+            let seal = self.seal.clone();
             let sub = self
                 .inner
                 .declare_subscriber(key.clone())
@@ -297,7 +327,12 @@ impl Session {
                         held.dropped.fetch_add(1, Ordering::Relaxed);
                         return;
                     }
-                    let received = match codec::decode(&sample.payload().to_bytes()) {
+                    let payload = sample.payload().to_bytes();
+                    let body = match &seal {
+                        Some(k) => k.open(&key, &payload).ok_or(DecodeError::Unsealed),
+                        None => Ok(&payload[..]),
+                    };
+                    let received = match body.and_then(codec::decode) {
                         Ok(m) if crate::keys::on_its_key(&key, &m) => Received::Message(key, m),
                         Ok(m) => Received::Misplaced(key, m),
                         Err(e) => Received::Garbage(key, e),

@@ -17,12 +17,15 @@ pub struct Recipe {
     pub program: PathBuf,
     /// Its arguments.
     pub args: Vec<OsString>,
+    /// Variables added to its environment (a flight's key: in the environment, not the
+    /// arguments, which every user of the machine can list).
+    pub env: Vec<(OsString, OsString)>,
 }
 
 impl Recipe {
     fn command(&self) -> Command {
         let mut cmd = Command::new(&self.program);
-        cmd.args(&self.args).stdin(std::process::Stdio::null());
+        cmd.args(&self.args).envs(self.env.iter().map(|(k, v)| (k, v))).stdin(std::process::Stdio::null());
         cmd
     }
 }

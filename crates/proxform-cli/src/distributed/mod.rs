@@ -20,6 +20,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 use proxform_net::access::{acl_json5, Party};
 use proxform_net::keys::Swarm;
+use proxform_net::seal::{self, FlightKey};
 use proxform_net::transport::{free_loopback_endpoint, Role, Secured, Session, Tls};
 use proxform_net::wire::ClockMode;
 use proxform_scenario::Scenario;
@@ -120,7 +121,21 @@ pub fn run(
         Some(dir) => Some(secured(dir, &swarm, scenario, args)?),
         None => None,
     };
+    // The flight's key (proxform_net::seal): the agents started here find it in their
+    // environment; those started elsewhere read it from --flight-key FILE, or speak plain.
+    let key = match (&args.flight_key, args.external_agents) {
+        (Some(path), _) => Some(seal::key_file(path).with_context(|| format!("--flight-key {}", path.display()))?),
+        (None, false) => Some(FlightKey::generate()?),
+        (None, true) => None,
+    };
+    if key.is_none() && args.tls.is_none() {
+        eprintln!(
+            "world: the flight is not sealed: any process that reaches its port can steer a UAV or end the flight \
+             (give the world and its agents --flight-key FILE, or serve it with --tls)"
+        );
+    }
     let (session, endpoint) = serve(args.listen.as_deref(), secured, args.insecure)?;
+    let session = session.sealed(key.clone());
     let telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
     let mode = if args.clock == "realtime" { ClockMode::RealTime } else { ClockMode::Lockstep };
     let mut net = NetAgents::new(session, swarm, scenario, (mode, deadline, seed))?;
@@ -195,7 +210,9 @@ pub fn run(
                     args.agents_sensing.clone().into(),
                 ]);
             }
-            children.spawn(Recipe { program: bin.clone(), args: a }, format!("agent of UAV(s) {}", list.join(",")))?;
+            let env = key.iter().map(|k| (seal::ENV.into(), k.hex().into())).collect();
+            children
+                .spawn(Recipe { program: bin.clone(), args: a, env }, format!("agent of UAV(s) {}", list.join(",")))?;
         }
     } else {
         eprintln!(

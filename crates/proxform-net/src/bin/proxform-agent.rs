@@ -19,6 +19,7 @@ use proxform_net::mavlink::autopilot::Autopilot;
 use proxform_net::mavlink::frame::Frame;
 use proxform_net::mavlink::link::{Endpoint, Link};
 use proxform_net::mavlink::vehicle::{MavlinkVehicle, Sensing};
+use proxform_net::seal;
 use proxform_net::transport::{Role, Session, Tls};
 use proxform_net::vehicle::NetVehicle;
 use proxform_scenario::{builtin, load, Scenario};
@@ -50,6 +51,11 @@ struct Args {
     /// process: the world lets each certificate speak for its own UAV only.
     #[arg(long)]
     tls: Option<PathBuf>,
+    /// The flight's key (a file of 64 hexadecimal digits, as the world wrote it with
+    /// `--flight-key`): every message is sealed with it and only messages it sealed are taken.
+    /// Launched by a world, an agent finds its key in the environment (PROXFORM_FLIGHT_KEY).
+    #[arg(long)]
+    flight_key: Option<PathBuf>,
     /// Exit when nothing arrived for this long (s).
     #[arg(long, default_value_t = 30.0)]
     idle_exit_s: f64,
@@ -172,7 +178,12 @@ fn run(args: Args) -> Result<Ended> {
     };
     let role =
         Role::Client { connect: vec![args.connect.clone()], wait_for_router: seconds("wait-s", args.wait_s)?, tls };
-    let session = Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?;
+    let key = match &args.flight_key {
+        Some(path) => Some(seal::read_key_file(path).with_context(|| format!("--flight-key {}", path.display()))?),
+        None => seal::from_env().with_context(|| format!("the environment's {}", seal::ENV))?,
+    };
+    let session =
+        Session::open(&role).with_context(|| format!("cannot reach the router at {}", args.connect))?.sealed(key);
     let vehicle = NetVehicle::new(session, swarm, &host.members())?;
     let Some(endpoint) = mavlink else {
         let mut vehicle = vehicle;

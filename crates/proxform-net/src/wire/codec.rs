@@ -69,6 +69,10 @@ pub enum DecodeError {
         /// Its value.
         value: u64,
     },
+    /// On a sealed flight, a message without its flight's tag ([`crate::seal`]): from a
+    /// process that does not have the key, or altered on the way.
+    #[error("not sealed with this flight's key")]
+    Unsealed,
 }
 
 struct Writer(Vec<u8>);
