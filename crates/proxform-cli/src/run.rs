@@ -117,7 +117,7 @@ fn distributed(
         proxform_sim::measure::stats::quantile_of(&mut rt, 0.99) * 1e3,
     );
     eprintln!(
-        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable, {} on \
+        "distributed: {} agent process(es); {} decisions in time, {} missing (held), {} late, {} undecodable{}, {} on \
          another UAV's key, {} refused (not a number, beyond what the vehicle can do, or for an instant ahead of the flight; held), {} lost to [network] faults; \
          the network's round trip (before [network] delay_s) median \
          {:.3} ms, p99 {:.3} ms",
@@ -126,6 +126,10 @@ fn distributed(
         d.stats.missing,
         d.stats.late,
         d.stats.garbage,
+        match d.stats.unsealed {
+            0 => String::new(),
+            n => format!(" ({n} not sealed with the flight's key: from a process without it)"),
+        },
         d.stats.misplaced,
         d.stats.refused,
         d.stats.dropped,

@@ -768,6 +768,7 @@ fn outsiders_without_the_flight_key_change_nothing_in_a_lockstep_flight() {
     assert!(stderr.contains(" 0 missing"), "{stderr}");
     let garbage = count_before(&stderr, " undecodable");
     assert!(garbage > 100.0, "the rogue's messages are counted: {stderr}");
+    assert!(stderr.contains("not sealed with the flight's key"), "and said to be unsealed: {stderr}");
     for f in ["trajectories.csv", "summary.json", "runs.csv"] {
         let (x, y) = (std::fs::read(a.join(f)).expect("clean"), std::fs::read(b.join(f)).expect("attacked"));
         assert!(x == y, "{f} differs between the clean and the attacked flight");

@@ -51,6 +51,9 @@ pub struct NetStats {
     pub late: u64,
     /// Undecodable messages.
     pub garbage: u64,
+    /// Of those, messages not sealed with the flight's key ([`proxform_net::seal`]): from a
+    /// process without it (an agent started without `--flight-key`, or an outsider).
+    pub unsealed: u64,
     /// Messages on another UAV's key than their own (a Command for UAV 3 put on UAV 2's key):
     /// never taken.
     pub misplaced: u64,
@@ -298,7 +301,10 @@ impl NetAgents {
                 self.stats.late += 1;
             }
             Received::Message(..) => {}
-            Received::Garbage(..) => self.stats.garbage += 1,
+            Received::Garbage(_, e) => {
+                self.stats.garbage += 1;
+                self.stats.unsealed += u64::from(e == proxform_net::wire::codec::DecodeError::Unsealed);
+            }
             Received::Misplaced(..) => self.stats.misplaced += 1,
         }
     }
