@@ -246,6 +246,14 @@ impl NetAgents {
                             .join(", ")
                     );
                 }
+                if self.stats.unsealed > 0 {
+                    bail!(
+                        "no agent announced UAV(s) {missing:?} within {:.0} s; {} message(s) came not sealed with this \
+                         flight's key: start the agents with the world's --flight-key FILE",
+                        timeout.as_secs_f64(),
+                        self.stats.unsealed
+                    );
+                }
                 bail!("no agent announced UAV(s) {missing:?} within {:.0} s", timeout.as_secs_f64());
             }
             if let Some(r) = self.inbox.recv_timeout(Duration::from_millis(100)) {
