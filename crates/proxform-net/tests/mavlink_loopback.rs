@@ -17,10 +17,15 @@ use proxform_net::mavlink::served::{Refused, Served};
 
 /// A vehicle that flies its setpoint's velocity at 50 Hz (HOLD: stops), on its own thread,
 /// until `stop`; returns what it refused and where it ended.
-fn vehicle(link: Link, stop: Arc<AtomicBool>, silent: Arc<AtomicBool>) -> std::thread::JoinHandle<(Refused, Ned)> {
+fn vehicle(
+    flavour: Flavour,
+    link: Link,
+    stop: Arc<AtomicBool>,
+    silent: Arc<AtomicBool>,
+) -> std::thread::JoinHandle<(Refused, Ned)> {
     std::thread::spawn(move || {
         let mut link = link;
-        let mut served = Served::new(7, Flavour::Px4, mavlink::dialects::common::MavType::MAV_TYPE_QUADROTOR);
+        let mut served = Served::new(7, flavour, mavlink::dialects::common::MavType::MAV_TYPE_QUADROTOR);
         let origin = GeoOrigin::from_degrees(47.397742, 8.545594, 488.0);
         let mut ned = Ned { position: [10.0, 20.0, -30.0], velocity: [0.0; 3], attitude: [0.0, 0.0, 0.3] };
         let start = Instant::now();
@@ -61,6 +66,16 @@ fn vehicle(link: Link, stop: Arc<AtomicBool>, silent: Arc<AtomicBool>) -> std::t
 
 #[test]
 fn a_companion_flies_a_vehicle_by_velocity_and_holds_when_it_goes_silent() {
+    flies_by_velocity_and_holds(Flavour::Px4);
+}
+
+#[test]
+fn a_companion_flies_an_ardupilot_vehicle_in_guided_and_holds_in_loiter() {
+    // ArduPilot's mode numbers (Copter: GUIDED 4, LOITER 5), told by its HEARTBEAT.
+    flies_by_velocity_and_holds(Flavour::ArduPilot);
+}
+
+fn flies_by_velocity_and_holds(flavour: Flavour) {
     let mut vehicle_link = Link::open(Endpoint::In(([127, 0, 0, 1], 0).into()), 7, 1).expect("bound");
     let port = vehicle_link.local_addr().expect("address").port();
     let companion = Link::open(format!("udpout:127.0.0.1:{port}").parse().expect("endpoint"), 7, 191).expect("bound");
@@ -70,7 +85,7 @@ fn a_companion_flies_a_vehicle_by_velocity_and_holds_when_it_goes_silent() {
     let first = vehicle_link.recv(Duration::from_secs(2)).expect("io");
     assert!(first.is_some(), "the vehicle heard the companion");
     let (stop, silent) = (Arc::new(AtomicBool::new(false)), Arc::new(AtomicBool::new(false)));
-    let handle = vehicle(vehicle_link, stop.clone(), silent.clone());
+    let handle = vehicle(flavour, vehicle_link, stop.clone(), silent.clone());
     let frame = Frame { origin_ned: [0.0; 3], course_rad: 0.0 };
 
     // Found, with its state and origin.
@@ -79,6 +94,7 @@ fn a_companion_flies_a_vehicle_by_velocity_and_holds_when_it_goes_silent() {
         ap.poll(Duration::from_millis(50)).expect("io");
     }
     assert_eq!(ap.target(), Some(7));
+    assert_eq!(ap.flavour(), Some(flavour), "told by the vehicle's HEARTBEAT");
     let (s, age) = ap.state(&frame, Instant::now()).expect("a state");
     assert!(age < Duration::from_millis(500));
     // North 10, east 20, down −30: x 10, y −20 (left of north is west), z 30.

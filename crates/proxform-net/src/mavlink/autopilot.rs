@@ -70,6 +70,11 @@ impl Autopilot {
         self.target
     }
 
+    /// Which autopilot it is (PX4, ArduPilot), as its HEARTBEAT says (None before one came).
+    pub fn flavour(&self) -> Option<Flavour> {
+        self.flavour
+    }
+
     /// The mode the autopilot last reported.
     pub fn mode(&self) -> Option<Mode> {
         self.mode
