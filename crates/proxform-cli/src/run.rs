@@ -181,6 +181,19 @@ fn distributed(
             proxform_net::transport::INBOX_MAX_BYTES >> 20
         );
     }
+    for (uav, spans) in &d.stats.rejoins {
+        let said: Vec<String> = spans
+            .iter()
+            .map(|(from, to)| match to {
+                Some(to) => format!("from {from:.1} s to {to:.1} s ({:.1} s)", to - from),
+                None => format!("from {from:.1} s to the end"),
+            })
+            .collect();
+        eprintln!(
+            "UAV {uav} rejoined (back after flying without decisions; not followed until near its slot): {}",
+            said.join(", ")
+        );
+    }
     for (uav, pids) in &d.stats.twins {
         let pids: Vec<String> = pids.iter().map(u32::to_string).collect();
         eprintln!(

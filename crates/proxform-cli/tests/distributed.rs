@@ -377,6 +377,11 @@ fn a_stalled_agent_is_avoided_not_followed_and_its_uav_rejoins() {
         .map(|l| count_before(l, " observations of silent neighbours"))
         .sum();
     assert!(unfollowed >= 30.0, "the others stopped following UAV3 while it was silent: {stderr}");
+    // The report says when it was rejoining: from its agent's return (about 14 s in) until
+    // it was near its slot again, before the end.
+    let rejoined = stderr.lines().find(|l| l.starts_with("UAV 3 rejoined")).unwrap_or_else(|| panic!("{stderr}"));
+    let from = count_before(rejoined.split("from ").nth(1).unwrap_or(""), " s to");
+    assert!((10.0..20.0).contains(&from) && !rejoined.contains("the end"), "{rejoined}");
     let traj = std::fs::read_to_string(out_dir.join("trajectories.csv")).expect("trajectories");
     // It hovered (the formation flies at 5 m/s).
     let slowest = traj

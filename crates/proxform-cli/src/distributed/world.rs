@@ -87,6 +87,9 @@ pub struct NetStats {
     pub twins: BTreeMap<u32, BTreeSet<u32>>,
     /// The UAVs' MAVLink systems, when served.
     pub mavlink: Option<super::mavlink::MavlinkStats>,
+    /// When each UAV's agent said it was rejoining (back after flying without decisions), by
+    /// UAV (from 1): the flight times (s) it began and, once it was near its slot again, ended.
+    pub rejoins: BTreeMap<u32, Vec<(f64, Option<f64>)>>,
 }
 
 /// Real time: the wall-clock instant of the flight's t = 0 (moved by the world's pauses),
@@ -184,7 +187,8 @@ impl NetAgents {
         let navigator = scenario.navigator().0 + 1;
         let followers: Vec<u32> = (1..=scenario.len() as u32).filter(|u| *u != navigator).collect();
         let sense = followers.iter().map(|u| Ok((*u, session.publisher(&swarm.sense(*u))?))).collect::<Result<_>>()?;
-        let inbox = session.inbox(&[swarm.all_commands(), swarm.all_members()])?;
+        // The agents' broadcasts too: they say when an agent is rejoining.
+        let inbox = session.inbox(&[swarm.all_commands(), swarm.all_members(), swarm.all_states()])?;
         let tokens = session.liveliness(&swarm.all_alive())?;
         Ok(Self {
             clock: session.publisher(&swarm.clock())?,
@@ -308,6 +312,7 @@ impl NetAgents {
                 self.seen.insert(c.uav, Instant::now());
                 self.stats.late += 1;
             }
+            Received::Message(_, Message::State(m)) if self.digests.contains_key(&m.uav) => self.rejoining(&m),
             Received::Message(..) => {}
             Received::Garbage(_, e) => {
                 self.stats.garbage += 1;
@@ -346,6 +351,24 @@ impl NetAgents {
                     }
                 };
             }
+        }
+    }
+
+    /// Notes when UAV `m.uav`'s broadcasts begin and stop saying it is rejoining.
+    fn rejoining(&mut self, m: &StateMsg) {
+        let spans = self.stats.rejoins.entry(m.uav).or_default();
+        let open = spans.last().is_some_and(|(_, end)| end.is_none());
+        match (m.rejoining, open) {
+            (true, false) => spans.push((m.t_s, None)),
+            (false, true) => {
+                if let Some(last) = spans.last_mut() {
+                    last.1 = Some(m.t_s);
+                }
+            }
+            _ => {}
+        }
+        if spans.is_empty() {
+            self.stats.rejoins.remove(&m.uav);
         }
     }
 
