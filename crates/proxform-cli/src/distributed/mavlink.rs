@@ -232,8 +232,11 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
         // sensed it (that would put the sensor's noise into the flight).
         for (j, u) in request.sensed.uavs.iter().enumerate() {
             let Some(truth) = request.truth.get(u.index()) else { continue };
-            if let Some(d) = swarm.decision(u.index(), truth) {
-                out[j] = d;
+            if let Some(flown) = swarm.decision(u.index(), truth) {
+                // What the vehicle flies, with what its agent said of the step (held or adjusted,
+                // its areas and references): a proxform agent over MAVLink answers the world
+                // too, so the report's adjustments are its own.
+                out[j] = Decision { input: flown.input, setpoint: flown.setpoint, ..out[j] };
             }
         }
     }
