@@ -59,39 +59,31 @@ pub enum MethodSpec {
     /// `"proximity"`, `"leader_follower"`, `"consensus"` or `"flocking"`, default gains.
     Label(String),
     /// `{ method = "proximity", horizon = 5, name = "proximity H=5" }`.
-    Table {
-        /// The method's label.
-        method: String,
-        /// Name in reports (default: the label, with the horizon when > 1).
-        name: Option<String>,
-        /// Horizon H of the proximity method (updates, 1 to 50).
-        horizon: Option<u32>,
-        /// A baseline's gains (keys of its gains struct; omitted ones keep their defaults),
-        /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_share = 0.5 }`.
-        gains: Option<toml::Table>,
-        /// The neighbour predictor: `"alpha_beta"` (default), `"constant_velocity"` or
-        /// `"singer"` (the Kalman tracks, fed by every channel).
-        predictor: Option<String>,
-        /// Further `[controller]` keys for this method, over the base scenario's, e.g.
-        /// `{ isolation_gate = 1.0, own_gate_m = 3.0 }`.
-        controller: Option<toml::Table>,
-        /// Every UAV broadcasts its state each period (`radio.broadcast_all`), so that the
-        /// method also hears its neighbours over the radio. Default false.
-        broadcast: Option<bool>,
-    },
+    Table(MethodTable),
 }
 
-/// A method table, as written.
-#[derive(serde::Deserialize)]
+/// A method entry's table.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-struct MethodTableSpec {
-    method: String,
-    name: Option<String>,
-    horizon: Option<u32>,
-    gains: Option<toml::Table>,
-    predictor: Option<String>,
-    controller: Option<toml::Table>,
-    broadcast: Option<bool>,
+pub struct MethodTable {
+    /// The method's label.
+    pub method: String,
+    /// Name in reports (default: the label, with the horizon when > 1).
+    pub name: Option<String>,
+    /// Horizon H of the proximity method (updates, 1 to 50).
+    pub horizon: Option<u32>,
+    /// A baseline's gains (keys of its gains struct; omitted ones keep their defaults),
+    /// e.g. `{ pd = { kp = 2.0, kv = 2.8 } }` or `{ leader_share = 0.5 }`.
+    pub gains: Option<toml::Table>,
+    /// The neighbour predictor: `"alpha_beta"` (default), `"constant_velocity"` or
+    /// `"singer"` (the Kalman tracks, fed by every channel).
+    pub predictor: Option<String>,
+    /// Further `[controller]` keys for this method, over the base scenario's, e.g.
+    /// `{ isolation_gate = 1.0, own_gate_m = 3.0 }`.
+    pub controller: Option<toml::Table>,
+    /// Every UAV broadcasts its state each period (`radio.broadcast_all`), so that the
+    /// method also hears its neighbours over the radio. Default false.
+    pub broadcast: Option<bool>,
 }
 
 impl<'de> serde::Deserialize<'de> for MethodSpec {
@@ -106,7 +98,7 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
                     let mut one = toml::Table::new();
                     one.insert("method".into(), toml::Value::String("proximity".into()));
                     one.insert(k.clone(), v.clone());
-                    if let Err(e) = MethodTableSpec::deserialize(toml::Value::Table(one)) {
+                    if let Err(e) = MethodTable::deserialize(toml::Value::Table(one)) {
                         let why = e.message().trim().to_string();
                         return Err(match why.starts_with("unknown field") {
                             true => {
@@ -116,11 +108,9 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
                         });
                     }
                 }
-                let m = MethodTableSpec::deserialize(toml::Value::Table(t)).map_err(|e| {
+                MethodTable::deserialize(toml::Value::Table(t)).map(MethodSpec::Table).map_err(|e| {
                     D::Error::custom(format!("a method table has the keys {KEYS}: {}", e.message().trim()))
-                })?;
-                let MethodTableSpec { method, name, horizon, gains, predictor, controller, broadcast } = m;
-                Ok(MethodSpec::Table { method, name, horizon, gains, predictor, controller, broadcast })
+                })
             }
             other => Err(D::Error::custom(format!(
                 "each method is a name (\"proximity\", \"leader_follower\", \"consensus\", \"flocking\") or a table \
@@ -299,7 +289,7 @@ impl Comparison {
         for (k, m) in spec.methods.iter().enumerate() {
             let (label, name, horizon, gains, predictor, controller, broadcast) = match m {
                 MethodSpec::Label(l) => (l.as_str(), None, None, None, None, None, None),
-                MethodSpec::Table { method, name, horizon, gains, predictor, controller, broadcast } => (
+                MethodSpec::Table(MethodTable { method, name, horizon, gains, predictor, controller, broadcast }) => (
                     method.as_str(),
                     name.clone(),
                     *horizon,
@@ -328,7 +318,8 @@ impl Comparison {
             }
             let mut name =
                 name.unwrap_or_else(|| if horizon > 1 { format!("{label} H={horizon}") } else { label.to_string() });
-            if let (Some(p), MethodSpec::Label(_) | MethodSpec::Table { name: None, .. }) = (&predictor, m) {
+            if let (Some(p), MethodSpec::Label(_) | MethodSpec::Table(MethodTable { name: None, .. })) = (&predictor, m)
+            {
                 name = format!("{name} {p}");
             }
             if methods.iter().any(|e: &MethodEntry| e.name == name) {
