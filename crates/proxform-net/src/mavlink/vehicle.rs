@@ -1,6 +1,9 @@
 //! An agent's UAV behind a MAVLink autopilot ([`MavlinkVehicle`], `proxform-agent --mavlink`):
-//! its own state comes from the autopilot (LOCAL_POSITION_NED and ATTITUDE in the method's
-//! frame), what it perceived and heard from its sensing over the network as before, and each
+//! with a world's sensing ([`Sensing::World`]) its update is the world's as before (the world
+//! is the UAV's sensors: its own state is the world's measurement, which the world's simulated
+//! autopilot also flies from, as a real one flies from its estimator's state); without
+//! ([`Sensing::Autopilot`]) its own state is the autopilot's (LOCAL_POSITION_NED and ATTITUDE in
+//! the method's frame). Each
 //! decision goes to the autopilot as its velocity and yaw setpoint (the decision's
 //! [`proxform_core::Setpoint`], absolute, chosen at the state the agent believed it had;
 //! SET_POSITION_TARGET_LOCAL_NED; for the paper's kinematic vehicle, whose inputs steer its
@@ -33,7 +36,8 @@ const ASK_EVERY: Duration = Duration::from_millis(500);
 /// Where an agent over MAVLink takes its updates from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Sensing {
-    /// A world's sensing over the network (its own state replaced by the autopilot's).
+    /// A world's sensing over the network, own state included (the world's measurement, from
+    /// which the world's simulated autopilot flies the targets).
     World,
     /// The autopilot's state alone, neighbours by radio: no world needed.
     Autopilot,
@@ -207,14 +211,10 @@ impl Vehicle for MavlinkVehicle {
         let now = Instant::now();
         self.beat(now)?;
         match event {
-            Event::Sense(mut s) => {
+            Event::Sense(s) => {
+                // The world is the UAV's sensors: its own state is the world's measurement (as
+                // in process), the estimate its simulated autopilot flies the targets from.
                 self.last_update = Some(now);
-                // The own state is the autopilot's, when it is fresh.
-                if let Some((own, age)) = self.autopilot.state(&self.frame, now) {
-                    if age.as_secs_f64() <= self.safety.position_timeout_s {
-                        s.own = own;
-                    }
-                }
                 Ok(Event::Sense(s))
             }
             other => {
