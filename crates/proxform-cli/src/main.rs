@@ -12,6 +12,7 @@ mod memory;
 mod merge;
 mod net_args;
 mod output;
+mod provenance;
 mod report;
 mod run;
 mod scenarios;

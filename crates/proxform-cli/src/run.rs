@@ -371,7 +371,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     let _folder = crate::files::OutputFolder::new(&out, "output directory")?;
     let _lock = crate::files::lock_folder(&out)?;
     // Outputs a link or FIFO would take are refused before anything flies.
-    for f in ["summary.json", "runs.csv", "trajectories.csv", crate::batch::JOURNAL] {
+    for f in ["summary.json", "runs.csv", "trajectories.csv", crate::batch::JOURNAL, crate::provenance::SCENARIO_FILE] {
         crate::files::check_output(&out.join(f))?;
     }
     // A new batch's folder holds no earlier batch's summary while it flies.
@@ -410,6 +410,14 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     }
     let batch = (args.seed, args.first_run, args.runs);
     let header = crate::batch::header(&scenario, options, batch)?;
+    // What the folder holds says what made it, before it flies.
+    let provenance = crate::provenance::Batch {
+        seed: args.seed,
+        first_run: args.first_run,
+        runs: args.runs,
+        no_adjust: args.no_adjust,
+    };
+    let scenario_file = crate::provenance::write_scenario(&out, &scenario, provenance)?;
     let started = Instant::now();
     let mut first_trajectory = if args.net.distributed {
         let d = distributed(&scenario, options, (args.seed, args.runs), record, &|| bar.inc(1), &args.net)?;
@@ -452,7 +460,8 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
 
     // Files first: a reader that closes the report early still gets them.
     let (_, summary) = crate::batch::finish(&[out.join(crate::batch::JOURNAL)], &out, false)?;
-    let mut written = vec![out.join("summary.json"), out.join("runs.csv"), out.join(crate::batch::JOURNAL)];
+    let mut written =
+        vec![out.join("summary.json"), out.join("runs.csv"), out.join(crate::batch::JOURNAL), scenario_file];
     if let Some(traj) = &mut first_trajectory {
         if let Some(mut sink) = traj.take_sink() {
             sink.finish().map_err(anyhow::Error::msg)?;

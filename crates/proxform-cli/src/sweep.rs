@@ -145,6 +145,8 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
         let header = batch::header(sc, RunOptions::default(), (args.seed, 0, args.runs))?;
         let opened = batch::open(&dir, &header, args.resume)?;
+        let cell_batch = crate::provenance::Batch { seed: args.seed, first_run: 0, runs: args.runs, no_adjust: false };
+        crate::provenance::write_scenario(&dir, sc, cell_batch)?;
         bar.inc(opened.resumed);
         // A single run ticks per step: count it when it ends.
         let single = args.runs == 1;
@@ -201,7 +203,7 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
 /// folder named as a cell that holds nothing but a batch's outputs is removed; another is
 /// refused, named, before anything is removed or runs.
 fn remove_stale_cells(out: &std::path::Path, cells: usize) -> Result<()> {
-    const OUTPUTS: [&str; 4] = ["runs.csv", "runs.journal", "summary.json", "trajectories.csv"];
+    const OUTPUTS: [&str; 5] = ["runs.csv", "runs.journal", "summary.json", "trajectories.csv", "scenario.toml"];
     let Ok(entries) = std::fs::read_dir(out) else { return Ok(()) };
     let mut stale = Vec::new();
     for e in entries.flatten() {

@@ -367,3 +367,62 @@ fn every_follower_has_its_detail_and_chosen_uavs_their_trajectories() {
         );
     }
 }
+
+/// The command `scenario.toml`'s header gives for flying its runs again, as arguments, with the
+/// file's path in place of its name.
+fn again_from(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("scenario.toml")).expect("scenario.toml");
+    let line = text.lines().find_map(|l| l.strip_prefix("#   proxform ")).expect("the command again");
+    line.split_whitespace()
+        .map(|a| if a == "scenario.toml" { dir.join(a).display().to_string() } else { a.to_string() })
+        .collect()
+}
+
+#[test]
+fn an_output_folders_scenario_file_flies_the_same_runs_again() {
+    let scenarios = concat!(env!("CARGO_MANIFEST_DIR"), "/../proxform-scenario/scenarios/");
+    let fault = format!("{scenarios}fault-triangle10.toml");
+    let change = format!("{scenarios}change-v-column.toml");
+    let cases: [(&str, Vec<&str>); 4] = [
+        ("paper", vec!["--seed", "4", "--runs", "3", "--first-run", "2", "--no-adjust", "--set", "noise.scale=1.5"]),
+        ("fault", vec![fault.as_str(), "--seed", "9", "--runs", "2", "--set", "wind.steady_kmh=[0,15,0]"]),
+        ("change", vec![change.as_str(), "--seed", "1", "--runs", "2"]),
+        ("swarm", vec!["--scenario", "swarm", "--uavs", "30", "--seed", "2", "--runs", "2"]),
+    ];
+    for (tag, args) in cases {
+        let (first, again) = (scratch(&format!("cli-again-{tag}-1")), scratch(&format!("cli-again-{tag}-2")));
+        let o = proxform()
+            .arg("run")
+            .args(&args)
+            .args(["--duration-s", "8", "--no-figures", "--no-trajectories", "-q", "--out"])
+            .arg(&first)
+            .output()
+            .expect("runs");
+        assert!(o.status.code().is_some_and(|c| c <= 1), "{tag}: {}", String::from_utf8_lossy(&o.stderr));
+        let o = proxform()
+            .args(again_from(&first))
+            .args(["--no-figures", "--no-trajectories", "-q", "--out"])
+            .arg(&again)
+            .output()
+            .expect("runs");
+        assert!(o.status.code().is_some_and(|c| c <= 1), "{tag}: {}", String::from_utf8_lossy(&o.stderr));
+        let runs = |d: &Path| std::fs::read(d.join("runs.csv")).expect("runs.csv");
+        assert!(runs(&first) == runs(&again), "{tag}: runs.csv differs when flown again from scenario.toml");
+    }
+    // A sweep's cells each say what they flew.
+    let sweep = scratch("cli-again-sweep");
+    let o = proxform()
+        .args(["sweep", "--scenario", "paper", "--set", "noise.scale=0.5,2", "--runs", "2", "--seed", "3"])
+        .args(["--set", "duration_s=6", "-q", "--out"])
+        .arg(&sweep)
+        .output()
+        .expect("sweeps");
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&o.stderr));
+    let cell = sweep.join("cell-002");
+    let again = scratch("cli-again-sweep-cell");
+    let o =
+        proxform().args(again_from(&cell)).args(["--no-figures", "-q", "--out"]).arg(&again).output().expect("runs");
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&o.stderr));
+    let runs = |d: &Path| std::fs::read(d.join("runs.csv")).expect("runs.csv");
+    assert!(runs(&cell) == runs(&again), "the sweep's cell 2 differs when flown again");
+}
