@@ -7,6 +7,7 @@ mod compare;
 mod distributed;
 mod figures;
 mod files;
+mod html;
 mod keys;
 mod memory;
 mod merge;
@@ -38,6 +39,9 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Compare formation control methods under radio loss, delay, noise and faults.
     Compare(compare::CompareArgs),
+    /// Write report.html for an output folder (tables, figures over time and over the runs,
+    /// a 3-D replay of the first run): one file that opens from disk.
+    Report(ReportArgs),
     /// List the built-in scenarios.
     Scenarios,
     /// Write an annotated example scenario file.
@@ -72,6 +76,25 @@ fn agent(args: &[std::ffi::OsString]) -> anyhow::Result<std::process::ExitCode> 
     Ok(std::process::ExitCode::from(status.code().map_or(2, |c| c.clamp(0, 255) as u8)))
 }
 
+/// `proxform report DIR`.
+#[derive(Debug, clap::Args)]
+struct ReportArgs {
+    /// An output folder of `proxform run` (its summary.json; runs.csv, trajectories.csv and
+    /// scenario.toml when there).
+    dir: std::path::PathBuf,
+}
+
+fn report_folder(args: &ReportArgs) -> anyhow::Result<std::process::ExitCode> {
+    if !args.dir.is_dir() {
+        anyhow::bail!("{}: not a folder (give the output folder of a run)", args.dir.display());
+    }
+    let _lock = files::lock_folder(&args.dir)?;
+    files::check_output(&args.dir.join(html::REPORT_FILE))?;
+    let path = html::write(&args.dir, None)?;
+    println!("wrote {}", path.display());
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -87,6 +110,7 @@ fn main() -> std::process::ExitCode {
         Command::Merge(args) => merge::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Report(args) => report_folder(&args),
         Command::Scenarios => scenarios::list(),
         Command::Init(args) => scenarios::init(&args),
     };

@@ -57,6 +57,9 @@ pub struct RunArgs {
     /// Skip the figures (PNG and SVG).
     #[arg(long)]
     no_figures: bool,
+    /// Skip report.html (the page with the tables, figures and a 3-D replay).
+    #[arg(long)]
+    no_report: bool,
     /// Skip trajectories.csv.
     #[arg(long)]
     no_trajectories: bool,
@@ -371,7 +374,9 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     let _folder = crate::files::OutputFolder::new(&out, "output directory")?;
     let _lock = crate::files::lock_folder(&out)?;
     // Outputs a link or FIFO would take are refused before anything flies.
-    for f in ["summary.json", "runs.csv", "trajectories.csv", crate::batch::JOURNAL, crate::provenance::SCENARIO_FILE] {
+    let outputs =
+        ["summary.json", "runs.csv", "trajectories.csv", crate::batch::JOURNAL, crate::provenance::SCENARIO_FILE];
+    for f in outputs.into_iter().chain([crate::html::REPORT_FILE]) {
         crate::files::check_output(&out.join(f))?;
     }
     // A new batch's folder holds no earlier batch's summary while it flies.
@@ -470,6 +475,9 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
         if !args.no_figures {
             written.extend(figures::write_all(&out, &scenario, traj)?);
         }
+    }
+    if !args.no_report {
+        written.push(crate::html::write(&out, Some(&scenario))?);
     }
     let mut stdout = std::io::stdout().lock();
     report::print(&mut stdout, &scenario, &summary, Some((elapsed, pool.current_num_threads())))?;

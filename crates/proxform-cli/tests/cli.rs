@@ -426,3 +426,41 @@ fn an_output_folders_scenario_file_flies_the_same_runs_again() {
     let runs = |d: &Path| std::fs::read(d.join("runs.csv")).expect("runs.csv");
     assert!(runs(&cell) == runs(&again), "the sweep's cell 2 differs when flown again");
 }
+
+#[test]
+fn a_run_writes_a_report_page_that_fetches_nothing_and_report_remakes_it() {
+    let dir = scratch("cli-report");
+    let o = proxform()
+        .args(["run", "--scenario", "paper", "--runs", "3", "--duration-s", "10", "--no-figures", "-q", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = std::fs::read_to_string(dir.join("report.html")).expect("report.html");
+    // One file: no address to fetch, every script and style inline.
+    for fetch in ["http:", "https:", "src=", "href=", "@import", "fetch("] {
+        assert!(!page.contains(fetch), "report.html holds {fetch}");
+    }
+    // Its data: the summary, the replay's frames from trajectories.csv, the scenario's links.
+    let data = page.split("<script type=\"application/json\" id=\"data\">").nth(1).expect("data");
+    let data: serde_json::Value = serde_json::from_str(data.split("</script>").next().expect("end")).expect("json");
+    assert_eq!(data["summary"]["runs"], 3);
+    assert_eq!(data["replay"]["uavs"].as_array().map(Vec::len), Some(6));
+    let frames = data["replay"]["times"].as_array().map_or(0, Vec::len);
+    assert_eq!(frames, 101, "every step of a 10 s flight");
+    assert_eq!(data["replay"]["pos"].as_array().map(Vec::len), Some(frames * 6 * 3));
+    assert!(data["scenario"]["links"].as_array().is_some_and(|l| !l.is_empty()));
+    assert_eq!(data["hist"]["runs"], 3);
+    // `proxform report` makes it again from the folder alone, the same page.
+    std::fs::remove_file(dir.join("report.html")).expect("removed");
+    let o = proxform().arg("report").arg(&dir).output().expect("reports");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let again = std::fs::read_to_string(dir.join("report.html")).expect("report.html again");
+    assert_eq!(again, page, "the page from the folder is the page the run wrote");
+    // A folder that is not a run's says so.
+    let empty = scratch("cli-report-empty");
+    std::fs::create_dir_all(&empty).expect("made");
+    let o = proxform().arg("report").arg(&empty).output().expect("reports");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("summary.json"), "{}", String::from_utf8_lossy(&o.stderr));
+}
