@@ -142,6 +142,15 @@ class Result:
         """Fraction of runs in which every follower stayed within every allowable error."""
         return float(self.summary["pass_fraction"])
 
+    def to_rerun(self, path: "os.PathLike[str] | str", *, recording_id: Optional[str] = None) -> str:
+        """Writes the first run (``trajectories``) to the rerun recording ``path`` (``.rrd``):
+        positions, attitudes, errors with their allowable bands and events on the
+        ``flight_time`` timeline (see :mod:`proxform.rrd`; needs ``rerun-sdk``:
+        ``pip install 'proxform[rerun]'``). Returns the path."""
+        from .rrd import to_rerun
+
+        return to_rerun(self, path, recording_id=recording_id)
+
     def __repr__(self) -> str:
         return (
             f"Result(scenario={self.scenario.name!r}, runs={self.summary['runs']}, "
