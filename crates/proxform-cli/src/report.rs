@@ -43,7 +43,7 @@ pub fn print(
     let allow = s.allowable_error.as_array();
     writeln!(
         out,
-        "proxform run: scenario '{}' ({} UAVs), {} run(s){} from seed {}{}\n",
+        "proxform run: scenario '{}' ({} UAVs), {} run(s){} from seed {}{}",
         s.scenario,
         s.uavs,
         s.runs,
@@ -54,6 +54,9 @@ pub fn print(
         s.seed,
         timing.map_or_else(String::new, |(e, threads)| format!(", {:.2} s on {threads} thread(s)", e.as_secs_f64()))
     )?;
+    // What the flight met, and what it was judged by.
+    writeln!(out, "conditions: {}", crate::html::conditions(scenario).join("; "))?;
+    writeln!(out)?;
     writeln!(out, "Largest |error| relative to the navigator (METHOD §7), over all runs:")?;
     write!(out, "{:<8}", "UAV")?;
     for a in AXES {

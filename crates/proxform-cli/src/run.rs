@@ -60,6 +60,12 @@ pub struct RunArgs {
     /// Skip report.html (the page with the tables, figures and a 3-D replay).
     #[arg(long)]
     no_report: bool,
+    /// The figures' size, WIDTHxHEIGHT in pixels at 100 DPI (SVG at that size).
+    #[arg(long, value_name = "WxH", default_value = "1000x760", value_parser = figure_size)]
+    figure_size: (u32, u32),
+    /// The PNG figures' resolution: their pixels, text and lines grow by DPI / 100 (300 for print).
+    #[arg(long, value_name = "DPI", default_value_t = 100, value_parser = clap::value_parser!(u32).range(50..=600))]
+    figure_dpi: u32,
     /// Skip trajectories.csv.
     #[arg(long)]
     no_trajectories: bool,
@@ -359,6 +365,17 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     }
     let options = RunOptions { adjustment_enabled: !args.no_adjust, ..RunOptions::default() };
     let out = args.out.clone().unwrap_or_else(|| crate::files::default_out(scenario.name()));
+    let look = figures::Look { size: args.figure_size, scale: f64::from(args.figure_dpi) / 100.0 };
+    let (w, h) = (f64::from(look.size.0) * look.scale, f64::from(look.size.1) * look.scale);
+    if w * h > figures::Look::MAX_PIXELS {
+        bail!(
+            "--figure-size {}x{} at --figure-dpi {}: PNGs of {w:.0} x {h:.0} pixels, more than the {:.0} million allowed",
+            look.size.0,
+            look.size.1,
+            args.figure_dpi,
+            figures::Look::MAX_PIXELS / 1e6
+        );
+    }
     // A bad list is refused before any file is written.
     let chosen = args.trajectory_uavs.as_deref().map(|l| uav_list(l, &scenario)).transpose()?;
     if args.net.distributed {
@@ -473,7 +490,7 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
             written.push(csv);
         }
         if !args.no_figures {
-            written.extend(figures::write_all(&out, &scenario, traj)?);
+            written.extend(figures::write_all(&out, &scenario, traj, &look)?);
         }
     }
     if !args.no_report {
@@ -486,6 +503,14 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     writeln!(stdout, "engine                   {engine}")?;
     writeln!(stdout, "\nwrote {} files to {}", written.len(), out.display())?;
     Ok(if summary.pass_fraction >= 1.0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// `--figure-size WxH`: each side 200 to 20 000 pixels.
+fn figure_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("\"{s}\" is not WIDTHxHEIGHT in pixels (each 200 to 20000), e.g. 1600x900");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = |v: &str| v.trim().parse::<u32>().ok().filter(|v| (200..=20_000).contains(v)).ok_or_else(bad);
+    Ok((side(w)?, side(h)?))
 }
 
 /// `--trajectory-uavs`: UAV numbers (from 1) and ranges `a-b`, comma-separated, as indices,

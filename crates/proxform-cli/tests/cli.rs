@@ -287,7 +287,12 @@ fn compare_writes_rows_cells_and_plots_and_refuses_bad_files() {
     let dark: Vec<&str> = cells.lines().filter(|l| l.contains(",dark,")).collect();
     assert!(dark.iter().any(|l| l.starts_with("proximity,dark,2,1")), "{dark:?}");
     assert!(dark.iter().any(|l| l.starts_with("leader_follower,dark,2,0")), "{dark:?}");
-    for plot in ["error_vs_loss.png", "error_vs_delay.svg"] {
+    // The pass fractions with their 95 % Wilson intervals (2 of 2: 0.342 to 1; 0 of 2: 0 to
+    // 0.658), and the attitude errors beside the position's.
+    assert!(dark.iter().any(|l| l.starts_with("proximity,dark,2,1.0,0.342")), "{dark:?}");
+    assert!(dark.iter().any(|l| l.starts_with("leader_follower,dark,2,0.0,0.0,0.657")), "{dark:?}");
+    assert!(csv.lines().next().is_some_and(|h| h.contains("max_alpha_deg") && h.contains("max_gamma_deg")));
+    for plot in ["error_vs_loss.png", "error_vs_delay.svg", "pass_by_condition.png"] {
         assert!(out.join(plot).exists(), "{plot}");
     }
 
@@ -463,4 +468,22 @@ fn a_run_writes_a_report_page_that_fetches_nothing_and_report_remakes_it() {
     let o = proxform().arg("report").arg(&empty).output().expect("reports");
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("summary.json"), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn a_reader_that_stops_early_ends_the_output_without_a_panic() {
+    use std::io::Read;
+    // Megabytes of text (a 20 000-UAV scenario printed), of which the reader takes 100 bytes.
+    let mut child = proxform()
+        .args(["run", "--scenario", "swarm", "--uavs", "20000", "--print-scenario"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("starts");
+    let mut head = [0u8; 100];
+    child.stdout.take().expect("stdout").read_exact(&mut head).expect("reads");
+    let o = child.wait_with_output().expect("ends");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
 }

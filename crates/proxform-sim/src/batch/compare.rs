@@ -34,6 +34,12 @@ pub struct CompareRow {
     pub max_y_m: f64,
     /// See `max_x_m`.
     pub max_z_m: f64,
+    /// Largest |error| per attitude axis: α, β, γ (degrees).
+    pub max_alpha_deg: f64,
+    /// See `max_alpha_deg`.
+    pub max_beta_deg: f64,
+    /// See `max_alpha_deg`.
+    pub max_gamma_deg: f64,
     /// RMS position error over the three axes (m).
     pub rms_error_m: f64,
     /// Smallest separation (m).
@@ -122,6 +128,9 @@ pub fn run_comparison_stoppable(
                         max_x_m: e[0],
                         max_y_m: e[1],
                         max_z_m: e[2],
+                        max_alpha_deg: e[3].to_degrees(),
+                        max_beta_deg: e[4].to_degrees(),
+                        max_gamma_deg: e[5].to_degrees(),
                         rms_error_m: ((s.rms_error[0].powi(2) + s.rms_error[1].powi(2) + s.rms_error[2].powi(2)) / 3.0)
                             .sqrt(),
                         min_separation_m: s.min_separation_m,
@@ -179,10 +188,18 @@ pub struct CellSummary {
     pub runs: u64,
     /// Fraction of runs that passed.
     pub pass_fraction: f64,
+    /// The 95 % Wilson interval of the pass fraction: its low end.
+    pub pass_fraction_lo: f64,
+    /// Its high end.
+    pub pass_fraction_hi: f64,
     /// Median of the largest position error (m).
     pub max_error_m_median: f64,
     /// 95th percentile of the largest position error (m).
     pub max_error_m_p95: f64,
+    /// Median of the largest attitude error, any of α, β, γ (degrees).
+    pub max_attitude_deg_median: f64,
+    /// 95th percentile of the same.
+    pub max_attitude_deg_p95: f64,
     /// Median of the largest error over its allowable error (any axis; ≤ 1 passes).
     pub error_ratio_median: f64,
     /// 95th percentile of the same.
@@ -218,13 +235,20 @@ pub fn summarise(rows: &[CompareRow]) -> Vec<CellSummary> {
             let err = col(|r| r.max_error_m);
             let sep = col(|r| r.min_separation_m);
             let ratio = col(|r| r.max_error_ratio);
+            let attitude = col(|r| r.max_alpha_deg.max(r.max_beta_deg).max(r.max_gamma_deg));
+            let passed = cell.iter().filter(|r| r.pass).count() as u64;
+            let (lo, hi) = crate::measure::stats::wilson(passed, cell.len() as u64);
             CellSummary {
                 method: m.into(),
                 condition: c.into(),
                 runs: cell.len() as u64,
-                pass_fraction: cell.iter().filter(|r| r.pass).count() as f64 / cell.len().max(1) as f64,
+                pass_fraction: passed as f64 / cell.len().max(1) as f64,
+                pass_fraction_lo: lo,
+                pass_fraction_hi: hi,
                 max_error_m_median: quantile(&err, 0.5),
                 max_error_m_p95: quantile(&err, 0.95),
+                max_attitude_deg_median: quantile(&attitude, 0.5),
+                max_attitude_deg_p95: quantile(&attitude, 0.95),
                 error_ratio_median: quantile(&ratio, 0.5),
                 error_ratio_p95: quantile(&ratio, 0.95),
                 min_separation_m_median: quantile(&sep, 0.5),

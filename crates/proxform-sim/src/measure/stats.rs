@@ -15,9 +15,33 @@ pub fn quantile_of(values: &mut [f64], q: f64) -> f64 {
     quantile(values, q)
 }
 
+/// The Wilson score interval at 95 % (z = 1.96) of a fraction of `passed` successes in `n`
+/// trials: (low, high), within [0, 1]; (0, 1) when there are no trials.
+pub fn wilson(passed: u64, n: u64) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let (z, n) = (1.959_963_984_540_054, n as f64);
+    let p = passed as f64 / n;
+    let centre = p + z * z / (2.0 * n);
+    let half = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    let d = 1.0 + z * z / n;
+    (((centre - half) / d).clamp(0.0, 1.0), ((centre + half) / d).clamp(0.0, 1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn wilson_intervals() {
+        // Known values: 0 of 10 → (0, 0.2775); 10 of 10 → (0.7225, 1); 50 of 100 → (0.4038, 0.5962).
+        let close = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() < 1e-4 && (a.1 - b.1).abs() < 1e-4;
+        assert!(close(wilson(0, 10), (0.0, 0.2775)), "{:?}", wilson(0, 10));
+        assert!(close(wilson(10, 10), (0.7225, 1.0)), "{:?}", wilson(10, 10));
+        assert!(close(wilson(50, 100), (0.4038, 0.5962)), "{:?}", wilson(50, 100));
+        assert_eq!(wilson(0, 0), (0.0, 1.0));
+    }
 
     #[test]
     fn nearest_rank() {
