@@ -178,7 +178,7 @@ fn distributed(
     if !d.uncontrolled.is_empty() {
         let list: Vec<String> = d.uncontrolled.iter().map(|(u, s)| format!("UAV{u} {s:.1} s")).collect();
         eprintln!(
-            "uncontrolled followers: {} (without their agent, or on the own clock without its commands for more than \
+            "uncontrolled followers: {} (without their agent, or without its answers for more than \
              5 periods; holding their course, a multirotor hovering once its autopilot's failsafe took over)",
             list.join(", ")
         );

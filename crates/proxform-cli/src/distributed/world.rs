@@ -309,7 +309,8 @@ impl NetAgents {
                 }
             }
             Received::Message(_, Message::Command(c)) => {
-                self.seen.insert(c.uav, Instant::now());
+                // Late, or an old one again: no sign of an agent flying now.
+                let _ = c;
                 self.stats.late += 1;
             }
             Received::Message(_, Message::State(m)) if self.digests.contains_key(&m.uav) => self.rejoining(&m),
@@ -634,9 +635,9 @@ impl NetAgents {
 }
 
 impl Agents for NetAgents {
-    /// In lockstep, while the agent is live; on the own clock also while its commands keep
-    /// coming: a UAV that went more than [`COMMAND_MAX_AGE_PERIODS`] periods without one flies
-    /// uncontrolled until one comes again.
+    /// While the agent is live and its answers keep coming: a UAV that went more than
+    /// [`COMMAND_MAX_AGE_PERIODS`] steps without one (in lockstep, its updates unanswered; on
+    /// the own clock, no command to apply) flies uncontrolled until one comes again.
     fn present(&mut self, uav: proxform_core::UavId) -> bool {
         self.drain();
         let held = self.own_clock.get(&(uav.0 + 1)).map_or(0, |o| o.held_periods);
@@ -666,6 +667,8 @@ impl Agents for NetAgents {
         };
         let real_time = self.mode == ClockMode::RealTime && request.phase == Phase::Fly;
         if request.phase == Phase::Fly && request.k == 0 {
+            // Each run counts the steps its agents went without answering from its start.
+            self.own_clock.clear();
             // t = 0 a little ahead, so that every agent has the clock before the first update.
             let lead = Duration::from_millis(200);
             self.start.set(Instant::now() + lead);
@@ -765,9 +768,22 @@ impl Agents for NetAgents {
             }
         }
         out.clear();
-        for a in &self.answers {
+        for (j, a) in self.answers.iter().enumerate() {
             if a.is_none() {
                 self.stats.missing += 1;
+            }
+            // Steps in a row without an answer, as on the own clock: a UAV whose agent has not
+            // answered for longer than a command may be old flies uncontrolled, whatever else
+            // is heard of it (a liveliness token, or its own sealed messages replayed, say
+            // nothing of whether it is flown).
+            if request.phase == Phase::Fly {
+                if let Some(u) = s.uavs.get(j) {
+                    let slot = self.own_clock.entry(u.0 + 1).or_default();
+                    slot.held_periods = match a {
+                        Some(_) => 0,
+                        None => slot.held_periods.saturating_add(1),
+                    };
+                }
             }
             out.push(a.unwrap_or_else(holding));
         }
