@@ -198,6 +198,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable, &vehicle)?;
         let faults = world::faults(&spec.fault, n)?;
+        if let Some(by) = reassign_on_loss {
+            placement::reassignments_within_bounds(by, n, &faults)?;
+        }
         if let Some(k) =
             faults.iter().position(|f| matches!(f, crate::faults::Fault::Join { uav, .. } if *uav == navigator))
         {
@@ -480,21 +483,66 @@ impl TryFrom<ScenarioSpec> for Scenario {
 /// where another UAV flies then (its slot in the formation flown at that time): it would
 /// appear on top of it.
 fn joins_clear_of_the_others(sc: &Scenario) -> Result<(), SpecError> {
-    use crate::faults::{is_active, Fault};
+    use crate::faults::{allows, Fault};
+    use std::collections::{BTreeMap, HashMap};
+    // The joins by instant: where every UAV flies then is found once per instant, on a grid of
+    // cells the size of the safety distance (linear in the UAVs and the joins, whatever their
+    // number).
+    let mut instants: BTreeMap<u64, Vec<usize>> = BTreeMap::new();
     for (k, f) in sc.faults().iter().enumerate() {
-        let Fault::Join { uav, at_s, offset_m } = *f else { continue };
+        if let Fault::Join { at_s, .. } = *f {
+            instants.entry(at_s.to_bits()).or_default().push(k);
+        }
+    }
+    if instants.is_empty() {
+        return Ok(());
+    }
+    // Each UAV's own faults (those that say when it flies).
+    let mut own: Vec<Vec<&Fault>> = vec![Vec::new(); sc.len()];
+    for f in sc.faults() {
+        if let Some(u) = f.uav().filter(|u| u.index() < sc.len()) {
+            own[u.index()].push(f);
+        }
+    }
+    let safety = sc.safety_distance_m();
+    let cell = |p: &[f64; 3]| -> [i64; 3] { p.map(|v| (v / safety.max(1e-9)).floor() as i64) };
+    for (bits, joins) in instants {
+        let at_s = f64::from_bits(bits);
         let formation = sc.formation_at(at_s);
         let nav_slot = &formation.slots[sc.navigator().index()];
         let nav = sc.path().state_at(at_s, [0.0; 3]);
-        let at = |i: usize| nav + formation.w(&formation.slots[i], nav_slot, &nav);
-        let own = at(uav.index());
-        let appears = [own[0] + offset_m.x, own[1] + offset_m.y, own[2] + offset_m.z];
-        for j in (0..sc.len()).filter(|&j| j != uav.index() && is_active(sc.faults(), j, at_s)) {
-            let other = at(j);
-            let d =
-                ((appears[0] - other[0]).powi(2) + (appears[1] - other[1]).powi(2) + (appears[2] - other[2]).powi(2))
-                    .sqrt();
-            if d < sc.safety_distance_m() {
+        let at = |i: usize| {
+            let s = nav + formation.w(&formation.slots[i], nav_slot, &nav);
+            [s[0], s[1], s[2]]
+        };
+        let mut grid: HashMap<[i64; 3], Vec<(usize, [f64; 3])>> = HashMap::new();
+        for (i, faults) in own.iter().enumerate() {
+            if faults.iter().all(|f| allows(f, at_s)) {
+                let p = at(i);
+                grid.entry(cell(&p)).or_default().push((i, p));
+            }
+        }
+        for k in joins {
+            let Fault::Join { uav, offset_m, .. } = sc.faults()[k] else { continue };
+            let slot = at(uav.index());
+            let appears = [slot[0] + offset_m.x, slot[1] + offset_m.y, slot[2] + offset_m.z];
+            let c = cell(&appears);
+            let near = (-1..=1)
+                .flat_map(|dx| (-1..=1).flat_map(move |dy| (-1..=1).map(move |dz| [c[0] + dx, c[1] + dy, c[2] + dz])));
+            let closest = near
+                .filter_map(|c| grid.get(&c))
+                .flatten()
+                .filter(|(j, _)| *j != uav.index())
+                .map(|(j, p)| {
+                    (
+                        *j,
+                        ((appears[0] - p[0]).powi(2) + (appears[1] - p[1]).powi(2) + (appears[2] - p[2]).powi(2))
+                            .sqrt(),
+                    )
+                })
+                .filter(|(_, d)| *d < safety)
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            if let Some((j, d)) = closest {
                 return Err(err(
                     format!("fault[{}].offset_m", k + 1),
                     format!(
@@ -503,7 +551,7 @@ fn joins_clear_of_the_others(sc: &Scenario) -> Result<(), SpecError> {
                         uav.0 + 1,
                         show(at_s),
                         j + 1,
-                        show(sc.safety_distance_m())
+                        show(safety)
                     ),
                 ));
             }

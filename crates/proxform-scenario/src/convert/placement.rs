@@ -258,3 +258,38 @@ pub fn assignment_within_bounds(
     }
     Ok(())
 }
+
+/// With `reassign_on_loss`, the work of every loss together: each instant at which UAVs are
+/// removed re-assigns the formation (up to [`proxform_core::assignment::MAX_CANDIDATES`]
+/// assignments of `n` UAVs), so `L` such instants may take the UAVs that one loss takes at
+/// most divided by L^(1/3) (the work grows with the cube of their number). Refused when read,
+/// naming the limit for that many losses.
+pub fn reassignments_within_bounds(by: AssignBy, n: usize, faults: &[crate::faults::Fault]) -> Result<(), SpecError> {
+    use proxform_core::assignment::max_assigned;
+    let mut instants: Vec<u64> = faults
+        .iter()
+        .filter_map(|f| match f {
+            crate::faults::Fault::Remove { at_s, .. } => Some(at_s.to_bits()),
+            _ => None,
+        })
+        .collect();
+    instants.sort_unstable();
+    instants.dedup();
+    let losses = instants.len();
+    if losses < 2 {
+        return Ok(());
+    }
+    let max = (max_assigned(by, true) as f64 / (losses as f64).cbrt()).floor() as usize;
+    if n > max {
+        return Err(err(
+            "formation.reassign_on_loss",
+            format!(
+                "{n} UAVs re-assigned after each of {losses} losses (removals at {losses} instants): more work than \
+                 {} UAVs after one; with {losses} losses at most {max} UAVs (the work of each grows with the cube \
+                 of their number); remove them at fewer instants, or set reassign_on_loss = false",
+                max_assigned(by, true)
+            ),
+        ));
+    }
+    Ok(())
+}
