@@ -70,6 +70,10 @@ pub struct ProximityController {
     /// its measured velocity is its position fix's error moving, which moves every onboard
     /// observation alike.
     own_frame: Option<Box<OwnFix>>,
+    /// The UAVs of which this step holds an observation that counts (not a close-range
+    /// detection, not left out of the frame): a lookup per observation, where a search of the
+    /// others made a swarm broadcasting to all quadratic per UAV. Working memory.
+    counted: std::collections::HashSet<u32>,
 }
 
 /// A UAV's own measured position and velocity at a time (relative sensing).
@@ -217,6 +221,7 @@ impl ProximityController {
             avoidance,
             trend,
             own_frame: None,
+            counted: std::collections::HashSet::new(),
         })
     }
 
@@ -416,11 +421,12 @@ impl ProximityController {
     /// beside the onboard detection of the same UAV) only feeds its track; the first report
     /// stands for it in the areas.
     fn sort_into_areas(&mut self, now_s: f64, own: &State9, observations: &[Observation]) {
-        let Self { id: me, setup, tracks, nearest, .. } = self;
+        let Self { id: me, setup, tracks, nearest, counted, .. } = self;
         let me = *me;
         let params = &setup.params;
         let r2 = params.areas.sensing_range_m.powi(2);
         nearest.iter_mut().for_each(|a| a.0 = EMPTY);
+        counted.clear();
         let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
             if o.source == ObservationSource::Close {
@@ -430,12 +436,9 @@ impl ProximityController {
                 continue;
             }
             // (A report left out of the frame stands for nothing: a later one of the same UAV,
-            // a relay placed in the frame, takes the place.)
-            if observations[..k].iter().any(|p| {
-                p.id == o.id
-                    && p.source != ObservationSource::Close
-                    && !out_of_frame(params, tracks, p, observations, now_s)
-            }) {
+            // a relay placed in the frame, takes the place.) A UAV observed again: its track
+            // takes this one too.
+            if !counted.insert(o.id.0) {
                 tracks.predict(o, now_s, params.dt_s);
                 continue;
             }
@@ -457,13 +460,7 @@ impl ProximityController {
         let navigator = self.navigator;
         for s in 0..tracks.slots() {
             let Some((id, _)) = coast(params, tracks, navigator, s, now_s) else { continue };
-            if id == me
-                || observations.iter().any(|o| {
-                    o.id == id
-                        && o.source != ObservationSource::Close
-                        && !out_of_frame(params, tracks, o, observations, now_s)
-                })
-            {
+            if id == me || counted.contains(&id.0) {
                 continue;
             }
             let x = tracks.state_at(s, now_s);

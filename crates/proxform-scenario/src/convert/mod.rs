@@ -381,6 +381,22 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ),
             ));
         }
+        // Every UAV hearing every other within the radio's range: n² reports a step.
+        if radio.broadcast_all && n > BROADCAST_ALL_SAYS_ABOVE {
+            warnings.push(err(
+                "radio.broadcast_all",
+                format!(
+                    "{n} UAVs each hear every other{}: up to {:.1e} radio reports a step, work that grows with the \
+                     square of the swarm (a flight of thousands takes minutes); a shorter radio.range_m bounds what \
+                     each hears",
+                    match radio.range_m.is_finite() {
+                        true => format!(" within {} m", show(radio.range_m)),
+                        false => String::new(),
+                    },
+                    (n as f64) * (n as f64 - 1.0)
+                ),
+            ));
+        }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &formation_spec));
         if spec.controller.turn_feedforward == Some(true) && formation.frame == proxform_core::FormationFrame::World {
             warnings.push(err(
@@ -482,6 +498,9 @@ impl TryFrom<ScenarioSpec> for Scenario {
 /// Refuses a UAV that joins (`[[fault]] kind = "join"`) closer than the safety distance to
 /// where another UAV flies then (its slot in the formation flown at that time): it would
 /// appear on top of it.
+/// Beyond this many UAVs broadcasting to all, the scenario says what that costs.
+const BROADCAST_ALL_SAYS_ABOVE: usize = 1000;
+
 fn joins_clear_of_the_others(sc: &Scenario) -> Result<(), SpecError> {
     use crate::faults::{allows, Fault};
     use std::collections::{BTreeMap, HashMap};

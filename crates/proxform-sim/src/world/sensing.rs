@@ -53,6 +53,11 @@ pub struct SensorScratch {
     close: Vec<u32>,
     /// Messages within radio range ([`Reach::for_each`]).
     heard: Vec<u32>,
+    /// Per UAV, whether this perception already holds an observation of it (any, or onboard):
+    /// equal to `stamp` when it does (a number per perception, so nothing is cleared).
+    seen_any: Vec<u32>,
+    seen_onboard: Vec<u32>,
+    stamp: u32,
 }
 
 impl SensorScratch {
@@ -64,6 +69,9 @@ impl SensorScratch {
             refs: Vec::with_capacity(8),
             close: Vec::with_capacity(8),
             heard: Vec::new(),
+            seen_any: Vec::new(),
+            seen_onboard: Vec::new(),
+            stamp: 0,
         }
     }
 }
@@ -199,16 +207,40 @@ impl ProximitySensor {
             let n = states.len();
             let mut relayed: Option<&Message> = None;
             let messages = link.messages;
-            link.reach.for_each(messages.len(), p, radio.range_m, &mut scratch.heard, |k| {
+            // What this perception holds already, by UAV (a lookup per message: a search of
+            // the observations made broadcast to all cubic in the swarm's size).
+            scratch.stamp = scratch.stamp.wrapping_add(1);
+            if scratch.stamp == 0 {
+                scratch.seen_any.fill(0);
+                scratch.seen_onboard.fill(0);
+                scratch.stamp = 1;
+            }
+            if scratch.seen_any.len() < n {
+                scratch.seen_any.resize(n, 0);
+                scratch.seen_onboard.resize(n, 0);
+            }
+            let stamp = scratch.stamp;
+            for o in &out[start..] {
+                if let Some(slot) = scratch.seen_any.get_mut(o.id.index()) {
+                    *slot = stamp;
+                    if o.source == ObservationSource::Onboard {
+                        scratch.seen_onboard[o.id.index()] = stamp;
+                    }
+                }
+            }
+            let (heard, seen_any, seen_onboard) = (&mut scratch.heard, &mut scratch.seen_any, &scratch.seen_onboard);
+            link.reach.for_each(messages.len(), p, radio.range_m, heard, |k| {
                 let m = &messages[k];
                 let j = m.sender as usize;
                 let about = m.about as usize;
                 // (A relative relay is in the receiver's frame: only its own view of the UAV
                 // makes it redundant, not a report in another's frame.)
                 let seen = !link.fuse
-                    && out[start..]
-                        .iter()
-                        .any(|o| o.id.index() == about && (!m.relative || o.source == ObservationSource::Onboard));
+                    && about < n
+                    && match m.relative {
+                        true => seen_onboard[about] == stamp,
+                        false => seen_any[about] == stamp,
+                    };
                 if j == i || about == i || j >= n || about >= n || !link.active[j] || seen {
                     return;
                 }
@@ -232,6 +264,7 @@ impl ProximitySensor {
                     age_s: link.delay_s,
                     source: ObservationSource::Radio,
                 });
+                seen_any[j] = stamp;
             });
             if let Some(m) = relayed {
                 let age_s = link.delay_s + m.age_s;
