@@ -70,10 +70,19 @@ pub struct ProximityController {
     /// its measured velocity is its position fix's error moving, which moves every onboard
     /// observation alike.
     own_frame: Option<Box<OwnFix>>,
-    /// The UAVs of which this step holds an observation that counts (not a close-range
-    /// detection, not left out of the frame): a lookup per observation, where a search of the
-    /// others made a swarm broadcasting to all quadratic per UAV. Working memory.
-    counted: std::collections::HashSet<u32>,
+}
+
+/// Up to this many observations a step, the controller searches them for the UAVs it has
+/// counted; beyond, it looks them up in [`COUNTED`].
+const SCAN_UP_TO: usize = 32;
+
+thread_local! {
+    /// With more than [`SCAN_UP_TO`] observations in a step, the UAVs of which it holds one
+    /// that counts (not a close-range detection, not left out of the frame): a lookup per
+    /// observation, where a search of the others made a swarm broadcasting to all quadratic
+    /// per UAV. The thread's scratch (cleared at each use), so a controller keeps no memory
+    /// for it.
+    static COUNTED: std::cell::RefCell<std::collections::HashSet<u32>> = std::cell::RefCell::default();
 }
 
 /// A UAV's own measured position and velocity at a time (relative sensing).
@@ -221,7 +230,6 @@ impl ProximityController {
             avoidance,
             trend,
             own_frame: None,
-            counted: std::collections::HashSet::new(),
         })
     }
 
@@ -421,12 +429,34 @@ impl ProximityController {
     /// beside the onboard detection of the same UAV) only feeds its track; the first report
     /// stands for it in the areas.
     fn sort_into_areas(&mut self, now_s: f64, own: &State9, observations: &[Observation]) {
-        let Self { id: me, setup, tracks, nearest, counted, .. } = self;
+        match observations.len() > SCAN_UP_TO {
+            true => COUNTED.with_borrow_mut(|c| {
+                c.clear();
+                self.sort_into_areas_with(now_s, own, observations, Some(c));
+            }),
+            false => self.sort_into_areas_with(now_s, own, observations, None),
+        }
+    }
+
+    /// [`Self::sort_into_areas`], with the set of the UAVs counted so far, or none to search
+    /// the observations for them.
+    fn sort_into_areas_with(
+        &mut self,
+        now_s: f64,
+        own: &State9,
+        observations: &[Observation],
+        mut counted: Option<&mut std::collections::HashSet<u32>>,
+    ) {
+        let Self { id: me, setup, tracks, nearest, .. } = self;
         let me = *me;
         let params = &setup.params;
         let r2 = params.areas.sensing_range_m.powi(2);
         nearest.iter_mut().for_each(|a| a.0 = EMPTY);
-        counted.clear();
+        // Whether an observation of `id` that counts was met (among the first `k`), and
+        // remember `id`'s (the k-th observation counts).
+        let valid = |p: &Observation, tracks: &NeighbourTracks| {
+            p.source != ObservationSource::Close && !out_of_frame(params, tracks, p, observations, now_s)
+        };
         let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
             if o.source == ObservationSource::Close {
@@ -438,7 +468,11 @@ impl ProximityController {
             // (A report left out of the frame stands for nothing: a later one of the same UAV,
             // a relay placed in the frame, takes the place.) A UAV observed again: its track
             // takes this one too.
-            if !counted.insert(o.id.0) {
+            let again = match counted.as_deref_mut() {
+                Some(c) => !c.insert(o.id.0),
+                None => observations[..k].iter().any(|p| p.id == o.id && valid(p, tracks)),
+            };
+            if again {
                 tracks.predict(o, now_s, params.dt_s);
                 continue;
             }
@@ -460,7 +494,11 @@ impl ProximityController {
         let navigator = self.navigator;
         for s in 0..tracks.slots() {
             let Some((id, _)) = coast(params, tracks, navigator, s, now_s) else { continue };
-            if id == me || counted.contains(&id.0) {
+            let observed = match counted.as_deref() {
+                Some(c) => c.contains(&id.0),
+                None => observations.iter().any(|o| o.id == id && valid(o, tracks)),
+            };
+            if id == me || observed {
                 continue;
             }
             let x = tracks.state_at(s, now_s);
