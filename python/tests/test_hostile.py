@@ -120,3 +120,12 @@ def test_a_controller_for_a_uav_that_is_not_an_int_names_the_argument(bad):
         proxform.Controller(proxform.load("paper"), bad)
     with pytest.raises(ValueError, match="uav"):
         proxform.Controller(proxform.load("paper"), 2**70)
+
+
+def test_controllers_name_a_uav_number_that_is_not_whole():
+    sc = proxform.load("paper")
+    with pytest.raises(TypeError, match=r"uavs\[0\]: a UAV number \(an int\), not float 2.9"):
+        proxform.Controllers(sc, [2.9, 3])
+    with pytest.raises(ValueError, match="uavs: a sequence of UAV numbers"):
+        proxform.Controllers(sc, 5)
+    assert proxform.Controllers(sc, np.array([2, 3])).uavs == [2, 3]

@@ -95,6 +95,28 @@ fn report_folder(args: &ReportArgs) -> anyhow::Result<std::process::ExitCode> {
     Ok(std::process::ExitCode::SUCCESS)
 }
 
+/// `text` as it may go to a terminal: control characters (but the line breaks of a message of
+/// several lines) and the characters that reorder text (bidirectional overrides) written as
+/// escapes, so that a value quoted from a file or an argument cannot move the cursor, clear the
+/// screen or disguise what is said.
+pub fn terminal_safe(text: &str) -> std::borrow::Cow<'_, str> {
+    let unsafe_char = |c: char| {
+        (c.is_control() && c != '\n' && c != '\t')
+            || matches!(c, '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !text.chars().any(unsafe_char) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 16);
+    for c in text.chars() {
+        match unsafe_char(c) {
+            true => out.push_str(&format!("\\u{{{:x}}}", u32::from(c))),
+            false => out.push(c),
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 /// A closed pipe (`proxform scenarios | head`) ends the output quietly, wherever it is printed:
 /// `println!` panics on it (Rust ignores SIGPIPE), and that panic is not an error of ours.
 fn quiet_on_closed_pipe() {
@@ -111,6 +133,18 @@ fn quiet_on_closed_pipe() {
         }
         default(info);
     }));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::terminal_safe;
+
+    #[test]
+    fn what_reaches_the_terminal_cannot_steer_it() {
+        assert_eq!(terminal_safe("kind \"v\u{1b}[2J\""), "kind \"v\\u{1b}[2J\"");
+        assert_eq!(terminal_safe("a\u{202e}b"), "a\\u{202e}b");
+        assert_eq!(terminal_safe("two\nlines\tok"), "two\nlines\tok");
+    }
 }
 
 fn main() -> std::process::ExitCode {
@@ -140,7 +174,7 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", terminal_safe(&format!("{e:#}")));
             std::process::ExitCode::from(2)
         }
     }

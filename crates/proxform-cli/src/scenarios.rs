@@ -47,13 +47,14 @@ pub fn load_spec(path: &Path) -> Result<(ScenarioSpec, Source)> {
 /// Prints the scenario's warnings to standard error, located in its file when it has one.
 pub fn warn(scenario: &Scenario, source: &Source) {
     for w in scenario.warnings() {
-        match source {
+        let said = match source {
             Source::File { name, text } => match load::locate(text, &w.key) {
-                Some(line) => eprintln!("warning: {name}:{line}: {w}"),
-                None => eprintln!("warning: {name}: {w}"),
+                Some(line) => format!("warning: {name}:{line}: {w}"),
+                None => format!("warning: {name}: {w}"),
             },
-            Source::BuiltIn => eprintln!("warning: {w}"),
-        }
+            Source::BuiltIn => format!("warning: {w}"),
+        };
+        eprintln!("{}", crate::terminal_safe(&said));
     }
 }
 

@@ -29,6 +29,9 @@ pub enum KeyError {
     /// A key file that cannot be read or written as one.
     #[error("{0}")]
     File(String),
+    /// A key anyone could guess (every byte the same).
+    #[error("a flight key of one byte repeated is no secret: make one with --flight-key NEW_FILE")]
+    Weak,
 }
 
 /// The key of [`ENV`] in this process's environment, if it is set.
@@ -46,6 +49,16 @@ pub fn read_key_file(path: &std::path::Path) -> Result<FlightKey, KeyError> {
     let meta = std::fs::symlink_metadata(path).map_err(io)?;
     if !meta.is_file() || meta.len() > 1024 {
         return Err(KeyError::File(format!("{} is not a key file (a regular file of 64 hex digits)", path.display())));
+    }
+    // Readable by others, it is not the owner's secret (as ssh refuses such a key).
+    use std::os::unix::fs::PermissionsExt;
+    let mode = meta.permissions().mode() & 0o777;
+    if mode & 0o077 != 0 {
+        return Err(KeyError::File(format!(
+            "{} can be read by others (mode {mode:o}): a flight key must be its owner's alone (chmod 600 {})",
+            path.display(),
+            path.display()
+        )));
     }
     FlightKey::from_hex(&std::fs::read_to_string(path).map_err(io)?)
 }
@@ -102,6 +115,9 @@ impl FlightKey {
         let mut bytes = [0u8; 32];
         for (i, pair) in t.as_bytes().chunks(2).enumerate() {
             bytes[i] = (digit(pair[0]).unwrap_or(0) * 16 + digit(pair[1]).unwrap_or(0)) as u8;
+        }
+        if bytes.iter().all(|b| *b == bytes[0]) {
+            return Err(KeyError::Weak);
         }
         Ok(Self::from_bytes(&bytes))
     }
@@ -161,6 +177,22 @@ mod tests {
         assert_eq!(again.open("proxform/v1/s/uav/3/cmd", &sealed), Some(&b"PXF command"[..]));
         assert_eq!(FlightKey::from_hex("abc").map(|_| ()), Err(KeyError::Format(3)));
         assert!(FlightKey::from_hex(&"g".repeat(64)).is_err());
+        assert_eq!(FlightKey::from_hex(&"0".repeat(64)).map(|_| ()), Err(KeyError::Weak));
         assert_ne!(k.hex(), other.hex());
+    }
+
+    #[test]
+    fn a_key_file_others_can_read_is_refused() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = std::env::temp_dir().join(format!("proxform-key-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("a folder");
+        let path = dir.join("flight.key");
+        let made = key_file(&path).expect("a new key, 0600");
+        assert_eq!(read_key_file(&path).map(|k| k.hex().to_string()).ok(), Some(made.hex().to_string()));
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o644)).expect("chmod");
+        let e = read_key_file(&path).map(|_| ()).expect_err("world-readable");
+        assert!(e.to_string().contains("can be read by others (mode 644)"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -390,10 +390,38 @@ impl PyControllers {
     /// The controllers of `uavs` (numbers from 1; default: every UAV but the navigator).
     #[new]
     #[pyo3(signature = (scenario, uavs = None))]
-    fn new(scenario: &Bound<'_, PyScenario>, uavs: Option<Vec<i64>>) -> PyResult<Self> {
+    fn new(scenario: &Bound<'_, PyScenario>, uavs: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let sc = scenario.get().inner.clone();
         let nav = sc.navigator().0 as i64 + 1;
-        let uavs = uavs.unwrap_or_else(|| (1..=sc.len() as i64).filter(|u| *u != nav).collect());
+        // Each UAV number as Controller's `uav` is checked (a whole number, not 2.9), the
+        // argument named.
+        let uavs: Vec<i64> = match uavs {
+            None => (1..=sc.len() as i64).filter(|u| *u != nav).collect(),
+            Some(list) => {
+                let items = list.try_iter().map_err(|_| {
+                    bad(format!(
+                        "uavs: a sequence of UAV numbers (from 1), not {}",
+                        list.get_type().name().map_or_else(|_| "that".into(), |n| n.to_string())
+                    ))
+                })?;
+                let mut out = Vec::new();
+                for (k, item) in items.enumerate() {
+                    let item = item?;
+                    let whole =
+                        !item.is_instance_of::<pyo3::types::PyBool>() && !item.is_instance_of::<pyo3::types::PyFloat>();
+                    match item.extract::<i64>() {
+                        Ok(u) if whole => out.push(u),
+                        _ => {
+                            let kind = item.get_type().name().map_or_else(|_| "?".into(), |n| n.to_string());
+                            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                                "uavs[{k}]: a UAV number (an int), not {kind} {item}"
+                            )));
+                        }
+                    }
+                }
+                out
+            }
+        };
         let mut seen = vec![false; sc.len()];
         let mut ids = Vec::with_capacity(uavs.len());
         let mut agents = Vec::with_capacity(uavs.len());

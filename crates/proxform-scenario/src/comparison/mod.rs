@@ -396,6 +396,16 @@ impl Comparison {
                     if !(at.is_finite() && at >= 0.0) {
                         return Err(bad(key("fail_at_s"), format!("must be a time ≥ 0 s, found {at}")));
                     }
+                    if at >= base.duration_s() {
+                        return Err(bad(
+                            key("fail_at_s"),
+                            format!(
+                                "UAV {u} would fail at {at} s, after the flight's {} s: it never fails (a time \
+                                 before the end, or a longer scenario)",
+                                base.duration_s()
+                            ),
+                        ));
+                    }
                     Some((UavId(u - 1), at))
                 }
                 None if c.fail_at_s.is_some() => {
@@ -472,6 +482,7 @@ mod tests {
             (format!("{head}[[condition]]\nname = 'a'\nradio_loss = 1.5\n"), "condition[1].radio_loss"),
             (format!("{head}[[condition]]\nname = 'a'\nradio_delay_s = 0.05\n"), "condition[1].radio_delay_s"),
             (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 9\n"), "condition[1].fail_uav"),
+            (format!("{head}[[condition]]\nname = 'a'\nfail_uav = 2\nfail_at_s = 1e4\n"), "condition[1].fail_at_s"),
             (
                 format!("{head}[[condition]]\nname = 'a'\nchannel_loss = 0.3\ndropout = 0.1\n"),
                 "condition[1].channel_loss",
