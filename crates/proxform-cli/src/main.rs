@@ -135,18 +135,6 @@ fn quiet_on_closed_pipe() {
     }));
 }
 
-#[cfg(test)]
-mod tests {
-    use super::terminal_safe;
-
-    #[test]
-    fn what_reaches_the_terminal_cannot_steer_it() {
-        assert_eq!(terminal_safe("kind \"v\u{1b}[2J\""), "kind \"v\\u{1b}[2J\"");
-        assert_eq!(terminal_safe("a\u{202e}b"), "a\\u{202e}b");
-        assert_eq!(terminal_safe("two\nlines\tok"), "two\nlines\tok");
-    }
-}
-
 fn main() -> std::process::ExitCode {
     quiet_on_closed_pipe();
     let cli = Cli::parse();
@@ -177,5 +165,17 @@ fn main() -> std::process::ExitCode {
             eprintln!("error: {}", terminal_safe(&format!("{e:#}")));
             std::process::ExitCode::from(2)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::terminal_safe;
+
+    #[test]
+    fn what_reaches_the_terminal_cannot_steer_it() {
+        assert_eq!(terminal_safe("kind \"v\u{1b}[2J\""), "kind \"v\\u{1b}[2J\"");
+        assert_eq!(terminal_safe("a\u{202e}b"), "a\\u{202e}b");
+        assert_eq!(terminal_safe("two\nlines\tok"), "two\nlines\tok");
     }
 }
