@@ -411,6 +411,28 @@ impl TryFrom<ScenarioSpec> for Scenario {
                 ),
             ));
         }
+        // Every UAV perceiving every other: a sensing range that spans the formation.
+        if n > BROADCAST_ALL_SAYS_ABOVE {
+            let (lo, hi) = formation.slots.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), s| {
+                let o = s.offset_m;
+                ([lo[0].min(o.x), lo[1].min(o.y), lo[2].min(o.z)], [hi[0].max(o.x), hi[1].max(o.y), hi[2].max(o.z)])
+            });
+            let span = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+            let range = setup.params().areas.sensing_range_m;
+            if range >= span {
+                warnings.push(err(
+                    "controller.sensing_range_m",
+                    format!(
+                        "{} m spans the whole formation ({:.0} m across): each of the {n} UAVs scans every other, \
+                         {:.1e} pairs a step, work that grows with the square of the swarm (a flight of thousands \
+                         takes minutes); a range of a few spacings finds the same nearest neighbours",
+                        show(range),
+                        span,
+                        (n as f64) * (n as f64 - 1.0)
+                    ),
+                ));
+            }
+        }
         warnings.extend(formation::drifting_groups(&dependencies, navigator, &formation_spec));
         if spec.controller.turn_feedforward == Some(true) && formation.frame == proxform_core::FormationFrame::World {
             warnings.push(err(
