@@ -71,7 +71,15 @@ pub fn check(spec: ScenarioSpec, text: &str, source_name: &str) -> Result<Scenar
 pub fn syntax_error(text: &str, source_name: &str, e: &toml::de::Error) -> LoadError {
     let line = e.span().map(|s| line_of(text, s.start));
     let key = line.and_then(|l| key_at(text, l));
-    LoadError { source_name: source_name.into(), line, key, message: plain_words(e.message()) }
+    let mut message = plain_words(e.message());
+    // A count beyond any whole number a key takes: the limit of the key itself, where it has one.
+    if key.as_deref().is_some_and(|k| k.ends_with(".uavs") || k == "uavs") {
+        message = message.replace(
+            "from 0 to 4294967295 (within that, the key's own limit applies)",
+            &format!("from 1 to {} (the most UAVs a scenario flies)", crate::convert::MAX_UAVS),
+        );
+    }
+    LoadError { source_name: source_name.into(), line, key, message }
 }
 
 /// Serde's and TOML's words for types, in the words of a file's author.
