@@ -83,8 +83,14 @@ def from_folder(folder: "os.PathLike[str] | str", path: "os.PathLike[str] | str 
     for name in ("trajectories.csv", "summary.json"):
         if not os.path.isfile(os.path.join(folder, name)):
             raise FileNotFoundError(f"{folder}: no {name} (give the output folder of `proxform run`)")
-    with open(os.path.join(folder, "summary.json"), encoding="utf-8") as f:
-        summary = json.load(f)
+    summary_path = os.path.join(folder, "summary.json")
+    with open(summary_path, encoding="utf-8") as f:
+        try:
+            summary = json.load(f)
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{summary_path}: not a proxform summary ({e})") from None
+    if not isinstance(summary, dict):
+        raise ValueError(f"{summary_path}: not a proxform summary (not a JSON object)")
     traj = _read_csv(os.path.join(folder, "trajectories.csv"))
     return write(traj, summary, path if path is not None else os.path.join(folder, "flight.rrd"))
 
@@ -98,6 +104,14 @@ def write(
     path = os.fspath(path)
     if os.path.isdir(path):
         raise IsADirectoryError(f"to_rerun: {path} is a folder (give a file name, e.g. flight.rrd)")
+    # Written fresh, never through a link or into a FIFO or device (as the CLI's outputs).
+    if os.path.lexists(path):
+        if os.path.islink(path) or not os.path.isfile(path):
+            raise FileExistsError(f"to_rerun: {path} exists and is not a regular file (a link, FIFO or device): not written")
+        os.remove(path)
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent):
+        raise FileNotFoundError(f"to_rerun: {parent} is not a folder (the recording goes into an existing one)")
     name = summary.get("scenario", "flight")
     seed = summary.get("seed")
     rec = rr.RecordingStream("proxform", recording_id=recording_id or f"{name}-seed-{seed}")
@@ -168,7 +182,7 @@ def main(argv: Optional[list] = None) -> int:
         return 2
     try:
         print("wrote", from_folder(*args))
-    except (OSError, ValueError, ImportError) as e:
+    except (OSError, ValueError, ImportError, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0

@@ -73,3 +73,15 @@ def test_an_output_folder_converts_and_bad_uses_say_what_is_wrong(tmp_path):
     assert all(rows[f"/swarm/uav/{u}"] == 1001 for u in range(1, 7)), rows
     bad = subprocess.run([sys.executable, "-m", "proxform.rrd", str(tmp_path / "nowhere")], capture_output=True, text=True)
     assert bad.returncode == 2 and "no trajectories.csv" in bad.stderr, bad.stderr
+
+
+def test_a_recording_is_written_fresh_never_through_a_link(tmp_path):
+    result = proxform.run("paper", seed=2, runs=1)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep")
+    (tmp_path / "link.rrd").symlink_to(victim)
+    with pytest.raises(FileExistsError, match="not a regular file"):
+        result.to_rerun(tmp_path / "link.rrd")
+    assert victim.read_text() == "keep"
+    with pytest.raises(FileNotFoundError, match="is not a folder"):
+        result.to_rerun(tmp_path / "nowhere" / "x.rrd")

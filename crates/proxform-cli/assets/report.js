@@ -18,8 +18,10 @@
     if (v === null || v === undefined || !isFinite(v)) return "–";
     if (v === 0) return "0";
     const a = Math.abs(v);
-    const s = a >= 1e5 || a < 1e-3 ? v.toExponential(2) : v.toPrecision(4);
-    return s.includes("e") ? s : s.replace(/\.?0+$/, "");
+    if (a >= 1e5 || a < 1e-3) return v.toExponential(2);
+    if (a >= 1000) return v.toFixed(0);
+    const s = v.toPrecision(4);
+    return s.includes(".") ? s.replace(/\.?0+$/, "") : s;
   };
   const allowable = AX.map((a) => (S.allowable_error ? S.allowable_error[a.key] : null));
 
@@ -161,6 +163,7 @@
       legend.appendChild(document.createTextNode("UAV " + id + "  "));
     });
     if (n > 40) legend.appendChild(document.createTextNode("… and " + (n - 40) + " more"));
+    if (SE.recorded > n) legend.appendChild(document.createTextNode(" (the first " + n + " of the " + SE.recorded + " recorded)"));
     $("series").after(legend);
   }
   const drawCursors = (t) => {
@@ -207,6 +210,10 @@
     return;
   }
   const n = R.uavs.length, F = R.times.length;
+  if (n < S.uavs) {
+    $("replay-section").querySelector("h2").textContent =
+      "Replay of the first run: the " + n + " UAVs trajectories.csv recorded, of " + S.uavs + " (--trajectory-uavs chooses them)";
+  }
   const P = (f, j) => {
     const b = (f * n + j) * 3;
     return R.pos[b] === null ? null : [R.pos[b], R.pos[b + 1], R.pos[b + 2]];

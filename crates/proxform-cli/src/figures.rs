@@ -369,7 +369,7 @@ fn tracks_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Series, 
         .draw()
         .map_err(plot_err)?;
     // The axes' titles at their far ends (the chart is x forward, z up, y across).
-    let titles = [("x (m)", (x.1, z.0, y.0)), ("z (m)", (x.0, z.1, y.0)), ("y (m)", (x.0, z.0, y.1))];
+    let titles = [("y (m)", (x.1, z.0, y.0)), ("z (m)", (x.0, z.1, y.0)), ("x (m)", (x.0, z.0, y.1))];
     chart
         .draw_series(
             titles.iter().map(|(t, at)| Text::new(t.to_string(), *at, look.font(15).into_font().color(&BLACK))),

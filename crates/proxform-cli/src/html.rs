@@ -6,9 +6,10 @@
 //! pairs and faults in time). The page's code is the project's own (`assets/report.js`,
 //! `assets/report.css`), inlined with the data: it opens from disk and fetches nothing.
 //!
-//! Its size is bounded whatever the flight: at most [`MAX_REPLAY_FRAMES`] replay frames and
-//! [`MAX_REPLAY_VALUES`] positions in all, [`MAX_SERIES_POINTS`] points of each error series,
-//! [`HIST_BINS`] bins per distribution; the files are read as streams.
+//! Its size is bounded whatever the flight (about 5 MB at most): at most [`MAX_REPLAY_FRAMES`]
+//! replay frames and [`MAX_REPLAY_VALUES`] positions in all, [`MAX_SERIES_POINTS`] points of
+//! the error series of at most [`MAX_SERIES_UAVS`] UAVs, [`HIST_BINS`] bins per distribution;
+//! the files are read as streams.
 
 use std::path::{Path, PathBuf};
 
@@ -22,9 +23,11 @@ pub const REPORT_FILE: &str = "report.html";
 /// Most frames of the replay.
 pub const MAX_REPLAY_FRAMES: usize = 1500;
 /// Most UAV positions of the replay in all (frames × UAVs).
-pub const MAX_REPLAY_VALUES: usize = 150_000;
+pub const MAX_REPLAY_VALUES: usize = 100_000;
 /// Most points of an error series.
-pub const MAX_SERIES_POINTS: usize = 600;
+pub const MAX_SERIES_POINTS: usize = 500;
+/// Most UAVs whose errors over time are drawn (the first ones recorded).
+pub const MAX_SERIES_UAVS: usize = 48;
 /// Bins of a distribution over the runs.
 pub const HIST_BINS: usize = 30;
 
@@ -89,7 +92,8 @@ fn escape(s: &str) -> String {
 /// its script element (`<` is written `\u003c`).
 fn page(data: &Value) -> String {
     let json = data.to_string().replace('<', "\\u003c");
-    let title = escape(data["name"].as_str().unwrap_or("proxform"));
+    // (Braces too: the title is placed first, and must hold no placeholder of the others.)
+    let title = escape(data["name"].as_str().unwrap_or("proxform")).replace('{', "&#123;").replace('}', "&#125;");
     TEMPLATE
         .replace("{{TITLE}}", &title)
         .replace("/*{{STYLE}}*/", STYLE)
@@ -103,8 +107,45 @@ fn data(dir: &Path, scenario: Option<&Scenario>) -> Result<Value> {
     let text = crate::files::read_input(&summary_path, "summary")?;
     let summary: Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not a proxform summary", summary_path.display()))?;
-    if !summary.is_object() || summary.get("worst_abs_error").is_none() {
-        bail!("{}: not a proxform summary (no worst_abs_error)", summary_path.display());
+    // What the page reads, there and of its kind (else the page would stop half drawn).
+    const AXES_OF: [&str; 5] = ["worst_abs_error", "p99_abs_error", "median_abs_error", "rms_error", "allowable_error"];
+    const NUMBERS: [&str; 9] = [
+        "uavs",
+        "runs",
+        "seed",
+        "pass_fraction",
+        "safety_distance_m",
+        "min_separation_m",
+        "unsafe_runs",
+        "off_path_runs",
+        "adjustments_per_uav_minute",
+    ];
+    const LISTS: [&str; 5] =
+        ["per_uav", "per_uav_worst", "per_uav_adjustments", "per_uav_runs_flown", "per_uav_runs_passed"];
+    let missing =
+        |key: &str, what: &str| anyhow::anyhow!("{}: not a proxform summary ({key}: {what})", summary_path.display());
+    if !summary.is_object() {
+        bail!("{}: not a proxform summary (not a JSON object)", summary_path.display());
+    }
+    for key in AXES_OF {
+        let axes = summary.get(key).ok_or_else(|| missing(key, "missing"))?;
+        if AXES.iter().any(|a| axes.get(a.0).is_none()) {
+            return Err(missing(key, "not the six axes"));
+        }
+    }
+    for key in NUMBERS {
+        if !summary.get(key).is_some_and(|v| v.is_number() || v.is_null()) {
+            return Err(missing(key, "not a number"));
+        }
+    }
+    let followers = summary.get("per_uav").and_then(Value::as_array).map_or(0, Vec::len);
+    for key in LISTS {
+        if summary.get(key).and_then(Value::as_array).map(Vec::len) != Some(followers) {
+            return Err(missing(key, "not a list of one entry per follower"));
+        }
+    }
+    if summary["per_uav_worst"].as_array().into_iter().flatten().any(|w| AXES.iter().any(|a| w.get(a.0).is_none())) {
+        return Err(missing("per_uav_worst", "not the six axes for every follower"));
     }
     let (version, command) = header(dir);
     let runs = dir.join("runs.csv");
@@ -290,8 +331,11 @@ fn trajectories(path: &Path) -> Result<(Value, Value)> {
             }
         }
     }
+    // The error series of the first UAVs recorded only (the replay has them all).
+    let shown = n.min(MAX_SERIES_UAVS);
+    let err: Vec<Value> = err.chunks(6 * n).flat_map(|frame| frame[..6 * shown].iter().cloned()).collect();
     let replay = json!({"times": t_replay, "uavs": uavs, "pos": pos, "within": ok});
-    let series = json!({"times": t_series, "uavs": uavs, "err": err});
+    let series = json!({"times": t_series, "uavs": &uavs[..shown], "err": err, "recorded": uavs.len()});
     Ok((replay, series))
 }
 
@@ -332,6 +376,8 @@ fn of_scenario(sc: &Scenario, replay: &Value) -> Value {
         })
         .chain(sc.schedule().stages().iter().map(|s| json!({"t": s.at_s, "uav": null, "what": "formation change"})))
         .collect();
+    let mut events = events;
+    events.sort_by(|a, b| a["t"].as_f64().unwrap_or(0.0).total_cmp(&b["t"].as_f64().unwrap_or(0.0)));
     json!({
         "allowable": allowable,
         "safety_m": sc.safety_distance_m(),
@@ -366,6 +412,18 @@ pub fn conditions(sc: &Scenario) -> Vec<String> {
         short(noise.velocity_mps),
         short(noise.attitude_rad.to_degrees())
     ));
+    if sc.actuation_error() > 0.0 {
+        out.push(format!("actuation error {} %", short(100.0 * sc.actuation_error())));
+    }
+    if let Some(b) = sc.gnss_bias() {
+        out.push(format!("GNSS bias σ {} m (correlation time {} s)", short(b.sigma_m), short(b.tau_s)));
+    }
+    if sc.dropout() > 0.0 {
+        out.push(format!("observations dropped {} %", short(100.0 * sc.dropout())));
+    }
+    if sc.relative_sensing() {
+        out.push("relative sensing (neighbours in the UAV's own frame)".into());
+    }
     let radio = sc.radio();
     if radio.loss > 0.0 || radio.burst.is_some() {
         out.push(format!(
@@ -382,7 +440,8 @@ pub fn conditions(sc: &Scenario) -> Vec<String> {
         out.push(format!("steady wind {:.1} km/h", w.steady_mps.norm() * 3.6));
     }
     if let Some(t) = &w.turbulence {
-        out.push(format!("turbulence {t:?}").to_lowercase());
+        let severity = format!("{:?}", t.severity).to_lowercase();
+        out.push(format!("{severity} Dryden turbulence (at {} m)", short(t.altitude_m)));
     }
     if w.gust.is_some() {
         out.push("a gust".into());

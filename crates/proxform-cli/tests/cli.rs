@@ -462,6 +462,19 @@ fn a_run_writes_a_report_page_that_fetches_nothing_and_report_remakes_it() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let again = std::fs::read_to_string(dir.join("report.html")).expect("report.html again");
     assert_eq!(again, page, "the page from the folder is the page the run wrote");
+    // A summary without what the page reads is refused, naming the key (the page stopped half
+    // drawn, exit 0).
+    let mut partial: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary")).expect("json");
+    partial.as_object_mut().expect("object").remove("p99_abs_error");
+    std::fs::write(dir.join("summary.json"), partial.to_string()).expect("written");
+    let o = proxform().arg("report").arg(&dir).output().expect("reports");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("p99_abs_error: missing"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     // A folder that is not a run's says so.
     let empty = scratch("cli-report-empty");
     std::fs::create_dir_all(&empty).expect("made");

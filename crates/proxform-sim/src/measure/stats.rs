@@ -26,7 +26,10 @@ pub fn wilson(passed: u64, n: u64) -> (f64, f64) {
     let centre = p + z * z / (2.0 * n);
     let half = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
     let d = 1.0 + z * z / n;
-    (((centre - half) / d).clamp(0.0, 1.0), ((centre + half) / d).clamp(0.0, 1.0))
+    // (None passed: 0 exactly; all: 1, not 1 − 1e-17.)
+    let lo = if passed == 0 { 0.0 } else { ((centre - half) / d).clamp(0.0, 1.0) };
+    let hi = if passed as f64 == n { 1.0 } else { ((centre + half) / d).clamp(0.0, 1.0) };
+    (lo, hi)
 }
 
 #[cfg(test)]
