@@ -201,20 +201,6 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if let Some(by) = reassign_on_loss {
             placement::reassignments_within_bounds(by, n, &faults)?;
         }
-        // A fault of the navigator's own sensors: it flies its planned path, not its estimate.
-        if let Some(k) = faults.iter().position(|f| {
-            matches!(f, crate::faults::Fault::Glitch { uav, .. } | crate::faults::Fault::StuckSensor { uav, .. }
-                if *uav == navigator)
-        }) {
-            return Err(err(
-                format!("fault[{}].uav", k + 1),
-                format!(
-                    "UAV {} is the navigator: it flies its planned path, not its own estimate, so a fault of its \
-                     own sensors changes nothing (give the fault to a follower)",
-                    navigator.0 + 1
-                ),
-            ));
-        }
         if let Some(k) =
             faults.iter().position(|f| matches!(f, crate::faults::Fault::Join { uav, .. } if *uav == navigator))
         {
