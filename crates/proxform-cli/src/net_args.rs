@@ -61,8 +61,8 @@ pub struct NetArgs {
     /// OFFBOARD and streams velocity setpoints flies it. Needs `--clock realtime`.
     #[arg(long, requires = "distributed", value_parser = clap::value_parser!(u16).range(1..))]
     pub mavlink_port: Option<u16>,
-    /// The agents started here fly their UAVs through these MAVLink systems (own state from
-    /// the autopilot, setpoints in OFFBOARD), one UAV per agent process.
+    /// The agents started here fly their UAVs through these MAVLink systems (setpoints in
+    /// OFFBOARD), one UAV per agent process.
     #[arg(long, requires = "mavlink_port")]
     pub agents_mavlink: bool,
     /// Where those agents take their updates: `world` (this world's sensing, the own state

@@ -239,9 +239,8 @@ fn proxform_agents_fly_the_papers_vehicles_through_mavlink_with_attitude_targets
 
 #[test]
 fn without_measurement_noise_the_paper_over_mavlink_is_the_in_process_flight() {
-    // Its agents read their own state from the autopilot, the true one; in process they are
-    // given the measured one. Without measurement noise the two are the same, and so is the
-    // flight: each agent's targets are its input from the state it decided at, and the
+    // Without measurement noise the flight is the in-process one: each agent's targets are its
+    // input from the state it decided at (the last adjusted ones again while it holds), and the
     // vehicle flies them from where it is, as the in-process world applies the input. (The
     // world turning targets back into inputs by the controller's least squares, or the agent
     // taking them from a state its commands on their way had left, made γ 1.4× as large.)

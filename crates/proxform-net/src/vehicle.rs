@@ -2,8 +2,8 @@
 //! what it perceived and heard ([`SenseMsg`]) in; its answer ([`Answer`]: the decision, its
 //! broadcast and the state it was decided at) out. The
 //! network world implements it here ([`NetVehicle`]); a MAVLink autopilot
-//! ([`crate::mavlink::vehicle::MavlinkVehicle`]: own state from the autopilot, the command as a
-//! setpoint) implements the same trait.
+//! ([`crate::mavlink::vehicle::MavlinkVehicle`]: the command as the autopilot's setpoint, the
+//! own state a world's measurement or the autopilot's) implements the same trait.
 
 use std::time::Duration;
 

@@ -68,8 +68,8 @@ struct Args {
     /// OFFBOARD (docs/mavlink.md).
     #[arg(long)]
     mavlink: Option<String>,
-    /// Where the agent's updates come from with --mavlink: `world` (a world's sensing, the own
-    /// state replaced by the autopilot's) or `autopilot` (no world needed: its own state from
+    /// Where the agent's updates come from with --mavlink: `world` (a world's sensing, own
+    /// state included: the world is the UAV's sensors) or `autopilot` (no world needed: its own state from
     /// the autopilot on its own clock, its neighbours from their agents' broadcasts; the
     /// scenario must have every UAV broadcast, radio.broadcast_all).
     #[arg(long, default_value = "world", value_parser = ["world", "autopilot"], requires = "mavlink")]

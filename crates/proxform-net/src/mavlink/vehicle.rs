@@ -1,6 +1,9 @@
 //! An agent's UAV behind a MAVLink autopilot ([`MavlinkVehicle`], `proxform-agent --mavlink`):
-//! its own state comes from the autopilot (LOCAL_POSITION_NED and ATTITUDE in the method's
-//! frame), what it perceived and heard from its sensing over the network as before, and each
+//! with a world's sensing ([`Sensing::World`]) its update is the world's as before (the world
+//! is the UAV's sensors: its own state is the world's measurement, which the world's simulated
+//! autopilot also flies from, as a real one flies from its estimator's state); without
+//! ([`Sensing::Autopilot`]) its own state is the autopilot's (LOCAL_POSITION_NED and ATTITUDE in
+//! the method's frame). Each
 //! decision goes to the autopilot as its velocity and yaw setpoint (the decision's
 //! [`proxform_core::Setpoint`], absolute, chosen at the state the agent believed it had;
 //! SET_POSITION_TARGET_LOCAL_NED; for the paper's kinematic vehicle, whose inputs steer its
@@ -18,7 +21,8 @@
 
 use std::time::{Duration, Instant};
 
-use proxform_core::VehicleModel;
+use proxform_core::state::{Input, State9};
+use proxform_core::{Outcome, VehicleModel};
 
 use super::autopilot::{Autopilot, Safety, Verdict};
 use super::frame::Frame;
@@ -33,7 +37,8 @@ const ASK_EVERY: Duration = Duration::from_millis(500);
 /// Where an agent over MAVLink takes its updates from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Sensing {
-    /// A world's sensing over the network (its own state replaced by the autopilot's).
+    /// A world's sensing over the network, own state included (the world's measurement, from
+    /// which the world's simulated autopilot flies the targets).
     World,
     /// The autopilot's state alone, neighbours by radio: no world needed.
     Autopilot,
@@ -59,10 +64,62 @@ pub struct MavlinkVehicle {
     asked: Option<(Mode, Instant)>,
     beat: Option<Instant>,
     boot: Instant,
+    /// The targets flown while the agent holds.
+    kept: KeptTargets,
     /// Setpoints sent.
     pub setpoints: u64,
     /// Times HOLD was asked by the safety policy, and the last reason.
     pub holds: (u64, Option<&'static str>),
+}
+
+/// What an autopilot is asked to fly, in the method's frame: velocity (m/s), yaw β (rad) and,
+/// for a vehicle whose inputs steer its attitude apart from its velocity, pitch α and roll γ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Targets {
+    /// Velocity (m/s).
+    pub velocity_mps: [f64; 3],
+    /// Yaw β (rad).
+    pub yaw_rad: f64,
+    /// Pitch α and roll γ (rad), for the paper's kinematic vehicle.
+    pub attitude: Option<[f64; 2]>,
+}
+
+/// The targets an autopilot is asked to fly after each answer: an adjusted decision's (the
+/// decision's setpoint, or the velocity, yaw and attitude its input reaches from the state it
+/// was decided at: not the update's, which would undo the commands still on their way); while
+/// the agent holds, the last adjusted targets again (an autopilot keeps flying its last
+/// setpoint, as a held UAV keeps its course in process: targets re-derived from each update's
+/// measured state would fly the sensor's noise every period); before its first adjustment, what
+/// the autopilot reports it has.
+#[derive(Debug, Clone, Default)]
+pub struct KeptTargets {
+    last: Option<Targets>,
+}
+
+impl KeptTargets {
+    /// The targets after `answer`, for `model` at period `dt_s`; `autopilot` is the state the
+    /// autopilot reports, when it has reported one.
+    pub fn next(&mut self, model: &VehicleModel, dt_s: f64, answer: &Answer, autopilot: Option<&State9>) -> Targets {
+        let (decision, at) = (&answer.command.decision, &answer.decided_at);
+        let adjusted = matches!(decision.outcome, Outcome::Adjusted { .. });
+        let zero = Input::zeros();
+        let (from, input) = match (adjusted, self.last, autopilot) {
+            // The decision's own setpoint says what it keeps (the multirotor's).
+            (false, Some(last), _) if decision.setpoint.is_none() => return last,
+            // Nothing adjusted yet: hold what the autopilot has.
+            (false, None, Some(own)) => (own, &zero),
+            _ => (at, &decision.input),
+        };
+        let (velocity_mps, yaw_rad) = match decision.setpoint {
+            Some(sp) => (sp.velocity_mps, sp.yaw_rad),
+            None => model.velocity_setpoint(from, input, dt_s),
+        };
+        let targets = Targets { velocity_mps, yaw_rad, attitude: model.attitude_setpoint(from, input, dt_s) };
+        if adjusted {
+            self.last = Some(targets);
+        }
+        targets
+    }
 }
 
 fn io(e: std::io::Error) -> TransportError {
@@ -87,6 +144,7 @@ impl MavlinkVehicle {
             asked: None,
             beat: None,
             boot: Instant::now(),
+            kept: KeptTargets::default(),
             setpoints: 0,
             holds: (0, None),
         }
@@ -207,14 +265,10 @@ impl Vehicle for MavlinkVehicle {
         let now = Instant::now();
         self.beat(now)?;
         match event {
-            Event::Sense(mut s) => {
+            Event::Sense(s) => {
+                // The world is the UAV's sensors: its own state is the world's measurement (as
+                // in process), the estimate its simulated autopilot flies the targets from.
                 self.last_update = Some(now);
-                // The own state is the autopilot's, when it is fresh.
-                if let Some((own, age)) = self.autopilot.state(&self.frame, now) {
-                    if age.as_secs_f64() <= self.safety.position_timeout_s {
-                        s.own = own;
-                    }
-                }
                 Ok(Event::Sense(s))
             }
             other => {
@@ -226,7 +280,6 @@ impl Vehicle for MavlinkVehicle {
 
     fn command(&mut self, answer: &Answer) -> Result<(), TransportError> {
         let now = Instant::now();
-        let command = &answer.command;
         if self.sensing == Sensing::Autopilot && self.clock.is_none() {
             // Before the flight: nothing for the autopilot.
             return self.net.command(answer);
@@ -235,17 +288,14 @@ impl Vehicle for MavlinkVehicle {
             // The agent's setpoint (absolute), or the velocity and yaw its input reaches from
             // the state it was decided at (not the update's: that would undo the commands
             // still on their way).
-            let at = &answer.decided_at;
-            let (v, beta) = match command.decision.setpoint {
-                Some(sp) => (sp.velocity_mps, sp.yaw_rad),
-                None => self.model.velocity_setpoint(at, &command.decision.input, self.dt_s),
-            };
-            let (v, yaw) = (self.frame.velocity_ned(v), self.frame.yaw(beta));
+            let own = self.autopilot.state(&self.frame, now).map(|(s, _)| s);
+            let targets = self.kept.next(&self.model, self.dt_s, answer, own.as_ref());
+            let (v, yaw) = (self.frame.velocity_ned(targets.velocity_mps), self.frame.yaw(targets.yaw_rad));
             let ms = now.duration_since(self.boot).as_millis() as u32;
             if self.autopilot.send_velocity(v, yaw, ms).map_err(io)? {
                 self.setpoints += 1;
                 // The attitude too, where the vehicle's inputs steer it apart from its velocity.
-                if let Some([alpha, gamma]) = self.model.attitude_setpoint(at, &command.decision.input, self.dt_s) {
+                if let Some([alpha, gamma]) = targets.attitude {
                     self.autopilot.send_attitude([gamma, alpha, yaw], ms).map_err(io)?;
                 }
                 self.ask(Mode::Offboard, now)?;
@@ -262,5 +312,71 @@ impl Vehicle for MavlinkVehicle {
 
     fn listen(&mut self, uavs: &[u32]) -> Result<(), TransportError> {
         self.net.listen(uavs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::{CommandMsg, StateMsg};
+    use proxform_core::state::{ALPHA, BETA, VX, VY};
+    use proxform_core::vehicle::{KinematicModel, MultirotorModel, Setpoint};
+    use proxform_core::Decision;
+
+    fn answer(outcome: Outcome, input: Input, at: State9, setpoint: Option<Setpoint>) -> Answer {
+        let mut decision = Decision::without_areas(outcome, input);
+        decision.setpoint = setpoint;
+        let command = CommandMsg { uav: 2, run: 0, k: 1, t_s: 0.1, age_s: 0.0, decision, digest: 0 };
+        Answer { command, state: StateMsg { uav: 2, k: 1, t_s: 0.1, state: at, rejoining: false }, decided_at: at }
+    }
+
+    fn state(vx: f64, vy: f64, alpha: f64, beta: f64) -> State9 {
+        let mut s = State9::zeros();
+        (s[VX], s[VY], s[ALPHA], s[BETA]) = (vx, vy, alpha, beta);
+        s
+    }
+
+    #[test]
+    fn an_autopilot_keeps_flying_the_last_adjusted_targets_while_its_agent_holds() {
+        let (model, dt) = (VehicleModel::Kinematic(KinematicModel::default()), 0.1);
+        let held = |at| answer(Outcome::Held, Input::zeros(), at, None);
+        let mut kept = KeptTargets::default();
+        // Before any adjustment: what the autopilot reports it has, not the measured state.
+        let truth = state(20.0, 0.0, 0.0, 0.0);
+        let measured = state(20.3, -0.2, 0.01, 0.02);
+        let first = kept.next(&model, dt, &held(measured), Some(&truth));
+        assert_eq!((first.velocity_mps, first.yaw_rad, first.attitude), ([20.0, 0.0, 0.0], 0.0, Some([0.0, 0.0])));
+        // An adjustment: the input's targets from the state it was decided at.
+        let mut u = Input::zeros();
+        (u[0], u[1], u[3]) = (0.5, -0.4, 0.02);
+        let adjusted =
+            kept.next(&model, dt, &answer(Outcome::Adjusted { normalised_sq: 2.0 }, u, measured, None), Some(&truth));
+        let (v, beta) = model.velocity_setpoint(&measured, &u, dt);
+        assert_eq!((adjusted.velocity_mps, adjusted.yaw_rad), (v, beta));
+        assert_eq!(adjusted.attitude, model.attitude_setpoint(&measured, &u, dt));
+        assert!((adjusted.velocity_mps[0] - 20.8).abs() < 1e-9, "{adjusted:?}");
+        // Held at other measured states (the sensor's noise): the same targets, every time.
+        for noisy in [state(20.6, 0.3, -0.02, 0.05), state(19.9, -0.5, 0.03, -0.01)] {
+            assert_eq!(kept.next(&model, dt, &held(noisy), Some(&truth)), adjusted);
+            let alone = answer(Outcome::Alone, Input::zeros(), noisy, None);
+            assert_eq!(kept.next(&model, dt, &alone, Some(&truth)), adjusted);
+        }
+    }
+
+    #[test]
+    fn a_decisions_own_setpoint_is_flown_as_it_is() {
+        // The multirotor's decisions carry the setpoint they keep while holding.
+        let (model, dt) = (VehicleModel::Multirotor(MultirotorModel::default()), 0.1);
+        let mut kept = KeptTargets::default();
+        let at = state(5.0, 0.0, 0.0, 0.0);
+        let sp = Setpoint { velocity_mps: [5.5, 1.0, 0.0], yaw_rad: 0.2 };
+        let mut u = Input::zeros();
+        u[0] = 0.5;
+        let a = kept.next(&model, dt, &answer(Outcome::Adjusted { normalised_sq: 2.0 }, u, at, Some(sp)), None);
+        assert_eq!((a.velocity_mps, a.yaw_rad, a.attitude), (sp.velocity_mps, sp.yaw_rad, None));
+        let later = Setpoint { velocity_mps: [5.0, 0.5, 0.0], yaw_rad: 0.1 };
+        let h =
+            kept.next(&model, dt, &answer(Outcome::Held, Input::zeros(), state(6.0, 0.0, 0.0, 0.0), Some(later)), None);
+        assert_eq!((h.velocity_mps, h.yaw_rad), (later.velocity_mps, later.yaw_rad));
     }
 }
