@@ -11,8 +11,9 @@ pub struct NetArgs {
     /// binary beside `proxform`.
     #[arg(long)]
     pub distributed: bool,
-    /// Do not start agents: wait for agents started elsewhere (`proxform world`).
-    #[arg(long, requires = "distributed")]
+    /// Do not start agents: wait for agents started elsewhere (`proxform world`). Needs
+    /// `--distributed` on `run` (a world is distributed).
+    #[arg(long)]
     pub external_agents: bool,
     /// UAVs per agent process.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
@@ -59,14 +60,14 @@ pub struct NetArgs {
     /// north is the formation's initial course) sending to 127.0.0.1:PORT + i − 1, as PX4
     /// SITL's instances send to 14540 + i; an outside controller that switches a follower to
     /// OFFBOARD and streams velocity setpoints flies it. Needs `--clock realtime`.
-    #[arg(long, requires = "distributed", value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     pub mavlink_port: Option<u16>,
     /// The agents started here fly their UAVs through these MAVLink systems (setpoints in
     /// OFFBOARD), one UAV per agent process.
     #[arg(long, requires = "mavlink_port")]
     pub agents_mavlink: bool,
     /// Where those agents take their updates: `world` (this world's sensing, the own state
-    /// from the autopilot) or `autopilot` (the autopilot's state alone, neighbours by radio
+    /// its measurement, as in process) or `autopilot` (the autopilot's state alone, neighbours by radio
     /// from the other agents: as on companion computers with no world; needs
     /// radio.broadcast_all).
     #[arg(long, default_value = "world", value_parser = ["world", "autopilot"], requires = "agents_mavlink")]

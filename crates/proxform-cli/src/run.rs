@@ -340,6 +340,14 @@ impl RunArgs {
 
 /// Runs the command; the exit code is 0 when every run passed, 1 otherwise.
 pub fn run(args: &RunArgs) -> Result<ExitCode> {
+    // `proxform world` is distributed whatever it was told; `run` is told so.
+    for (given, flag) in
+        [(args.net.external_agents, "--external-agents"), (args.net.mavlink_port.is_some(), "--mavlink-port")]
+    {
+        if given && !args.net.distributed {
+            bail!("{flag} needs --distributed (or `proxform world`)");
+        }
+    }
     let (mut spec, source) = match &args.file {
         Some(path) => {
             if args.uavs.is_some() {

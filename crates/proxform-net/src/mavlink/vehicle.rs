@@ -189,14 +189,15 @@ impl MavlinkVehicle {
         self.safety.verdict(own, update)
     }
 
-    /// Asks for `mode` unless the autopilot is in it or it was asked lately.
-    fn ask(&mut self, mode: Mode, now: Instant) -> Result<(), TransportError> {
+    /// Asks for `mode` unless the autopilot is in it or it was asked lately; whether it asked.
+    fn ask(&mut self, mode: Mode, now: Instant) -> Result<bool, TransportError> {
         let recent = self.asked.is_some_and(|(m, t)| m == mode && now.duration_since(t) < ASK_EVERY);
         if self.autopilot.mode() != Some(mode) && !recent {
             self.autopilot.request(mode).map_err(io)?;
             self.asked = Some((mode, now));
+            return Ok(true);
         }
-        Ok(())
+        Ok(false)
     }
 
     /// The companion's heartbeat, once a second.
@@ -213,10 +214,10 @@ impl MavlinkVehicle {
     fn guard(&mut self, now: Instant) -> Result<(), TransportError> {
         if let Verdict::Hold(why) = self.verdict(now) {
             if self.autopilot.mode() == Some(Mode::Offboard) || self.asked.is_some_and(|a| a.0 == Mode::Offboard) {
-                if self.autopilot.mode() != Some(Mode::Hold) {
+                // Counted as asked (the request goes out at most every `ASK_EVERY`).
+                if self.ask(Mode::Hold, now)? {
                     self.holds = (self.holds.0 + 1, Some(why));
                 }
-                self.ask(Mode::Hold, now)?;
             }
         }
         Ok(())
