@@ -30,10 +30,19 @@ use proxform_sim::world::remote::{Agents, StepRequest};
 /// Where local NED's origin is on the earth (PX4 SITL's default home).
 pub const ORIGIN: (f64, f64, f64) = (47.397742, 8.545594, 488.0);
 
+/// How long a step's flight waits for the setpoints of the followers flown in OFFBOARD that
+/// have not sent one since the last step (a MAVLink link's latency: a router, a relay, a serial
+/// bridge). A setpoint later than that flies from the next step on. Without it a setpoint that
+/// arrived a millisecond after the agents' answers over Zenoh was flown a whole period late,
+/// every step (measured: the paper's followers through a relay, roll 6.4° against 0.12°).
+pub const SETPOINT_ALLOWANCE: Duration = Duration::from_millis(20);
+
 /// One UAV's MAVLink system.
 struct Vehicle {
     served: Served,
     link: Link,
+    /// Setpoints and attitude targets it had been sent when its last step was flown.
+    flown_setpoints: (u64, u64),
 }
 
 /// Every UAV of the world as a MAVLink system.
@@ -81,7 +90,7 @@ impl MavlinkSwarm {
                 let served = Served::new(i as u8 + 1, flavour, mav_type);
                 // The navigator too: it flies its path until an outside controller takes it
                 // in OFFBOARD, and again once that controller stops.
-                Ok(Vehicle { served, link })
+                Ok(Vehicle { served, link, flown_setpoints: (0, 0) })
             })
             .collect::<Result<_>>()?;
         Ok(Self {
@@ -104,6 +113,34 @@ impl MavlinkSwarm {
                 if let Some(reply) = v.served.handle(&h, &m, t) {
                     let _ = v.link.send(&reply);
                 }
+            }
+        }
+    }
+
+    /// Reads what the vehicles were sent until each of `uavs` (from 0) in OFFBOARD has had a
+    /// setpoint (and an attitude target, if it was ever sent one) since its last step was flown,
+    /// or [`SETPOINT_ALLOWANCE`] passed.
+    fn await_setpoints(&mut self, uavs: impl Iterator<Item = usize> + Clone) {
+        let deadline = Instant::now() + SETPOINT_ALLOWANCE;
+        loop {
+            self.drain();
+            // A vehicle sent attitude targets beside its setpoints waits for both.
+            let waiting = uavs.clone().any(|i| {
+                self.vehicles.get(i).is_some_and(|v| {
+                    let (setpoints, attitudes) = v.flown_setpoints;
+                    v.served.mode() == Mode::Offboard
+                        && (v.served.setpoints == setpoints
+                            || (attitudes > 0 && v.served.attitude_targets == attitudes))
+                })
+            });
+            if !waiting || Instant::now() >= deadline {
+                break;
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        for i in uavs {
+            if let Some(v) = self.vehicles.get_mut(i) {
+                v.flown_setpoints = (v.served.setpoints, v.served.attitude_targets);
             }
         }
     }
@@ -224,10 +261,11 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
         self.agents.decide(request, out);
         let mut swarm = self.swarm.borrow_mut();
-        swarm.drain();
         if request.phase != proxform_sim::world::remote::Phase::Fly {
+            swarm.drain();
             return;
         }
+        swarm.await_setpoints(request.sensed.uavs.iter().map(|u| u.index()));
         // The autopilot flies its targets from where its vehicle is, not from where the agent
         // sensed it (that would put the sensor's noise into the flight).
         for (j, u) in request.sensed.uavs.iter().enumerate() {

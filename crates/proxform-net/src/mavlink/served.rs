@@ -65,6 +65,8 @@ pub struct Served {
     pub refused: Refused,
     /// Setpoints accepted.
     pub setpoints: u64,
+    /// Attitude targets accepted.
+    pub attitude_targets: u64,
 }
 
 impl Served {
@@ -81,6 +83,7 @@ impl Served {
             offboard: true,
             refused: Refused::default(),
             setpoints: 0,
+            attitude_targets: 0,
         }
     }
 
@@ -143,7 +146,10 @@ impl Served {
                     !a.type_mask.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE)
                 });
                 match rotation {
-                    Some([roll, pitch, _]) => self.attitude = Some(([roll, pitch], now_s)),
+                    Some([roll, pitch, _]) => {
+                        self.attitude = Some(([roll, pitch], now_s));
+                        self.attitude_targets += 1;
+                    }
                     None => self.refused.invalid += 1,
                 }
                 None
