@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import os
 import pathlib
+import socket
 import subprocess
+from typing import Callable
 
 import pytest
 
@@ -47,3 +49,32 @@ def cli_net(tmp_path_factory) -> pathlib.Path:
             cwd=ROOT, check=True, timeout=3600,
         )
     return binary
+
+
+def _free_udp_base(n: int) -> int:
+    """A loopback UDP port p with p .. p + n - 1 all free (one per MAVLink vehicle)."""
+    for _ in range(50):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.bind(("127.0.0.1", 0))
+            base = s.getsockname()[1]
+        if base > 60000:
+            continue
+        socks = []
+        try:
+            for i in range(n):
+                t = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                socks.append(t)
+                t.bind(("127.0.0.1", base + i))
+            return base
+        except OSError:
+            continue
+        finally:
+            for t in socks:
+                t.close()
+    raise RuntimeError("no free UDP ports")
+
+
+@pytest.fixture
+def free_udp_base() -> Callable[[int], int]:
+    """Finds `n` consecutive free loopback UDP ports: `free_udp_base(n)` is the first."""
+    return _free_udp_base

@@ -22,28 +22,6 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common  # noqa: E402
 
 
-def free_udp_base(n: int) -> int:
-    for _ in range(50):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-            s.bind(("127.0.0.1", 0))
-            base = s.getsockname()[1]
-        if base > 60000:
-            continue
-        socks = []
-        try:
-            for i in range(n):
-                t = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                socks.append(t)
-                t.bind(("127.0.0.1", base + i))
-            return base
-        except OSError:
-            continue
-        finally:
-            for t in socks:
-                t.close()
-    raise RuntimeError("no free UDP ports")
-
-
 def free_tcp_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
@@ -108,7 +86,7 @@ turn_radius_m = 20.0
 
 
 @pytest.mark.parametrize("vehicle", ["multirotor", "paper"])
-def test_pymavlink_decodes_every_frame_the_agents_and_the_vehicles_exchange(cli_net, tmp_path, vehicle):
+def test_pymavlink_decodes_every_frame_the_agents_and_the_vehicles_exchange(cli_net, tmp_path, vehicle, free_udp_base):
     # The multirotor's agents send velocity and yaw setpoints, the paper's kinematic vehicle's
     # attitude targets too. Both flights pass through the relays: the world waits for a step's
     # setpoints within its allowance (before, the relayed setpoints arrived just after the

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import os
-import socket
 import subprocess
 import time
 
@@ -16,28 +15,6 @@ os.environ["MAVLINK20"] = "1"
 from pymavlink import mavutil  # noqa: E402
 
 R = 6_371_000.0
-
-
-def free_base(n: int) -> int:
-    for _ in range(50):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-            s.bind(("127.0.0.1", 0))
-            base = s.getsockname()[1]
-        if base > 60000:
-            continue
-        try:
-            socks = []
-            for i in range(n):
-                t = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                socks.append(t)
-                t.bind(("127.0.0.1", base + i))
-            return base
-        except OSError:
-            continue
-        finally:
-            for t in socks:
-                t.close()
-    raise RuntimeError("no free UDP ports")
 
 
 def ned_of(lat0: float, lon0: float, lat: float, lon: float) -> tuple[float, float]:
@@ -51,8 +28,8 @@ def ned_of(lat0: float, lon0: float, lat: float, lon: float) -> tuple[float, flo
     return n, e
 
 
-def test_every_uav_is_a_mavlink_system_pymavlink_decodes(cli_net, tmp_path):
-    base = free_base(6)
+def test_every_uav_is_a_mavlink_system_pymavlink_decodes(cli_net, tmp_path, free_udp_base):
+    base = free_udp_base(6)
     conns = [mavutil.mavlink_connection(f"udpin:127.0.0.1:{base + i}", source_system=255) for i in range(6)]
     proc = subprocess.Popen(
         [cli_net, "run", "--distributed", "--clock", "realtime", "--mavlink-port", str(base), "--duration-s", "8",

@@ -9,7 +9,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import socket
 import subprocess
 import time
 
@@ -38,33 +37,11 @@ turn_radius_m = 20.0
 """
 
 
-def free_base(n: int) -> int:
-    for _ in range(50):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-            s.bind(("127.0.0.1", 0))
-            base = s.getsockname()[1]
-        if base > 60000:
-            continue
-        socks = []
-        try:
-            for i in range(n):
-                t = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                socks.append(t)
-                t.bind(("127.0.0.1", base + i))
-            return base
-        except OSError:
-            continue
-        finally:
-            for t in socks:
-                t.close()
-    raise RuntimeError("no free UDP ports")
-
-
-def test_mavsdk_reads_the_navigator_and_flies_it_in_offboard_while_the_followers_keep_formation(cli_net, tmp_path):
+def test_mavsdk_reads_the_navigator_and_flies_it_in_offboard_while_the_followers_keep_formation(cli_net, tmp_path, free_udp_base):
     scenario = tmp_path / "v6.toml"
     scenario.write_text(V6)
     out = tmp_path / "out"
-    base = free_base(6)
+    base = free_udp_base(6)
     proc = subprocess.Popen(
         [cli_net, "run", scenario, "--distributed", "--clock", "realtime", "--mavlink-port", str(base),
          "--start-delay-s", "2", "--no-figures", "-q", "--out", out],
