@@ -156,3 +156,43 @@ fn flies_by_velocity_and_holds(flavour: Flavour) {
     assert_eq!(refused, Refused { foreign: 0, invalid: 0, commands: 1 }, "the one early OFFBOARD");
     assert!(end.velocity == [0.0; 3], "in HOLD it stopped: {end:?}");
 }
+
+#[test]
+fn a_listening_companion_is_not_redirected_by_another_system_on_its_port() {
+    // The companion listens (`udpin`, as beside PX4 SITL); its autopilot (system 7) and another
+    // local process (system 66, also claiming to be a PX4) both send to its port. Once the
+    // autopilot is known, the companion's setpoints go to the autopilot alone, however often
+    // the other one speaks.
+    use mavlink::dialects::common::{MavAutopilot, MavMessage, MavType, HEARTBEAT_DATA};
+    let companion = Link::open(Endpoint::In(([127, 0, 0, 1], 0).into()), 7, 191).expect("bound");
+    let port = companion.local_addr().expect("address").port();
+    let to_companion = |system| Link::open(format!("udpout:127.0.0.1:{port}").parse().expect("endpoint"), system, 1);
+    let (mut vehicle, mut intruder) = (to_companion(7).expect("bound"), to_companion(66).expect("bound"));
+    let mut ap = Autopilot::new(companion, None);
+    let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+        mavtype: MavType::MAV_TYPE_QUADROTOR,
+        ..Default::default()
+    });
+    vehicle.send(&beat).expect("sent");
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while ap.target().is_none() && Instant::now() < deadline {
+        ap.poll(Duration::from_millis(20)).expect("io");
+    }
+    assert_eq!(ap.target(), Some(7));
+    let (mut to_vehicle, mut to_intruder) = (0, 0);
+    for _ in 0..20 {
+        intruder.send(&beat).expect("sent");
+        ap.poll(Duration::from_millis(5)).expect("io");
+        assert!(ap.send_velocity([1.0, 0.0, 0.0], 0.0, 0).expect("sent"));
+        while let Ok(Some(_)) = vehicle.recv(Duration::from_millis(5)) {
+            to_vehicle += 1;
+        }
+        while let Ok(Some(_)) = intruder.recv(Duration::ZERO) {
+            to_intruder += 1;
+        }
+    }
+    assert_eq!(to_intruder, 0, "nothing went to the other system");
+    assert_eq!(to_vehicle, 20, "every setpoint reached the autopilot");
+    assert!(ap.foreign >= 20, "the other system's frames were counted: {}", ap.foreign);
+}

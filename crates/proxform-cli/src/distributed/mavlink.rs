@@ -13,6 +13,7 @@
 //! followers keep their places around it as it flies), and its path again after.
 
 use std::cell::RefCell;
+use std::collections::VecDeque;
 use std::rc::Rc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -24,6 +25,7 @@ use proxform_net::mavlink::frame::{Frame, GeoOrigin};
 use proxform_net::mavlink::link::{Endpoint, Link, LinkStats};
 use proxform_net::mavlink::modes::{Flavour, Mode};
 use proxform_net::mavlink::served::{Refused, Served};
+use proxform_net::mavlink::vehicle::stamp_ms;
 use proxform_scenario::Scenario;
 use proxform_sim::world::remote::{Agents, StepRequest};
 
@@ -37,12 +39,36 @@ pub const ORIGIN: (f64, f64, f64) = (47.397742, 8.545594, 488.0);
 /// every step (measured: the paper's followers through a relay, roll 6.4° against 0.12°).
 pub const SETPOINT_ALLOWANCE: Duration = Duration::from_millis(20);
 
+/// How many of a UAV's last measurements the world keeps the errors of, for the setpoints
+/// decided at them (3.2 s at the paper's period; a setpoint is flown for at most
+/// [`proxform_net::mavlink::served::SETPOINT_LOSS_S`]).
+const MEASUREMENTS_KEPT: usize = 32;
+
 /// One UAV's MAVLink system.
 struct Vehicle {
     served: Served,
     link: Link,
     /// Setpoints and attitude targets it had been sent when its last step was flown.
     flown_setpoints: (u64, u64),
+    /// The errors (measured − true) of the measurements its agent was sent, by their instant
+    /// as a stamp (ms of flight time).
+    measured: VecDeque<(u32, State9)>,
+    /// The error of the estimate the setpoint being flown was decided at, by its stamp (kept
+    /// while the agent re-sends the same targets, however long it holds).
+    flown_error: Option<(u32, State9)>,
+}
+
+impl Vehicle {
+    /// The error of the measurement stamped `stamp` (what the autopilot's estimate was when
+    /// the setpoint was decided), if its agent decided it on one the world sent.
+    fn estimate_error(&mut self, stamp: u32) -> Option<State9> {
+        if let Some((_, e)) = self.flown_error.filter(|(s, _)| *s == stamp) {
+            return Some(e);
+        }
+        let e = self.measured.iter().rev().find(|(s, _)| *s == stamp).map(|(_, e)| *e)?;
+        self.flown_error = Some((stamp, e));
+        Some(e)
+    }
 }
 
 /// Every UAV of the world as a MAVLink system.
@@ -90,7 +116,8 @@ impl MavlinkSwarm {
                 let served = Served::new(i as u8 + 1, flavour, mav_type);
                 // The navigator too: it flies its path until an outside controller takes it
                 // in OFFBOARD, and again once that controller stops.
-                Ok(Vehicle { served, link, flown_setpoints: (0, 0) })
+                let measured = VecDeque::with_capacity(MEASUREMENTS_KEPT);
+                Ok(Vehicle { served, link, flown_setpoints: (0, 0), measured, flown_error: None })
             })
             .collect::<Result<_>>()?;
         Ok(Self {
@@ -145,11 +172,27 @@ impl MavlinkSwarm {
         }
     }
 
+    /// Keeps the error of the measurement of UAV `i` (from 0) at `t_s` its agent is sent.
+    fn measured(&mut self, i: usize, t_s: f64, measured: &State9, truth: &State9) {
+        if let Some(v) = self.vehicles.get_mut(i) {
+            if v.measured.len() == MEASUREMENTS_KEPT {
+                v.measured.pop_front();
+            }
+            v.measured.push_back((stamp_ms(t_s), state::difference(measured, truth)));
+        }
+    }
+
     /// The decision that flies UAV `i` (from 0), truly at `own`, toward its outside targets, if
-    /// an outside controller flies it now.
+    /// an outside controller flies it now. The simulated autopilot flies them from its estimate:
+    /// for a setpoint its agent decided at one of the world's measurements (stamped with its
+    /// instant), the truth with that measurement's error, as in process the decision's input
+    /// acts on the truth; for any other, the truth.
     fn decision(&mut self, i: usize, own: &State9) -> Option<Decision> {
         let t = self.start.elapsed().as_secs_f64();
-        let s = self.vehicles.get_mut(i)?.served.setpoint(t)?;
+        let vehicle = self.vehicles.get_mut(i)?;
+        let s = vehicle.served.setpoint(t)?;
+        let estimate = own + vehicle.estimate_error(s.stamp_ms).unwrap_or_else(State9::zeros);
+        let own = &estimate;
         let v = self.frame.velocity_xyz(s.velocity_ned);
         let beta = s.yaw.map(|y| self.frame.yaw(y));
         self.offboard_steps[i] += 1;
@@ -172,7 +215,8 @@ impl MavlinkSwarm {
             }
         };
         let mut d = Decision::without_areas(Outcome::Adjusted { normalised_sq: 0.0 }, u);
-        // A vehicle flown by velocity setpoints (the multirotor) flies them as they are.
+        // A vehicle flown by velocity setpoints (the multirotor) flies them as they are (its
+        // inner loop flies from the truth, as in process).
         if vehicle.takes_velocity_setpoints() {
             let yaw_rad = beta.unwrap_or(own[state::BETA]);
             d.setpoint = Some(proxform_core::Setpoint { velocity_mps: v, yaw_rad });
@@ -259,6 +303,17 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+        if request.phase == proxform_sim::world::remote::Phase::Fly {
+            // What each live agent is sent: the estimate its setpoints will be decided at.
+            for (j, u) in request.sensed.uavs.iter().enumerate() {
+                let (Some(own), Some(truth)) = (request.sensed.own.get(j), request.truth.get(u.index())) else {
+                    continue;
+                };
+                if self.agents.present(*u) {
+                    self.swarm.borrow_mut().measured(u.index(), request.t_s, own, truth);
+                }
+            }
+        }
         self.agents.decide(request, out);
         let mut swarm = self.swarm.borrow_mut();
         if request.phase != proxform_sim::world::remote::Phase::Fly {
@@ -266,8 +321,7 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
             return;
         }
         swarm.await_setpoints(request.sensed.uavs.iter().map(|u| u.index()));
-        // The autopilot flies its targets from where its vehicle is, not from where the agent
-        // sensed it (that would put the sensor's noise into the flight).
+        // The autopilot flies its targets from its estimate (see `MavlinkSwarm::decision`).
         for (j, u) in request.sensed.uavs.iter().enumerate() {
             let Some(truth) = request.truth.get(u.index()) else { continue };
             if let Some(flown) = swarm.decision(u.index(), truth) {
@@ -300,23 +354,21 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_served_vehicle_flies_its_targets_from_where_it_is_not_from_where_it_was_sensed() {
+    /// Flies UAV 2 of the paper (in a swarm served at `port`) on the targets its input `u`
+    /// reaches from `decided_at`, stamped `stamp`, in a step at t = 1 s where the world measured
+    /// it at `measured` and it truly is at `truth`; the input flown.
+    fn flown(port: u16, u: &proxform_core::Input, decided_at: &State9, stamp: u32, measured: &State9) -> Vec<f64> {
         let sc = proxform_scenario::builtin::paper();
-        let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, 47_610).expect("loopback ports")));
+        let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, port).expect("loopback ports")));
         let (vehicle, dt) = (sc.vehicle().clone(), sc.dt_s());
-        let nav = sc.path().state_at(1.0, [0.0; 3]);
-        let truth: Vec<State9> = (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect();
-        // What UAV 2's agent decided at its true state, as an autopilot is given it.
-        let (lo, hi) = vehicle.input_bounds(&truth[1], dt);
-        let u = lo.zip_map(&hi, |l, h| l + 0.8 * (h - l));
         let frame = swarm.borrow().frame;
-        let (v, beta) = vehicle.velocity_setpoint(&truth[1], &u, dt);
-        let [alpha, gamma] = vehicle.attitude_setpoint(&truth[1], &u, dt).expect("the paper's vehicle");
+        let (v, beta) = vehicle.velocity_setpoint(decided_at, u, dt);
+        let [alpha, gamma] = vehicle.attitude_setpoint(decided_at, u, dt).expect("the paper's vehicle");
         let vn = frame.velocity_ned(v);
         let from = MavHeader { system_id: 2, component_id: 191, sequence: 0 };
         let messages = [
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(SET_POSITION_TARGET_LOCAL_NED_DATA {
+                time_boot_ms: stamp,
                 vx: vn[0] as f32,
                 vy: vn[1] as f32,
                 vz: vn[2] as f32,
@@ -337,6 +389,7 @@ mod tests {
                 ..Default::default()
             }),
             MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+                time_boot_ms: stamp,
                 q: proxform_net::mavlink::frame::quaternion([gamma, alpha, frame.yaw(beta)]).map(|x| x as f32),
                 type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE,
                 target_system: 2,
@@ -352,20 +405,58 @@ mod tests {
             }
             assert!(s.offboard(1));
         }
-        // Its agent sensed it 0.3 m and 0.2 m/s off, 0.01 rad pitched: what it flies does not
-        // carry that error into the flight.
+        let nav = sc.path().state_at(1.0, [0.0; 3]);
+        let truth: Vec<State9> = (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect();
         let mut sensed = Sensed::default();
-        let mut off = truth[1];
-        (off[state::Y], off[state::VY], off[state::ALPHA]) =
-            (off[state::Y] + 0.3, off[state::VY] + 0.2, off[state::ALPHA] + 0.01);
         sensed.uavs.push(proxform_core::UavId(1));
-        sensed.own.push(off);
+        sensed.own.push(*measured);
         sensed.spans.push(0..0);
         let request = StepRequest { run: 0, k: 10, t_s: 1.0, phase: Phase::Fly, sensed: &sensed, truth: &truth };
         let mut out = Vec::new();
         WithMavlink { agents: &mut Holding, swarm: swarm.clone() }.decide(&request, &mut out);
-        for j in 0..vehicle.n_inputs() {
-            assert!((out[0].input[j] - u[j]).abs() < 1e-5, "input {j}: {} for {}", out[0].input[j], u[j]);
+        out[0].input.iter().copied().collect()
+    }
+
+    /// UAV 2 of the paper in its slot at t = 1 s.
+    fn paper_truth() -> State9 {
+        let sc = proxform_scenario::builtin::paper();
+        sc.slot_state(1, &sc.path().state_at(1.0, [0.0; 3]))
+    }
+
+    /// An input within the paper's vehicle's bounds at `x`.
+    fn paper_input(x: &State9) -> proxform_core::Input {
+        let sc = proxform_scenario::builtin::paper();
+        let (lo, hi) = sc.vehicle().input_bounds(x, sc.dt_s());
+        lo.zip_map(&hi, |l, h| l + 0.8 * (h - l))
+    }
+
+    #[test]
+    fn a_served_vehicle_flies_its_agents_targets_from_the_estimate_they_were_decided_at() {
+        // Its agent was sent a measurement 0.3 m and 0.2 m/s off, 0.01 rad pitched, and decided
+        // its targets there: the input flown is the agent's, acting on the truth, as in process
+        // (from the truth the measurement's error would be flown with it).
+        let truth = paper_truth();
+        let mut measured = truth;
+        (measured[state::Y], measured[state::VY], measured[state::ALPHA]) =
+            (truth[state::Y] + 0.3, truth[state::VY] + 0.2, truth[state::ALPHA] + 0.01);
+        let u = paper_input(&measured);
+        let flown = flown(47_610, &u, &measured, stamp_ms(1.0), &measured);
+        for (j, f) in flown.iter().enumerate() {
+            assert!((f - u[j]).abs() < 1e-5, "input {j}: {f} for {}", u[j]);
+        }
+    }
+
+    #[test]
+    fn a_served_vehicle_flies_other_controllers_targets_from_where_it_is() {
+        // An outside controller that read the vehicle's telemetry (the truth) and stamps its
+        // own time: its targets are flown from the truth, whatever the world measured.
+        let truth = paper_truth();
+        let mut measured = truth;
+        (measured[state::VY], measured[state::ALPHA]) = (truth[state::VY] + 0.2, truth[state::ALPHA] + 0.01);
+        let u = paper_input(&truth);
+        let flown = flown(47_620, &u, &truth, 123_456, &measured);
+        for (j, f) in flown.iter().enumerate() {
+            assert!((f - u[j]).abs() < 1e-5, "input {j}: {f} for {}", u[j]);
         }
     }
 }

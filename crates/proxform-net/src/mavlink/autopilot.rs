@@ -5,7 +5,8 @@
 //! SET_POSITION_TARGET_LOCAL_NED velocity and yaw setpoints (and SET_ATTITUDE_TARGET attitudes for
 //! the vehicle whose attitude is steered apart from its velocity), MAV_CMD_DO_SET_MODE for OFFBOARD
 //! (PX4) or GUIDED (ArduPilot) and for HOLD/LOITER, and a HEARTBEAT of its own. It never arms
-//! the vehicle. Messages from other systems are counted and left alone.
+//! the vehicle. Messages from other systems are counted and left alone, and never move where a
+//! listening link sends (only the autopilot's frames do).
 //!
 //! The safety policy ([`Safety`]) is apart from the link: given how old the own state and the
 //! references are, fly the controller's setpoints or ask for HOLD.
@@ -45,7 +46,9 @@ pub struct Autopilot {
 impl Autopilot {
     /// The autopilot over `link`; `target` names its system id (None: the first autopilot
     /// whose HEARTBEAT is heard).
-    pub fn new(link: Link, target: Option<u8>) -> Self {
+    pub fn new(mut link: Link, target: Option<u8>) -> Self {
+        // Only the autopilot's frames say where it is.
+        link.answer_system(target);
         Self {
             link,
             target,
@@ -99,6 +102,7 @@ impl Autopilot {
             if let MavMessage::HEARTBEAT(b) = &m {
                 if self.target.is_none() && h.component_id == 1 && b.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID {
                     self.target = system;
+                    self.link.answer_system(system);
                 }
             }
             if system.is_none() || system != self.target {

@@ -1,5 +1,6 @@
 //! A MAVLink link over UDP: where it goes (`udpin:HOST:PORT` listens there and answers whoever
-//! spoke last, as an offboard program listens for PX4's 14540; `udpout:HOST:PORT` sends there),
+//! spoke last, as an offboard program listens for PX4's 14540, or once it is told which system
+//! it talks to, whoever spoke last as that system; `udpout:HOST:PORT` sends there),
 //! and the frames of each datagram checked before anything reads them: MAVLink 2 and 1 frames
 //! of the common dialect whose checksum (with the message's CRC extra) holds are decoded; the
 //! rest are counted by kind ([`LinkStats`]) and dropped. Messages go out as MAVLink 2.
@@ -137,6 +138,8 @@ pub struct Link {
     socket: UdpSocket,
     endpoint: Endpoint,
     peer: Option<SocketAddr>,
+    /// The system whose frames alone move an `udpin` link's peer, once known.
+    peer_system: Option<u8>,
     system_id: u8,
     component_id: u8,
     sequence: u8,
@@ -164,6 +167,7 @@ impl Link {
             socket,
             endpoint,
             peer,
+            peer_system: None,
             system_id,
             component_id,
             sequence: 0,
@@ -182,6 +186,13 @@ impl Link {
     /// Where messages go: the `udpout` address, or whoever an `udpin` link heard last.
     pub fn peer(&self) -> Option<SocketAddr> {
         self.peer
+    }
+
+    /// Answers only system `system` from now on: an `udpin` link's peer moves only to an
+    /// address that sent a frame of that system (a frame of any other, decodable or not, does
+    /// not redirect what the link sends). None: whoever spoke last.
+    pub fn answer_system(&mut self, system: Option<u8>) {
+        self.peer_system = system;
     }
 
     /// Sends `m` to the peer (nothing while an `udpin` link has heard nobody).
@@ -228,7 +239,8 @@ impl Link {
             };
             self.scratch.clear();
             decode(&self.buf[..n], &mut self.stats, &mut self.scratch);
-            if !self.scratch.is_empty() && matches!(self.endpoint, Endpoint::In(_)) {
+            let answers = |h: &MavHeader| self.peer_system.is_none_or(|s| h.system_id == u32::from(s));
+            if matches!(self.endpoint, Endpoint::In(_)) && self.scratch.iter().any(|(h, _)| answers(h)) {
                 self.peer = Some(from);
             }
             self.inbox.extend(self.scratch.drain(..));
@@ -313,5 +325,30 @@ mod tests {
         let (h, _) = companion.recv(Duration::from_secs(2)).expect("io").expect("answered");
         assert_eq!(h.system_id, 2);
         assert!(companion.recv(Duration::from_millis(20)).expect("io").is_none());
+    }
+
+    #[test]
+    fn a_link_told_its_system_is_not_redirected_by_another() {
+        let local = Endpoint::In(([127, 0, 0, 1], 0).into());
+        let mut companion = Link::open(local, 255, 191).expect("bound");
+        let port = companion.local_addr().expect("address").port();
+        let to = |system| Link::open(format!("udpout:127.0.0.1:{port}").parse().expect("endpoint"), system, 1);
+        let (mut autopilot, mut intruder) = (to(1).expect("bound"), to(66).expect("bound"));
+        companion.answer_system(Some(1));
+        let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA::default());
+        autopilot.send(&beat).expect("sent");
+        assert_eq!(companion.recv(Duration::from_secs(2)).expect("io").expect("heard").0.system_id, 1);
+        // Another system speaks (its frames are still read): the link keeps answering system 1.
+        intruder.send(&beat).expect("sent");
+        assert_eq!(companion.recv(Duration::from_secs(2)).expect("io").expect("heard").0.system_id, 66);
+        assert_eq!(companion.peer(), autopilot.local_addr().ok());
+        companion.send(&beat).expect("sent");
+        assert!(autopilot.recv(Duration::from_secs(2)).expect("io").is_some());
+        assert!(intruder.recv(Duration::from_millis(50)).expect("io").is_none());
+        // Told nothing, whoever spoke last.
+        companion.answer_system(None);
+        intruder.send(&beat).expect("sent");
+        assert!(companion.recv(Duration::from_secs(2)).expect("io").is_some());
+        assert_eq!(companion.peer(), intruder.local_addr().ok());
     }
 }

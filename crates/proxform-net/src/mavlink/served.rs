@@ -34,6 +34,10 @@ pub struct Setpoint {
     pub attitude: Option<[f64; 2]>,
     /// When it arrived (the vehicle's time, s).
     pub at_s: f64,
+    /// Its sender's time stamp (`time_boot_ms`): a proxform agent flying on a world's sensing
+    /// stamps the flight time of the update it decided at (ms), so the world can fly it from
+    /// the same estimate.
+    pub stamp_ms: u32,
 }
 
 /// Messages the vehicle refused, by reason.
@@ -133,7 +137,8 @@ impl Served {
                     self.refused.invalid += 1;
                     return None;
                 }
-                self.setpoint = Some(Setpoint { velocity_ned: v, yaw, attitude: None, at_s: now_s });
+                self.setpoint =
+                    Some(Setpoint { velocity_ned: v, yaw, attitude: None, at_s: now_s, stamp_ms: s.time_boot_ms });
                 self.setpoints += 1;
                 None
             }

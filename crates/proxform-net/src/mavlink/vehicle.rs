@@ -82,6 +82,9 @@ pub struct Targets {
     pub yaw_rad: f64,
     /// Pitch α and roll γ (rad), for the paper's kinematic vehicle.
     pub attitude: Option<[f64; 2]>,
+    /// The instant of the update they were decided at (flight time, s); None for what the
+    /// autopilot reported it had.
+    pub decided_t_s: Option<f64>,
 }
 
 /// The targets an autopilot is asked to fly after each answer: an adjusted decision's (the
@@ -90,7 +93,8 @@ pub struct Targets {
 /// the agent holds, the last adjusted targets again (an autopilot keeps flying its last
 /// setpoint, as a held UAV keeps its course in process: targets re-derived from each update's
 /// measured state would fly the sensor's noise every period); before its first adjustment, what
-/// the autopilot reports it has.
+/// the autopilot reports it has. Each carries the instant of the update it was decided at
+/// (kept targets, their adjusted decision's).
 #[derive(Debug, Clone, Default)]
 pub struct KeptTargets {
     last: Option<Targets>,
@@ -103,23 +107,29 @@ impl KeptTargets {
         let (decision, at) = (&answer.command.decision, &answer.decided_at);
         let adjusted = matches!(decision.outcome, Outcome::Adjusted { .. });
         let zero = Input::zeros();
-        let (from, input) = match (adjusted, self.last, autopilot) {
+        let (from, input, decided_t_s) = match (adjusted, self.last, autopilot) {
             // The decision's own setpoint says what it keeps (the multirotor's).
             (false, Some(last), _) if decision.setpoint.is_none() => return last,
             // Nothing adjusted yet: hold what the autopilot has.
-            (false, None, Some(own)) => (own, &zero),
-            _ => (at, &decision.input),
+            (false, None, Some(own)) => (own, &zero, None),
+            _ => (at, &decision.input, Some(answer.state.t_s)),
         };
         let (velocity_mps, yaw_rad) = match decision.setpoint {
             Some(sp) => (sp.velocity_mps, sp.yaw_rad),
             None => model.velocity_setpoint(from, input, dt_s),
         };
-        let targets = Targets { velocity_mps, yaw_rad, attitude: model.attitude_setpoint(from, input, dt_s) };
+        let attitude = model.attitude_setpoint(from, input, dt_s);
+        let targets = Targets { velocity_mps, yaw_rad, attitude, decided_t_s };
         if adjusted {
             self.last = Some(targets);
         }
         targets
     }
+}
+
+/// A flight time (s) as a MAVLink `time_boot_ms` stamp.
+pub fn stamp_ms(t_s: f64) -> u32 {
+    (t_s.max(0.0) * 1e3).round() as u32
 }
 
 fn io(e: std::io::Error) -> TransportError {
@@ -292,7 +302,14 @@ impl Vehicle for MavlinkVehicle {
             let own = self.autopilot.state(&self.frame, now).map(|(s, _)| s);
             let targets = self.kept.next(&self.model, self.dt_s, answer, own.as_ref());
             let (v, yaw) = (self.frame.velocity_ned(targets.velocity_mps), self.frame.yaw(targets.yaw_rad));
-            let ms = now.duration_since(self.boot).as_millis() as u32;
+            // Stamped with the flight time of the world's update they were decided at, which a
+            // world's simulated autopilot flies them from (its estimate then was that update's
+            // measurement); otherwise with the time since the agent started, as MAVLink's
+            // `time_boot_ms` is.
+            let ms = match (self.sensing, targets.decided_t_s) {
+                (Sensing::World, Some(t_s)) => stamp_ms(t_s),
+                _ => now.duration_since(self.boot).as_millis() as u32,
+            };
             if self.autopilot.send_velocity(v, yaw, ms).map_err(io)? {
                 self.setpoints += 1;
                 // The attitude too, where the vehicle's inputs steer it apart from its velocity.
@@ -356,9 +373,14 @@ mod tests {
         assert_eq!((adjusted.velocity_mps, adjusted.yaw_rad), (v, beta));
         assert_eq!(adjusted.attitude, model.attitude_setpoint(&measured, &u, dt));
         assert!((adjusted.velocity_mps[0] - 20.8).abs() < 1e-9, "{adjusted:?}");
+        // Stamped with the update they were decided at; the autopilot's own state with none.
+        assert_eq!((first.decided_t_s, adjusted.decided_t_s), (None, Some(0.1)));
         // Held at other measured states (the sensor's noise): the same targets, every time.
         for noisy in [state(20.6, 0.3, -0.02, 0.05), state(19.9, -0.5, 0.03, -0.01)] {
-            assert_eq!(kept.next(&model, dt, &held(noisy), Some(&truth)), adjusted);
+            // (Later updates: the stamp stays the adjusted decision's.)
+            let mut later = held(noisy);
+            later.state.t_s = 0.5;
+            assert_eq!(kept.next(&model, dt, &later, Some(&truth)), adjusted);
             let alone = answer(Outcome::Alone, Input::zeros(), noisy, None);
             assert_eq!(kept.next(&model, dt, &alone, Some(&truth)), adjusted);
         }
