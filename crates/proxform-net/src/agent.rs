@@ -13,8 +13,8 @@
 //!   own update older than [`STALE_AFTER_PERIODS`] periods on the shared clock is not stepped
 //!   on (the UAV keeps its last command, which the world or the autopilot holds); a backlog
 //!   (an agent that was stopped) is skipped to its newest. A neighbour whose agent has
-//!   broadcast nothing for as long flies uncontrolled ([`ControlWatch`]): it is avoided, not
-//!   followed.
+//!   broadcast nothing for [`crate::watch::SILENT_AFTER_PERIODS`] periods flies uncontrolled
+//!   ([`ControlWatch`]): it is avoided, not followed.
 //!
 //! A new run starts a fresh agent; the first flight update after a warm-up makes the agent
 //! forget its own-state estimate (as the simulator does at t = 0). Whatever arrives is checked

@@ -17,8 +17,7 @@ use proxform_core::{Decision, Observation, Outcome};
 pub const VERSION: u8 = 1;
 
 /// On the own clock, what is older than this many update periods is stale: an own update is
-/// not stepped on, a command is not applied, and a neighbour whose agent has broadcast nothing
-/// newer flies uncontrolled (it is avoided, not followed).
+/// not stepped on, a command is not applied.
 pub const STALE_AFTER_PERIODS: f64 = 5.0;
 
 /// A world on real time applies the commands that reach it within this many periods after a
