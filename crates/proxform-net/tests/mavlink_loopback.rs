@@ -195,4 +195,26 @@ fn a_listening_companion_is_not_redirected_by_another_system_on_its_port() {
     assert_eq!(to_intruder, 0, "nothing went to the other system");
     assert_eq!(to_vehicle, 20, "every setpoint reached the autopilot");
     assert!(ap.foreign >= 20, "the other system's frames were counted: {}", ap.foreign);
+    // Another process writing the autopilot's own system id while the autopilot speaks: its
+    // position is not taken, and the setpoints still go to the autopilot.
+    use mavlink::dialects::common::LOCAL_POSITION_NED_DATA;
+    let frame = Frame { origin_ned: [0.0; 3], course_rad: 0.0 };
+    let mut fake = to_companion(7).expect("bound");
+    let at = |x| MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA { x, ..Default::default() });
+    let (foreign, mut to_fake) = (ap.foreign, 0);
+    vehicle.send(&MavMessage::ATTITUDE(Default::default())).expect("sent");
+    for _ in 0..10 {
+        vehicle.send(&at(5.0)).expect("sent");
+        fake.send(&at(999.0)).expect("sent");
+        ap.poll(Duration::from_millis(5)).expect("io");
+        ap.send_velocity([1.0, 0.0, 0.0], 0.0, 0).expect("sent");
+        while let Ok(Some(_)) = fake.recv(Duration::ZERO) {
+            to_fake += 1;
+        }
+    }
+    ap.poll(Duration::from_millis(20)).expect("io");
+    let (s, _) = ap.state(&frame, Instant::now()).expect("the autopilot's state");
+    assert!((s[state::X] - 5.0).abs() < 1e-6, "x {} (the fake said 999)", s[state::X]);
+    assert_eq!(to_fake, 0, "nothing went to the fake");
+    assert!(ap.foreign >= foreign + 10, "the fake's frames counted as another's: {}", ap.foreign - foreign);
 }

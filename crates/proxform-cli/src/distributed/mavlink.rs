@@ -56,6 +56,9 @@ struct Vehicle {
     /// The error of the estimate the setpoint being flown was decided at, by its stamp (kept
     /// while the agent re-sends the same targets, however long it holds).
     flown_error: Option<(u32, State9)>,
+    /// Whether the last setpoint came from the offboard port the vehicle sends to (where a
+    /// proxform agent over MAVLink listens), not from a program elsewhere.
+    setpoint_from_port: bool,
 }
 
 impl Vehicle {
@@ -117,7 +120,14 @@ impl MavlinkSwarm {
                 // The navigator too: it flies its path until an outside controller takes it
                 // in OFFBOARD, and again once that controller stops.
                 let measured = VecDeque::with_capacity(MEASUREMENTS_KEPT);
-                Ok(Vehicle { served, link, flown_setpoints: (0, 0), measured, flown_error: None })
+                Ok(Vehicle {
+                    served,
+                    link,
+                    flown_setpoints: (0, 0),
+                    measured,
+                    flown_error: None,
+                    setpoint_from_port: false,
+                })
             })
             .collect::<Result<_>>()?;
         Ok(Self {
@@ -137,8 +147,12 @@ impl MavlinkSwarm {
         let t = self.start.elapsed().as_secs_f64();
         for v in &mut self.vehicles {
             while let Ok(Some((h, m))) = v.link.recv(Duration::ZERO) {
+                let setpoints = v.served.setpoints;
                 if let Some(reply) = v.served.handle(&h, &m, t) {
                     let _ = v.link.send(&reply);
+                }
+                if v.served.setpoints != setpoints {
+                    v.setpoint_from_port = v.link.from_peer();
                 }
             }
         }
@@ -184,14 +198,16 @@ impl MavlinkSwarm {
 
     /// The decision that flies UAV `i` (from 0), truly at `own`, toward its outside targets, if
     /// an outside controller flies it now. The simulated autopilot flies them from its estimate:
-    /// for a setpoint its agent decided at one of the world's measurements (stamped with its
+    /// for a setpoint its agent decided at one of the world's measurements (sent from the
+    /// vehicle's offboard port, where the agent listens, and stamped with the measurement's
     /// instant), the truth with that measurement's error, as in process the decision's input
     /// acts on the truth; for any other, the truth.
     fn decision(&mut self, i: usize, own: &State9) -> Option<Decision> {
         let t = self.start.elapsed().as_secs_f64();
         let vehicle = self.vehicles.get_mut(i)?;
         let s = vehicle.served.setpoint(t)?;
-        let estimate = own + vehicle.estimate_error(s.stamp_ms).unwrap_or_else(State9::zeros);
+        let error = vehicle.setpoint_from_port.then(|| vehicle.estimate_error(s.stamp_ms)).flatten();
+        let estimate = own + error.unwrap_or_else(State9::zeros);
         let own = &estimate;
         let v = self.frame.velocity_xyz(s.velocity_ned);
         let beta = s.yaw.map(|y| self.frame.yaw(y));
@@ -357,7 +373,13 @@ mod tests {
     /// Flies UAV 2 of the paper (in a swarm served at `port`) on the targets its input `u`
     /// reaches from `decided_at`, stamped `stamp`, in a step at t = 1 s where the world measured
     /// it at `measured` and it truly is at `truth`; the input flown.
-    fn flown(port: u16, u: &proxform_core::Input, decided_at: &State9, stamp: u32, measured: &State9) -> Vec<f64> {
+    fn flown(
+        port: u16,
+        u: &proxform_core::Input,
+        decided_at: &State9,
+        (stamp, from_port): (u32, bool),
+        measured: &State9,
+    ) -> Vec<f64> {
         let sc = proxform_scenario::builtin::paper();
         let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, port).expect("loopback ports")));
         let (vehicle, dt) = (sc.vehicle().clone(), sc.dt_s());
@@ -403,6 +425,7 @@ mod tests {
             for m in &messages {
                 s.vehicles[1].served.handle(&from, m, t);
             }
+            s.vehicles[1].setpoint_from_port = from_port;
             assert!(s.offboard(1));
         }
         let nav = sc.path().state_at(1.0, [0.0; 3]);
@@ -440,7 +463,7 @@ mod tests {
         (measured[state::Y], measured[state::VY], measured[state::ALPHA]) =
             (truth[state::Y] + 0.3, truth[state::VY] + 0.2, truth[state::ALPHA] + 0.01);
         let u = paper_input(&measured);
-        let flown = flown(47_610, &u, &measured, stamp_ms(1.0), &measured);
+        let flown = flown(47_610, &u, &measured, (stamp_ms(1.0), true), &measured);
         for (j, f) in flown.iter().enumerate() {
             assert!((f - u[j]).abs() < 1e-5, "input {j}: {f} for {}", u[j]);
         }
@@ -454,9 +477,12 @@ mod tests {
         let mut measured = truth;
         (measured[state::VY], measured[state::ALPHA]) = (truth[state::VY] + 0.2, truth[state::ALPHA] + 0.01);
         let u = paper_input(&truth);
-        let flown = flown(47_620, &u, &truth, 123_456, &measured);
-        for (j, f) in flown.iter().enumerate() {
-            assert!((f - u[j]).abs() < 1e-5, "input {j}: {f} for {}", u[j]);
+        for (stamp, from_port) in [(123_456, true), (stamp_ms(1.0), false)] {
+            // (Stamped at the measurement's instant too, but from elsewhere than the port.)
+            let flown = flown(47_620 + u16::from(from_port), &u, &truth, (stamp, from_port), &measured);
+            for (j, f) in flown.iter().enumerate() {
+                assert!((f - u[j]).abs() < 1e-5, "input {j}: {f} for {} (stamp {stamp}, {from_port})", u[j]);
+            }
         }
     }
 }

@@ -5,8 +5,9 @@
 //! SET_POSITION_TARGET_LOCAL_NED velocity and yaw setpoints (and SET_ATTITUDE_TARGET attitudes for
 //! the vehicle whose attitude is steered apart from its velocity), MAV_CMD_DO_SET_MODE for OFFBOARD
 //! (PX4) or GUIDED (ArduPilot) and for HOLD/LOITER, and a HEARTBEAT of its own. It never arms
-//! the vehicle. Messages from other systems are counted and left alone, and never move where a
-//! listening link sends (only the autopilot's frames do).
+//! the vehicle. Messages from other systems, and its system id written from another address
+//! than the autopilot's, are counted and left alone, and never move where a listening link
+//! sends ([`super::link::PEER_SILENT`]).
 //!
 //! The safety policy ([`Safety`]) is apart from the link: given how old the own state and the
 //! references are, fly the controller's setpoints or ask for HOLD.
@@ -105,7 +106,9 @@ impl Autopilot {
                     self.link.answer_system(system);
                 }
             }
-            if system.is_none() || system != self.target {
+            // The autopilot's frames come from the address the link answers; its system id
+            // written from elsewhere (unsigned MAVLink: anyone can) is another's.
+            if system.is_none() || system != self.target || !self.link.from_peer() {
                 self.foreign += 1;
                 continue;
             }

@@ -1,6 +1,7 @@
 //! A MAVLink link over UDP: where it goes (`udpin:HOST:PORT` listens there and answers whoever
-//! spoke last, as an offboard program listens for PX4's 14540, or once it is told which system
-//! it talks to, whoever spoke last as that system; `udpout:HOST:PORT` sends there),
+//! spoke last, as an offboard program listens for PX4's 14540; once it is told which system it
+//! talks to, the address that system's frames come from, moving to another address only after
+//! the one it answers has sent none of them for [`PEER_SILENT`]; `udpout:HOST:PORT` sends there),
 //! and the frames of each datagram checked before anything reads them: MAVLink 2 and 1 frames
 //! of the common dialect whose checksum (with the message's CRC extra) holds are decoded; the
 //! rest are counted by kind ([`LinkStats`]) and dropped. Messages go out as MAVLink 2.
@@ -10,6 +11,12 @@ use std::time::{Duration, Instant};
 
 use mavlink::dialects::common::MavMessage;
 use mavlink::{MavHeader, Message as _};
+
+/// How long the address an `udpin` link answers must have sent no frame of its system before
+/// another address sending as that system takes its place (an autopilot, or a router, that
+/// came back on another port). Frames of the system from elsewhere meanwhile (MAVLink 2 here is
+/// unsigned: anyone can write any system id) are read but do not redirect the link.
+pub const PEER_SILENT: Duration = Duration::from_secs(1);
 
 /// A link that cannot be opened.
 #[derive(Debug, thiserror::Error)]
@@ -144,7 +151,11 @@ pub struct Link {
     component_id: u8,
     sequence: u8,
     buf: Vec<u8>,
-    inbox: std::collections::VecDeque<(MavHeader, MavMessage)>,
+    /// When the address answered last sent a frame of the system it answers.
+    peer_heard: Option<Instant>,
+    /// Where the message `recv` returned last came from.
+    last_from: Option<SocketAddr>,
+    inbox: std::collections::VecDeque<(SocketAddr, MavHeader, MavMessage)>,
     scratch: Vec<(MavHeader, MavMessage)>,
     /// What arrived.
     pub stats: LinkStats,
@@ -168,6 +179,8 @@ impl Link {
             endpoint,
             peer,
             peer_system: None,
+            peer_heard: None,
+            last_from: None,
             system_id,
             component_id,
             sequence: 0,
@@ -195,6 +208,12 @@ impl Link {
         self.peer_system = system;
     }
 
+    /// Whether the message `recv` returned last came from the address this link sends to (the
+    /// `udpout` address: where the program that flies the vehicle listens).
+    pub fn from_peer(&self) -> bool {
+        self.last_from.is_some() && self.last_from == self.peer
+    }
+
     /// Sends `m` to the peer (nothing while an `udpin` link has heard nobody).
     pub fn send(&mut self, m: &MavMessage) -> std::io::Result<()> {
         let Some(peer) = self.peer else { return Ok(()) };
@@ -213,8 +232,9 @@ impl Link {
     pub fn recv(&mut self, timeout: Duration) -> std::io::Result<Option<(MavHeader, MavMessage)>> {
         let deadline = Instant::now() + timeout;
         loop {
-            if let Some(m) = self.inbox.pop_front() {
-                return Ok(Some(m));
+            if let Some((from, h, m)) = self.inbox.pop_front() {
+                self.last_from = Some(from);
+                return Ok(Some((h, m)));
             }
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
@@ -241,9 +261,18 @@ impl Link {
             decode(&self.buf[..n], &mut self.stats, &mut self.scratch);
             let answers = |h: &MavHeader| self.peer_system.is_none_or(|s| h.system_id == u32::from(s));
             if matches!(self.endpoint, Endpoint::In(_)) && self.scratch.iter().any(|(h, _)| answers(h)) {
-                self.peer = Some(from);
+                let now = Instant::now();
+                // Told its system, the link keeps the address it answers while that address
+                // speaks as the system.
+                let keep = self.peer_system.is_some()
+                    && self.peer.is_some_and(|p| p != from)
+                    && self.peer_heard.is_some_and(|t| now.duration_since(t) < PEER_SILENT);
+                if !keep {
+                    self.peer = Some(from);
+                    self.peer_heard = Some(now);
+                }
             }
-            self.inbox.extend(self.scratch.drain(..));
+            self.inbox.extend(self.scratch.drain(..).map(|(h, m)| (from, h, m)));
         }
     }
 }
@@ -345,6 +374,21 @@ mod tests {
         companion.send(&beat).expect("sent");
         assert!(autopilot.recv(Duration::from_secs(2)).expect("io").is_some());
         assert!(intruder.recv(Duration::from_millis(50)).expect("io").is_none());
+        // Another address speaking as system 1 (unsigned MAVLink: anyone can) does not take
+        // the link while the autopilot speaks; once the autopilot has been silent for
+        // PEER_SILENT, a new address of system 1 does (an autopilot back on another port).
+        let mut fake = to(1).expect("bound");
+        fake.send(&beat).expect("sent");
+        assert!(companion.recv(Duration::from_secs(2)).expect("io").is_some());
+        assert_eq!(companion.peer(), autopilot.local_addr().ok());
+        assert!(!companion.from_peer(), "the fake's frame is not the peer's");
+        autopilot.send(&beat).expect("sent");
+        assert!(companion.recv(Duration::from_secs(2)).expect("io").is_some());
+        assert!(companion.from_peer());
+        std::thread::sleep(PEER_SILENT + Duration::from_millis(100));
+        fake.send(&beat).expect("sent");
+        assert!(companion.recv(Duration::from_secs(2)).expect("io").is_some());
+        assert_eq!(companion.peer(), fake.local_addr().ok(), "the autopilot went silent");
         // Told nothing, whoever spoke last.
         companion.answer_system(None);
         intruder.send(&beat).expect("sent");
