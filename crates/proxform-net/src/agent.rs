@@ -8,11 +8,14 @@
 //!   report of every broadcaster ([`AgentRadio`]: agent to agent over the network, not through
 //!   the world), and decides at its own period on the newest it has: when a new own update is
 //!   there and at least nine tenths of a period passed since its last decision (once a
-//!   period, whatever rate its updates come at: an autopilot reports at tens of hertz). Every observation is
-//!   brought to the instant of the own state (its age from the times the messages carry); an
-//!   own update older than [`STALE_AFTER_PERIODS`] periods on the shared clock is not stepped
-//!   on (the UAV keeps its last command, which the world or the autopilot holds); a backlog
-//!   (an agent that was stopped) is skipped to its newest. A neighbour whose agent has
+//!   period, whatever rate its updates come at: an autopilot reports at tens of hertz). Every
+//!   observation is brought to the instant of the own state (its age from the times the
+//!   messages carry), and when the command will act a period or more after its update, over
+//!   that lead as the mission plan moves (`bridge_the_lead`: the network's latency, not the
+//!   method's to predict); an own update older than [`STALE_AFTER_PERIODS`] periods on the
+//!   shared clock is not stepped on (the UAV keeps its last command, which the world or the
+//!   autopilot holds); a backlog (an agent that was stopped) is skipped to its newest. A
+//!   neighbour whose agent has
 //!   broadcast nothing for [`crate::watch::SILENT_AFTER_PERIODS`] periods flies uncontrolled
 //!   ([`ControlWatch`]): it is avoided, not followed.
 //!
@@ -377,6 +380,7 @@ impl Host {
                     o.age_s += age;
                 }
                 self.radio.observations(UavId(s.uav - 1), t_s, &own, &mut self.heard);
+                bridge_the_lead(&self.scenario, &mut self.heard, t_s, age);
                 // Silence is judged at the update's own instant (a neighbour's last broadcast
                 // is of an update like this one), not at the instant the command will act.
                 self.watch.leave_out_the_unfollowed(s.t_s, &mut self.heard, h.rejoining);
@@ -404,6 +408,30 @@ impl Host {
         let command = CommandMsg { uav: s.uav, run: s.run, k: s.k, t_s, age_s: latency_s, decision, digest: h.digest };
         let state = StateMsg { uav: s.uav, k: s.k, t_s: s.t_s, state: s.own, rejoining: h.rejoining };
         Some(Answer { command, state, decided_at: own })
+    }
+}
+
+/// The lead, from an update to the instant its command acts (`age`, s), is the network's,
+/// not the method's to predict: what was heard is brought over it by the mission plan
+/// ([`proxform_core::plan`]), and the method predicts from there as in process. With
+/// `plan_forward` on, the tracks already carry every report beyond a period by the plan
+/// (through its age) and nothing is done here; with the paper's prediction
+/// (`plan_forward = false`) a report's tracked rates would otherwise carry it over the lead
+/// too, and a rear rank falls behind the navigator's manoeuvres by a period per rank
+/// (measured: 40 ± 20 ms each way failed the paper in 5 of 5 runs). Without a plan the
+/// tracks carry the lead as they carry any age.
+fn bridge_the_lead(scenario: &Scenario, heard: &mut [Observation], t_s: f64, age: f64) {
+    let setup = scenario.agents().controller();
+    let frame = scenario.formation_at(t_s).frame;
+    if age <= 0.0 || setup.carry(frame).is_some() {
+        return;
+    }
+    let Some(carry) = setup.carry_by_plan(frame) else { return };
+    for o in heard {
+        let bridge = o.age_s.min(age);
+        let measured = t_s - o.age_s;
+        o.state = carry.carry(&o.state, measured, measured + bridge);
+        o.age_s -= bridge;
     }
 }
 
@@ -538,7 +566,7 @@ pub fn serve(host: &mut Host, vehicle: &mut impl Vehicle, timing: Timing) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
-    use proxform_core::state;
+    use proxform_core::state::{self, State9};
 
     #[test]
     fn a_command_acts_at_the_step_whose_window_it_reaches() {
@@ -671,5 +699,42 @@ mod tests {
         let mut lock = Host::new(sc.clone(), &[2]).expect("a follower");
         let a = lock.handle(&u, 0.06).expect("stepped");
         assert_eq!((a.command.t_s, a.decided_at), (u.t_s, u.own));
+    }
+
+    #[test]
+    fn with_the_papers_prediction_what_was_heard_is_brought_over_the_lead_by_the_plan() {
+        let sc = paper();
+        let (dt, nav) = (sc.dt_s(), sc.navigator());
+        let plan = sc.agents().controller().plan().expect("the paper's UAVs know the plan").clone();
+        // The navigator in its lateral manoeuvre, seen onboard at the update (10.5 s) and heard
+        // over the radio 0.15 s before; the command acts a period later.
+        let (t, lead) = (10.5, dt);
+        let onboard = Observation {
+            id: nav,
+            state: plan.state_at(t),
+            age_s: lead,
+            source: proxform_core::ObservationSource::Onboard,
+        };
+        let radio = Observation { state: plan.state_at(t - 0.15), age_s: 0.15 + lead, ..onboard };
+        let mut heard = vec![onboard, radio];
+        bridge_the_lead(&sc, &mut heard, t + lead, lead);
+        let near = |a: &State9, b: &State9| (a - b).amax() < 1e-9;
+        assert!(near(&heard[0].state, &plan.state_at(t + lead)), "{:?}", heard[0].state);
+        assert!(heard[0].age_s.abs() < 1e-12, "the lead is bridged, its age at the update is left");
+        assert!(near(&heard[1].state, &plan.state_at(t - 0.15 + lead)));
+        assert!((heard[1].age_s - 0.15).abs() < 1e-12);
+        // Not the track's rates: the manoeuvre turns the velocity within the lead.
+        let mut by_rates = onboard.state;
+        for k in 0..3 {
+            by_rates[state::X + k] += lead * by_rates[state::VX + k];
+        }
+        assert!(!near(&heard[0].state, &by_rates), "the plan accelerates at 10.5 s");
+        // With plan_forward on, the tracks carry reports by the plan through their ages.
+        let mut spec = proxform_scenario::builtin::spec_by_name("paper", None).expect("built in");
+        spec.controller.plan_forward = Some(true);
+        let planned = Scenario::try_from(spec).expect("valid");
+        let mut same = vec![onboard, radio];
+        bridge_the_lead(&planned, &mut same, t + lead, lead);
+        assert_eq!(same, vec![onboard, radio]);
     }
 }

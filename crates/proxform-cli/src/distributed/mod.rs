@@ -33,16 +33,6 @@ use supervise::Supervised;
 pub use world::NetStats;
 use world::{NavigatorTelemetry, NetAgents};
 
-/// Said when a flight on the own clock uses the paper's prediction: measured with 40 ± 20 ms
-/// each way between the world and every agent (`scripts/netns-faults.sh --fault delay`, 30 s,
-/// seeds 1-5), the paper failed 5 of 5 runs (y 0.69-1.22 m of 0.6 m: the rear rank behind the
-/// navigator's lateral manoeuvre, a period per rank), and with `plan_forward = true` passed 5
-/// of 5 (y at most 0.16 m).
-const PAPER_PREDICTION_OVER_A_NETWORK: &str = "world: warning: controller.plan_forward = false (the paper's prediction): \
-     when a decision's round trip passes 0.9 of a period it acts a period after its update, and reports carried by their \
-     tracks' rates leave each rank a period further behind a manoeuvre (the paper with 40 ± 20 ms each way failed 5 runs \
-     of 5 on y; with plan_forward = true 5 of 5 passed): set controller.plan_forward = true to fly over a network with latency";
-
 /// Set by Ctrl-C: the flight stops at its next step and everything is shut down.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -148,9 +138,6 @@ pub fn run(
     let session = session.sealed(key.clone());
     let telemetry = NavigatorTelemetry::new(&session, &swarm, scenario)?;
     let mode = if args.clock == "realtime" { ClockMode::RealTime } else { ClockMode::Lockstep };
-    if mode == ClockMode::RealTime && !scenario.agents().controller().params().plan_forward {
-        eprintln!("{}", PAPER_PREDICTION_OVER_A_NETWORK);
-    }
     let mut net = NetAgents::new(session, swarm, scenario, (mode, deadline, seed))?;
     let mut telemetry = match mode {
         ClockMode::RealTime => telemetry.timed(net.clock(), scenario.dt_s()),

@@ -74,8 +74,14 @@ impl ControllerSetup {
     /// How reports older than a period are brought forward in a formation of frame `frame`:
     /// with the plan, when the UAVs know it and `plan_forward` is on.
     pub fn carry(&self, frame: FormationFrame) -> Option<Arc<Carry>> {
-        let carries = self.carries.as_ref().filter(|_| self.params.plan_forward)?;
-        Some(carries[frame as usize].clone())
+        self.carry_by_plan(frame).filter(|_| self.params.plan_forward)
+    }
+
+    /// How the plan brings a report forward in a formation of frame `frame`, when the UAVs know
+    /// the plan, whatever `plan_forward` says: for spans that are not the method's to predict
+    /// (a network agent's latency, from the update to the instant its command acts).
+    pub fn carry_by_plan(&self, frame: FormationFrame) -> Option<Arc<Carry>> {
+        Some(self.carries.as_ref()?[frame as usize].clone())
     }
 
     /// The parameters.
