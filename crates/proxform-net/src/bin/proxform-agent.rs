@@ -63,7 +63,9 @@ struct Args {
     #[arg(long, default_value_t = 10.0)]
     wait_s: f64,
     /// Fly the UAV (one) through its autopilot over MAVLink: `udpin:HOST:PORT` (listen where
-    /// the autopilot sends, as PX4's offboard port 14540) or `udpout:HOST:PORT`. Its own state
+    /// the autopilot sends, as PX4's offboard port 14540), `udpout:HOST:PORT`, or
+    /// `serial:DEVICE[:BAUD]` (the flight controller's TELEM port; 57600 baud unless given;
+    /// Linux). Its own state
     /// comes from the autopilot; each decision goes to it as a velocity and yaw setpoint in
     /// OFFBOARD (docs/mavlink.md).
     #[arg(long)]

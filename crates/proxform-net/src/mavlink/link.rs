@@ -4,13 +4,23 @@
 //! the one it answers has sent none of them for [`PEER_SILENT`]; `udpout:HOST:PORT` sends there),
 //! and the frames of each datagram checked before anything reads them: MAVLink 2 and 1 frames
 //! of the common dialect whose checksum (with the message's CRC extra) holds are decoded; the
-//! rest are counted by kind ([`LinkStats`]) and dropped. Messages go out as MAVLink 2.
+//! rest are counted by kind ([`LinkStats`]) and dropped. `serial:PATH[:BAUD]` is a serial line
+//! to a flight controller ([`super::serial`], Linux; 57 600 baud unless told): point to point,
+//! every frame from its one other end, the byte stream cut into frames that hold (after bytes
+//! that are no frame, or a frame whose checksum fails, at the next start marker). Messages go
+//! out as MAVLink 2.
 
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
 use std::time::{Duration, Instant};
 
 use mavlink::dialects::common::MavMessage;
 use mavlink::{MavHeader, Message as _};
+
+use super::serial::{SerialLine, BAUDS};
+
+/// A serial line's baud rate when the endpoint does not say (MAVProxy's default; PX4's
+/// companion port is often set to 921 600).
+pub const DEFAULT_BAUD: u32 = 57_600;
 
 /// How long the address an `udpin` link answers must have sent no frame of its system before
 /// another address sending as that system takes its place (an autopilot, or a router, that
@@ -21,10 +31,11 @@ pub const PEER_SILENT: Duration = Duration::from_secs(1);
 /// A link that cannot be opened.
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {
-    /// The endpoint is not `udpin:HOST:PORT` or `udpout:HOST:PORT`.
+    /// The endpoint is not `udpin:HOST:PORT`, `udpout:HOST:PORT` or `serial:PATH[:BAUD]`.
     #[error(
         "MAVLink endpoint \"{0}\": expected udpin:HOST:PORT (listen) or udpout:HOST:PORT (send to), a host that \
-         resolves and a port from 1 to 65535"
+         resolves and a port from 1 to 65535, or serial:PATH[:BAUD] (a serial line; baud one of {BAUDS:?}, \
+         57600 unless given)"
     )]
     Endpoint(String),
     /// The socket failed.
@@ -38,12 +49,19 @@ pub enum LinkError {
 }
 
 /// Where a link goes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Endpoint {
     /// Listen on this address; answer the address heard last.
     In(SocketAddr),
     /// Send to this address (from a port of the system's choosing).
     Out(SocketAddr),
+    /// A serial line: the device and its baud rate.
+    Serial {
+        /// The device (`/dev/ttyAMA0`, `/dev/ttyUSB0`, ...).
+        path: String,
+        /// Bits per second, one of the standard rates.
+        baud: u32,
+    },
 }
 
 impl std::str::FromStr for Endpoint {
@@ -52,6 +70,18 @@ impl std::str::FromStr for Endpoint {
     fn from_str(s: &str) -> Result<Self, LinkError> {
         let bad = || LinkError::Endpoint(s.chars().filter(|c| !c.is_control()).take(120).collect());
         let (kind, addr) = s.split_once(':').ok_or_else(bad)?;
+        if kind == "serial" {
+            let (path, baud) = match addr.rsplit_once(':') {
+                Some((path, baud)) if baud.bytes().all(|b| b.is_ascii_digit()) => {
+                    (path, baud.parse::<u32>().map_err(|_| bad())?)
+                }
+                _ => (addr, DEFAULT_BAUD),
+            };
+            if path.is_empty() || !BAUDS.contains(&baud) {
+                return Err(bad());
+            }
+            return Ok(Self::Serial { path: path.to_string(), baud });
+        }
         // `udpin://HOST:PORT`, as MAVSDK writes it, too.
         let addr = addr.strip_prefix("//").unwrap_or(addr);
         let addr = addr.to_socket_addrs().map_err(|_| bad())?.next().ok_or_else(bad)?;
@@ -80,59 +110,132 @@ pub struct LinkStats {
     pub malformed: u64,
 }
 
+/// What the bytes at the start of a buffer are.
+enum Frame {
+    /// A frame that holds, `len` bytes long (its message appended to the output).
+    Decoded { len: usize },
+    /// A whole frame (`len` bytes) of a message outside the common dialect.
+    Unknown { len: usize },
+    /// A whole frame (`len` bytes) whose checksum does not hold.
+    BadCrc { len: usize },
+    /// A whole frame (`len` bytes) whose payload does not parse.
+    Unparsed { len: usize },
+    /// A frame's start whose rest has not arrived.
+    Short,
+    /// No frame: not a start marker, or flags this link does not read.
+    Noise,
+}
+
+/// The frame at the start of `b` (not empty), its message appended to `out` if it holds.
+fn frame_at(b: &[u8], out: &mut Vec<(MavHeader, MavMessage)>) -> Frame {
+    let (version, header_len) = match b[0] {
+        0xFD => (mavlink::MavlinkVersion::V2, 10),
+        0xFE => (mavlink::MavlinkVersion::V1, 6),
+        _ => return Frame::Noise,
+    };
+    // MAVLink 2's incompatibility flags: only "signed" (0x01) is MAVLink 2 as published.
+    if version == mavlink::MavlinkVersion::V2 && b.len() > 2 && b[2] & !0x01 != 0 {
+        return Frame::Noise;
+    }
+    if b.len() < header_len + 2 {
+        return Frame::Short;
+    }
+    let len = usize::from(b[1]);
+    let (signed, sequence, system, component, id) = match version {
+        mavlink::MavlinkVersion::V2 => (b[2] & 0x01 != 0, b[4], b[5], b[6], u32::from_le_bytes([b[7], b[8], b[9], 0])),
+        mavlink::MavlinkVersion::V1 => (false, b[2], b[3], b[4], u32::from(b[5])),
+    };
+    let total = header_len + len + 2 + if signed { 13 } else { 0 };
+    if b.len() < total {
+        return Frame::Short;
+    }
+    let frame = &b[..total];
+    let payload = &frame[header_len..header_len + len];
+    let crc = u16::from_le_bytes([frame[header_len + len], frame[header_len + len + 1]]);
+    let Some(extra) = known_extra_crc(id) else {
+        return Frame::Unknown { len: total };
+    };
+    if mavlink::calculate_crc(&frame[1..header_len + len], extra) != crc {
+        return Frame::BadCrc { len: total };
+    }
+    match MavMessage::parse(version, id, payload) {
+        Ok(message) => {
+            out.push((MavHeader { system_id: u32::from(system), component_id: component, sequence }, message));
+            Frame::Decoded { len: total }
+        }
+        Err(_) => Frame::Unparsed { len: total },
+    }
+}
+
 /// The frames of `datagram` that hold, decoded into `out` (appended); the rest counted.
 pub fn decode(datagram: &[u8], stats: &mut LinkStats, out: &mut Vec<(MavHeader, MavMessage)>) {
     let mut b = datagram;
     while !b.is_empty() {
-        let (version, header_len) = match b[0] {
-            0xFD => (mavlink::MavlinkVersion::V2, 10),
-            0xFE => (mavlink::MavlinkVersion::V1, 6),
-            _ => {
+        let len = match frame_at(b, out) {
+            Frame::Decoded { len } => {
+                stats.decoded += 1;
+                len
+            }
+            Frame::Unknown { len } => {
+                stats.unknown += 1;
+                len
+            }
+            Frame::BadCrc { len } => {
+                stats.bad_crc += 1;
+                len
+            }
+            Frame::Unparsed { len } => {
+                stats.malformed += 1;
+                len
+            }
+            // A datagram holds whole frames: the rest of it is no frame.
+            Frame::Short | Frame::Noise => {
                 stats.malformed += 1;
                 return;
             }
         };
-        if b.len() < header_len + 2 {
-            stats.malformed += 1;
-            return;
-        }
-        let len = usize::from(b[1]);
-        let (signed, sequence, system, component, id) = match version {
-            mavlink::MavlinkVersion::V2 => {
-                // Incompatibility flags: only "signed" (0x01) is MAVLink 2 as published.
-                if b[2] & !0x01 != 0 {
-                    stats.malformed += 1;
-                    return;
-                }
-                (b[2] & 0x01 != 0, b[4], b[5], b[6], u32::from_le_bytes([b[7], b[8], b[9], 0]))
-            }
-            mavlink::MavlinkVersion::V1 => (false, b[2], b[3], b[4], u32::from(b[5])),
-        };
-        let total = header_len + len + 2 + if signed { 13 } else { 0 };
-        if b.len() < total {
-            stats.malformed += 1;
-            return;
-        }
-        let frame = &b[..total];
-        b = &b[total..];
-        let payload = &frame[header_len..header_len + len];
-        let crc = u16::from_le_bytes([frame[header_len + len], frame[header_len + len + 1]]);
-        let Some(extra) = known_extra_crc(id) else {
-            stats.unknown += 1;
-            continue;
-        };
-        if mavlink::calculate_crc(&frame[1..header_len + len], extra) != crc {
-            stats.bad_crc += 1;
-            continue;
-        }
-        match MavMessage::parse(version, id, payload) {
-            Ok(m) => {
-                stats.decoded += 1;
-                out.push((MavHeader { system_id: u32::from(system), component_id: component, sequence }, m));
-            }
-            Err(_) => stats.malformed += 1,
-        }
+        b = &b[len..];
     }
+}
+
+/// The frames that hold at the start of a byte stream's `pending` bytes, decoded into `out`
+/// (appended) and removed with whatever was no frame (counted); a frame's start whose rest
+/// has not arrived stays. A frame whose checksum fails may be bytes that only look like one
+/// (a start marker inside noise, a frame cut by a lost byte): the stream is read on from the
+/// next start marker after its first byte, so a frame hidden in it is not lost.
+pub fn decode_stream(pending: &mut Vec<u8>, stats: &mut LinkStats, out: &mut Vec<(MavHeader, MavMessage)>) {
+    let mut at = 0;
+    let mut in_noise = false;
+    while at < pending.len() {
+        let skip = match frame_at(&pending[at..], out) {
+            Frame::Decoded { len } => {
+                stats.decoded += 1;
+                len
+            }
+            Frame::Unknown { len } => {
+                stats.unknown += 1;
+                len
+            }
+            Frame::Short => break,
+            Frame::BadCrc { .. } => {
+                stats.bad_crc += 1;
+                1
+            }
+            Frame::Unparsed { .. } | Frame::Noise => {
+                // One count per stretch of noise, as a datagram of noise counts once.
+                if !in_noise {
+                    stats.malformed += 1;
+                }
+                in_noise = true;
+                let next = pending[at + 1..].iter().position(|&c| c == 0xFD || c == 0xFE);
+                at = next.map_or(pending.len(), |n| at + 1 + n);
+                continue;
+            }
+        };
+        in_noise = false;
+        at += skip;
+    }
+    pending.drain(..at);
 }
 
 /// The CRC extra of message `id` if the common dialect has it.
@@ -140,22 +243,34 @@ fn known_extra_crc(id: u32) -> Option<u8> {
     MavMessage::default_message_from_id(id).map(|_| MavMessage::extra_crc(id))
 }
 
-/// One end of a MAVLink conversation over UDP.
+/// What a link reads and writes.
+enum Io {
+    Udp(UdpSocket),
+    /// The line and the bytes read from it that are not yet a whole frame.
+    Serial(SerialLine, Vec<u8>),
+}
+
+/// One end of a MAVLink conversation over UDP or a serial line.
 pub struct Link {
-    socket: UdpSocket,
+    io: Io,
     endpoint: Endpoint,
     peer: Option<SocketAddr>,
-    /// The system whose frames alone move an `udpin` link's peer, once known.
+    /// The address the system it answers speaks from: for `udpin` also where messages go; for
+    /// `udpout`, the `udpout` address or, failing it, where that system's frames come from (a
+    /// router or autopilot may answer from another port than the one it listens on).
+    source: Option<SocketAddr>,
+    /// The system whose frames alone move the link's source (and an `udpin` link's peer), once
+    /// known.
     peer_system: Option<u8>,
     system_id: u8,
     component_id: u8,
     sequence: u8,
     buf: Vec<u8>,
-    /// When the address answered last sent a frame of the system it answers.
+    /// When the source last sent a frame of the system it answers.
     peer_heard: Option<Instant>,
-    /// Where the message `recv` returned last came from.
+    /// Where the message `recv` returned last came from (None: a serial line's other end).
     last_from: Option<SocketAddr>,
-    inbox: std::collections::VecDeque<(SocketAddr, MavHeader, MavMessage)>,
+    inbox: std::collections::VecDeque<(Option<SocketAddr>, MavHeader, MavMessage)>,
     scratch: Vec<(MavHeader, MavMessage)>,
     /// What arrived.
     pub stats: LinkStats,
@@ -165,19 +280,23 @@ impl Link {
     /// Opens `endpoint`, sending as system `system_id`, component `component_id`.
     pub fn open(endpoint: Endpoint, system_id: u8, component_id: u8) -> Result<Self, LinkError> {
         let io = |problem| LinkError::Io { endpoint: format!("{endpoint:?}"), problem };
-        let (socket, peer) = match endpoint {
-            Endpoint::In(a) => (UdpSocket::bind(a).map_err(io)?, None),
+        let (link, peer) = match &endpoint {
+            Endpoint::In(a) => (Io::Udp(UdpSocket::bind(a).map_err(io)?), None),
             Endpoint::Out(a) => {
                 let any: SocketAddr =
                     if a.is_ipv4() { ([0, 0, 0, 0], 0).into() } else { (std::net::Ipv6Addr::UNSPECIFIED, 0).into() };
                 let local = if a.ip().is_loopback() { SocketAddr::new(a.ip(), 0) } else { any };
-                (UdpSocket::bind(local).map_err(io)?, Some(a))
+                (Io::Udp(UdpSocket::bind(local).map_err(io)?), Some(*a))
+            }
+            Endpoint::Serial { path, baud } => {
+                (Io::Serial(SerialLine::open(path, *baud).map_err(io)?, Vec::with_capacity(4096)), None)
             }
         };
         Ok(Self {
-            socket,
+            io: link,
             endpoint,
             peer,
+            source: None,
             peer_system: None,
             peer_heard: None,
             last_from: None,
@@ -191,12 +310,16 @@ impl Link {
         })
     }
 
-    /// The local address (the port an `udpout` link answers on).
+    /// The local address (the port an `udpout` link answers on); a serial line has none.
     pub fn local_addr(&self) -> std::io::Result<SocketAddr> {
-        self.socket.local_addr()
+        match &self.io {
+            Io::Udp(socket) => socket.local_addr(),
+            Io::Serial(..) => Err(std::io::Error::new(std::io::ErrorKind::Unsupported, "a serial line")),
+        }
     }
 
-    /// Where messages go: the `udpout` address, or whoever an `udpin` link heard last.
+    /// Where messages go: the `udpout` address, or whoever an `udpin` link heard last (None on
+    /// a serial line, which goes to its other end).
     pub fn peer(&self) -> Option<SocketAddr> {
         self.peer
     }
@@ -208,15 +331,24 @@ impl Link {
         self.peer_system = system;
     }
 
-    /// Whether the message `recv` returned last came from the address this link sends to (the
-    /// `udpout` address: where the program that flies the vehicle listens).
+    /// Whether the message `recv` returned last came from the address the system it answers
+    /// speaks from (an `udpin` link's peer; an `udpout` link's address, or the one address its
+    /// system answers from).
+    /// A serial line's frames all come from its other end.
     pub fn from_peer(&self) -> bool {
-        self.last_from.is_some() && self.last_from == self.peer
+        match self.io {
+            Io::Udp(_) => self.last_from.is_some() && self.last_from == self.source,
+            Io::Serial(..) => true,
+        }
     }
 
     /// Sends `m` to the peer (nothing while an `udpin` link has heard nobody).
     pub fn send(&mut self, m: &MavMessage) -> std::io::Result<()> {
-        let Some(peer) = self.peer else { return Ok(()) };
+        let peer = match (&self.io, self.peer) {
+            (Io::Serial(..), _) => None,
+            (Io::Udp(_), Some(peer)) => Some(peer),
+            (Io::Udp(_), None) => return Ok(()),
+        };
         let header = MavHeader {
             system_id: u32::from(self.system_id),
             component_id: self.component_id,
@@ -225,7 +357,11 @@ impl Link {
         self.sequence = self.sequence.wrapping_add(1);
         let mut bytes = Vec::with_capacity(64);
         mavlink::write_v2_msg(&mut bytes, header, m).map_err(|e| std::io::Error::other(e.to_string()))?;
-        self.socket.send_to(&bytes, peer).map(|_| ())
+        match (&mut self.io, peer) {
+            (Io::Udp(socket), Some(peer)) => socket.send_to(&bytes, peer).map(|_| ()),
+            (Io::Serial(line, _), _) => line.write(&bytes),
+            (Io::Udp(_), None) => Ok(()),
+        }
     }
 
     /// The next message that holds, waiting at most `timeout` (None when nothing came).
@@ -233,17 +369,31 @@ impl Link {
         let deadline = Instant::now() + timeout;
         loop {
             if let Some((from, h, m)) = self.inbox.pop_front() {
-                self.last_from = Some(from);
+                self.last_from = from;
                 return Ok(Some((h, m)));
             }
             let left = deadline.saturating_duration_since(Instant::now());
+            let socket = match &mut self.io {
+                Io::Udp(socket) => socket,
+                Io::Serial(line, pending) => {
+                    let n = line.read(&mut self.buf, left)?;
+                    pending.extend_from_slice(&self.buf[..n]);
+                    self.scratch.clear();
+                    decode_stream(pending, &mut self.stats, &mut self.scratch);
+                    self.inbox.extend(self.scratch.drain(..).map(|(h, m)| (None, h, m)));
+                    if self.inbox.is_empty() && Instant::now() >= deadline {
+                        return Ok(None);
+                    }
+                    continue;
+                }
+            };
             if left.is_zero() {
-                self.socket.set_nonblocking(true)?;
+                socket.set_nonblocking(true)?;
             } else {
-                self.socket.set_nonblocking(false)?;
-                self.socket.set_read_timeout(Some(left))?;
+                socket.set_nonblocking(false)?;
+                socket.set_read_timeout(Some(left))?;
             }
-            let (n, from) = match self.socket.recv_from(&mut self.buf) {
+            let (n, from) = match socket.recv_from(&mut self.buf) {
                 Ok(r) => r,
                 Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
                     return Ok(None)
@@ -260,19 +410,24 @@ impl Link {
             self.scratch.clear();
             decode(&self.buf[..n], &mut self.stats, &mut self.scratch);
             let answers = |h: &MavHeader| self.peer_system.is_none_or(|s| h.system_id == u32::from(s));
-            if matches!(self.endpoint, Endpoint::In(_)) && self.scratch.iter().any(|(h, _)| answers(h)) {
+            if self.scratch.iter().any(|(h, _)| answers(h)) {
                 let now = Instant::now();
-                // Told its system, the link keeps the address it answers while that address
-                // speaks as the system.
-                let keep = self.peer_system.is_some()
-                    && self.peer.is_some_and(|p| p != from)
+                // Told its system, the link keeps its source while that address speaks as the
+                // system; an `udpout` link's own address is its source whenever it speaks.
+                let sent_to = matches!(self.endpoint, Endpoint::Out(a) if a == from);
+                let keep = !sent_to
+                    && self.peer_system.is_some()
+                    && self.source.is_some_and(|p| p != from)
                     && self.peer_heard.is_some_and(|t| now.duration_since(t) < PEER_SILENT);
                 if !keep {
-                    self.peer = Some(from);
+                    self.source = Some(from);
                     self.peer_heard = Some(now);
+                    if matches!(self.endpoint, Endpoint::In(_)) {
+                        self.peer = Some(from);
+                    }
                 }
             }
-            self.inbox.extend(self.scratch.drain(..).map(|(h, m)| (from, h, m)));
+            self.inbox.extend(self.scratch.drain(..).map(|(h, m)| (Some(from), h, m)));
         }
     }
 }
@@ -394,5 +549,146 @@ mod tests {
         intruder.send(&beat).expect("sent");
         assert!(companion.recv(Duration::from_secs(2)).expect("io").is_some());
         assert_eq!(companion.peer(), intruder.local_addr().ok());
+    }
+
+    #[test]
+    fn a_byte_stream_is_cut_into_the_frames_that_hold_whatever_comes_between() {
+        let pos =
+            |x| MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA { x, y: -2.0, z: -30.0, ..Default::default() });
+        let mut stream = b"\x00noise\xfd\x09".to_vec(); // noise, with a start marker and a length in it
+        stream.extend(frame(&pos(1.0), 3));
+        let mut broken = frame(&pos(2.0), 3);
+        let last = broken.len() - 1;
+        broken[last] ^= 0xff; // its checksum fails
+        stream.extend(&broken);
+        stream.extend(frame(&pos(3.0), 3));
+        // A frame cut short by lost bytes, the next one right behind it.
+        let cut = frame(&pos(4.0), 3);
+        stream.extend(&cut[..cut.len() - 5]);
+        stream.extend(frame(&pos(5.0), 3));
+        stream.extend(frame(&MavMessage::HEARTBEAT(HEARTBEAT_DATA::default()), 3));
+        // Arriving a few bytes at a time, the last frame's end not yet.
+        let whole = stream.len();
+        stream.extend(&frame(&pos(6.0), 3)[..20]);
+        let (mut stats, mut out, mut pending) = (LinkStats::default(), Vec::new(), Vec::new());
+        for chunk in stream.chunks(7) {
+            pending.extend_from_slice(chunk);
+            decode_stream(&mut pending, &mut stats, &mut out);
+            assert!(pending.len() <= 7 + 280, "what is kept is at most a frame and a chunk");
+        }
+        let xs: Vec<f32> = out
+            .iter()
+            .filter_map(|(_, m)| match m {
+                MavMessage::LOCAL_POSITION_NED(p) => Some(p.x),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(xs, vec![1.0, 3.0, 5.0], "every whole frame that holds, in order");
+        assert_eq!(out.len(), 4, "and the heartbeat");
+        assert_eq!(pending.len(), stream.len() - whole, "the last frame's start waits for its rest");
+        assert!(stats.bad_crc >= 2 && stats.malformed >= 1, "{stats:?}");
+        pending.extend_from_slice(&frame(&pos(6.0), 3)[20..]);
+        decode_stream(&mut pending, &mut stats, &mut out);
+        assert!(matches!(out.last(), Some((_, MavMessage::LOCAL_POSITION_NED(p))) if p.x == 6.0));
+        assert!(pending.is_empty());
+    }
+
+    #[test]
+    fn serial_endpoints_parse_with_their_baud_or_say_what_they_expect() {
+        let serial = |s: &str| s.parse::<Endpoint>();
+        assert_eq!(
+            serial("serial:/dev/ttyAMA0:921600").ok(),
+            Some(Endpoint::Serial { path: "/dev/ttyAMA0".into(), baud: 921_600 })
+        );
+        assert_eq!(
+            serial("serial:/dev/ttyUSB0").ok(),
+            Some(Endpoint::Serial { path: "/dev/ttyUSB0".into(), baud: DEFAULT_BAUD })
+        );
+        for bad in ["serial:", "serial:/dev/ttyUSB0:12345", "serial:/dev/ttyUSB0:99999999999", "serial::57600"] {
+            let e = serial(bad).expect_err(bad).to_string();
+            assert!(e.contains("serial:PATH[:BAUD]") && e.contains("921600"), "{e}");
+        }
+        let missing = Link::open(serial("serial:/nonexistent/tty:57600").expect("parsed"), 1, 191);
+        assert!(matches!(missing, Err(LinkError::Io { .. })));
+    }
+
+    /// A serial line over a pseudo-terminal: the link on its device, the test as the autopilot
+    /// on the other side.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_serial_link_talks_to_the_other_end_of_its_line() {
+        use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+        use std::io::{Read, Write};
+        use std::os::fd::AsFd;
+        let pty = nix::pty::openpty(None, None).expect("a pseudo-terminal");
+        let device = nix::unistd::ttyname(&pty.slave).expect("its device");
+        let endpoint = format!("serial:{}:921600", device.display()).parse().expect("endpoint");
+        let mut companion = Link::open(endpoint, 255, 191).expect("opened");
+        let mut autopilot = std::fs::File::from(pty.master);
+        assert!(companion.local_addr().is_err() && companion.peer().is_none());
+        // The autopilot's frames, in two writes that cut one of them, with noise before.
+        let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA::default());
+        let pos = MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA { x: 7.5, ..Default::default() });
+        let mut bytes = b"\x55\xaa".to_vec();
+        bytes.extend(frame(&beat, 1));
+        bytes.extend(frame(&pos, 1));
+        let (first, rest) = bytes.split_at(8);
+        autopilot.write_all(first).expect("written");
+        assert!(companion.recv(Duration::from_millis(100)).expect("io").is_none(), "a frame cut short waits");
+        autopilot.write_all(rest).expect("written");
+        let got = companion.recv(Duration::from_secs(2)).expect("io").expect("heartbeat");
+        assert!(matches!(got.1, MavMessage::HEARTBEAT(_)) && got.0.system_id == 1);
+        assert!(companion.from_peer(), "the line's other end");
+        let got = companion.recv(Duration::from_secs(2)).expect("io").expect("position");
+        assert!(matches!(got.1, MavMessage::LOCAL_POSITION_NED(p) if p.x == 7.5));
+        assert_eq!((companion.stats.decoded, companion.stats.malformed), (2, 1));
+        // What the companion sends reaches the autopilot whole.
+        companion.send(&pos).expect("sent");
+        let (mut pending, mut out, mut stats) = (Vec::new(), Vec::new(), LinkStats::default());
+        let mut buf = [0u8; 512];
+        for _ in 0..20 {
+            let mut fds = [PollFd::new(autopilot.as_fd(), PollFlags::POLLIN)];
+            if poll(&mut fds, PollTimeout::from(100u16)).expect("poll") > 0 {
+                let n = autopilot.read(&mut buf).expect("read");
+                pending.extend_from_slice(&buf[..n]);
+                decode_stream(&mut pending, &mut stats, &mut out);
+            }
+            if !out.is_empty() {
+                break;
+            }
+        }
+        assert!(matches!(&out[..], [(h, MavMessage::LOCAL_POSITION_NED(p))] if h.system_id == 255 && p.x == 7.5));
+    }
+
+    #[test]
+    fn an_udpout_link_takes_its_system_from_the_one_address_it_answers_from() {
+        // An autopilot (or a router) that listens on one port and answers from another.
+        let local = Endpoint::In(([127, 0, 0, 1], 0).into());
+        let listens = Link::open(local, 1, 1).expect("bound");
+        let port = listens.local_addr().expect("address").port();
+        let mut companion =
+            Link::open(format!("udpout:127.0.0.1:{port}").parse().expect("endpoint"), 255, 191).expect("bound");
+        let to = |system| Link::open(Endpoint::In(([127, 0, 0, 1], 0).into()), system, 1);
+        let (mut answers, mut intruder) = (to(1).expect("bound"), to(1).expect("bound"));
+        let here = companion.local_addr().expect("address");
+        let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA::default());
+        let say = |l: &mut Link, c: &mut Link| {
+            l.peer = Some(here);
+            l.send(&beat).expect("sent");
+            c.recv(Duration::from_secs(2)).expect("io").expect("heard")
+        };
+        companion.answer_system(Some(1));
+        assert_eq!(say(&mut answers, &mut companion).0.system_id, 1);
+        assert!(companion.from_peer(), "its system's frames from where it answers");
+        // Another address writing the same system id does not take it while it speaks ...
+        say(&mut intruder, &mut companion);
+        assert!(!companion.from_peer(), "another address claiming system 1");
+        say(&mut answers, &mut companion);
+        assert!(companion.from_peer());
+        assert_eq!(companion.peer(), listens.local_addr().ok(), "an udpout link sends where it was told");
+        // ... and once it has been silent for PEER_SILENT, the new address is its system's.
+        std::thread::sleep(PEER_SILENT + Duration::from_millis(100));
+        say(&mut intruder, &mut companion);
+        assert!(companion.from_peer(), "the autopilot went silent");
     }
 }
