@@ -158,20 +158,33 @@ impl MavlinkSwarm {
         }
     }
 
-    /// Reads what the vehicles were sent until each of `uavs` (from 0) in OFFBOARD has had a
-    /// setpoint (and an attitude target, if it was ever sent one) since its last step was flown,
-    /// or [`SETPOINT_ALLOWANCE`] passed.
-    fn await_setpoints(&mut self, uavs: impl Iterator<Item = usize> + Clone) {
+    /// Reads what the vehicles were sent until each of `uavs` (from 0) in OFFBOARD has had what
+    /// it is to fly this step, or [`SETPOINT_ALLOWANCE`] passed. With the instant `decided_on`
+    /// of the update its agent's adjustment applied this step was decided on (the agent's
+    /// answer over the network), that is the setpoint (and attitude target, if it was ever sent one)
+    /// stamped with it or a later one; otherwise any setpoint since its last step was flown. A
+    /// setpoint counted only by arrival would, once one came after its step was flown, be
+    /// taken for the next step's, and every step after would fly the one before (measured: the
+    /// paper through a serial line at 921 600 baud, roll 3.9° of 1°).
+    fn await_setpoints(&mut self, uavs: impl Iterator<Item = (usize, Option<f64>)> + Clone) {
         let deadline = Instant::now() + SETPOINT_ALLOWANCE;
         loop {
             self.drain();
-            // A vehicle sent attitude targets beside its setpoints waits for both.
-            let waiting = uavs.clone().any(|i| {
+            let waiting = uavs.clone().any(|(i, decided_on)| {
                 self.vehicles.get(i).is_some_and(|v| {
                     let (setpoints, attitudes) = v.flown_setpoints;
-                    v.served.mode() == Mode::Offboard
-                        && (v.served.setpoints == setpoints
-                            || (attitudes > 0 && v.served.attitude_targets == attitudes))
+                    let older = |stamp: Option<u32>, want: u32| stamp.is_none_or(|s| s < want);
+                    let missing = match decided_on.map(stamp_ms) {
+                        // A vehicle sent attitude targets beside its setpoints waits for both.
+                        Some(want) => {
+                            let (setpoint, attitude) = v.served.stamps();
+                            older(setpoint, want) || (v.served.attitude_targets > 0 && older(attitude, want))
+                        }
+                        None => {
+                            v.served.setpoints == setpoints || (attitudes > 0 && v.served.attitude_targets == attitudes)
+                        }
+                    };
+                    v.served.mode() == Mode::Offboard && missing
                 })
             });
             if !waiting || Instant::now() >= deadline {
@@ -179,7 +192,7 @@ impl MavlinkSwarm {
             }
             std::thread::sleep(Duration::from_micros(200));
         }
-        for i in uavs {
+        for (i, _) in uavs {
             if let Some(v) = self.vehicles.get_mut(i) {
                 v.flown_setpoints = (v.served.setpoints, v.served.attitude_targets);
             }
@@ -336,7 +349,13 @@ impl<A: Agents> Agents for WithMavlink<'_, A> {
             swarm.drain();
             return;
         }
-        swarm.await_setpoints(request.sensed.uavs.iter().map(|u| u.index()));
+        // An agent that adjusted sends new targets stamped with the update it decided on; one
+        // that holds sends its last ones again, with their first stamp.
+        let adjusted = |d: Option<&Decision>| d.is_some_and(|d| matches!(d.outcome, Outcome::Adjusted { .. }));
+        let decided_on: Vec<_> = (request.sensed.uavs.iter().enumerate())
+            .map(|(j, u)| (u.index(), self.agents.decided_on(*u).filter(|_| adjusted(out.get(j)))))
+            .collect();
+        swarm.await_setpoints(decided_on.iter().copied());
         // The autopilot flies its targets from its estimate (see `MavlinkSwarm::decision`).
         for (j, u) in request.sensed.uavs.iter().enumerate() {
             let Some(truth) = request.truth.get(u.index()) else { continue };
@@ -370,25 +389,20 @@ mod tests {
         }
     }
 
-    /// Flies UAV 2 of the paper (in a swarm served at `port`) on the targets its input `u`
-    /// reaches from `decided_at`, stamped `stamp`, in a step at t = 1 s where the world measured
-    /// it at `measured` and it truly is at `truth`; the input flown.
-    fn flown(
-        port: u16,
+    /// UAV 2's velocity and attitude targets of the paper for input `u` decided at
+    /// `decided_at`, stamped `stamp`.
+    fn targets(
+        sc: &Scenario,
+        frame: Frame,
         u: &proxform_core::Input,
         decided_at: &State9,
-        (stamp, from_port): (u32, bool),
-        measured: &State9,
-    ) -> Vec<f64> {
-        let sc = proxform_scenario::builtin::paper();
-        let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, port).expect("loopback ports")));
+        stamp: u32,
+    ) -> [MavMessage; 2] {
         let (vehicle, dt) = (sc.vehicle().clone(), sc.dt_s());
-        let frame = swarm.borrow().frame;
         let (v, beta) = vehicle.velocity_setpoint(decided_at, u, dt);
         let [alpha, gamma] = vehicle.attitude_setpoint(decided_at, u, dt).expect("the paper's vehicle");
         let vn = frame.velocity_ned(v);
-        let from = MavHeader { system_id: 2, component_id: 191, sequence: 0 };
-        let messages = [
+        [
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(SET_POSITION_TARGET_LOCAL_NED_DATA {
                 time_boot_ms: stamp,
                 vx: vn[0] as f32,
@@ -401,15 +415,6 @@ mod tests {
                 coordinate_frame: MavFrame::MAV_FRAME_LOCAL_NED,
                 ..Default::default()
             }),
-            MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-                param1: 1.0,
-                param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
-                param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
-                command: MavCmd::MAV_CMD_DO_SET_MODE,
-                target_system: 2,
-                target_component: 1,
-                ..Default::default()
-            }),
             MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
                 time_boot_ms: stamp,
                 q: proxform_net::mavlink::frame::quaternion([gamma, alpha, frame.yaw(beta)]).map(|x| x as f32),
@@ -418,7 +423,34 @@ mod tests {
                 target_component: 1,
                 ..Default::default()
             }),
-        ];
+        ]
+    }
+
+    /// Flies UAV 2 of the paper (in a swarm served at `port`) on the targets its input `u`
+    /// reaches from `decided_at`, stamped `stamp`, in a step at t = 1 s where the world measured
+    /// it at `measured` and it truly is at `truth`; the input flown.
+    fn flown(
+        port: u16,
+        u: &proxform_core::Input,
+        decided_at: &State9,
+        (stamp, from_port): (u32, bool),
+        measured: &State9,
+    ) -> Vec<f64> {
+        let sc = proxform_scenario::builtin::paper();
+        let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, port).expect("loopback ports")));
+        let frame = swarm.borrow().frame;
+        let from = MavHeader { system_id: 2, component_id: 191, sequence: 0 };
+        let [setpoint, attitude] = targets(&sc, frame, u, decided_at, stamp);
+        let offboard = MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: 1.0,
+            param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
+            param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
+            command: MavCmd::MAV_CMD_DO_SET_MODE,
+            target_system: 2,
+            target_component: 1,
+            ..Default::default()
+        });
+        let messages = [setpoint, offboard, attitude];
         {
             let mut s = swarm.borrow_mut();
             let t = s.start.elapsed().as_secs_f64();
@@ -483,6 +515,84 @@ mod tests {
             for (j, f) in flown.iter().enumerate() {
                 assert!((f - u[j]).abs() < 1e-5, "input {j}: {f} for {} (stamp {stamp}, {from_port})", u[j]);
             }
+        }
+    }
+
+    /// Agents whose decision for UAV 2 adjusts, decided on the update at 1 s.
+    struct AdjustedAt1s;
+
+    impl Agents for AdjustedAt1s {
+        fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {
+            out.clear();
+            let adjusted = Decision { outcome: proxform_core::Outcome::Adjusted { normalised_sq: 2.0 }, ..holding() };
+            out.resize(request.sensed.len(), adjusted);
+        }
+
+        fn decided_on(&mut self, _: proxform_core::UavId) -> Option<f64> {
+            Some(1.0)
+        }
+    }
+
+    #[test]
+    fn a_step_flies_the_targets_of_the_update_its_agent_decided_on_not_the_last_to_arrive() {
+        // The targets decided on the update at 0.9 s came after that step was flown (a slow
+        // line): at the step of 1 s they are there, unflown, and those decided on 1 s come 5 ms
+        // after the agent's answer. The step waits for them; counted by arrival, it took the
+        // late ones, and so every step after.
+        let sc = proxform_scenario::builtin::paper();
+        let swarm = Rc::new(RefCell::new(MavlinkSwarm::new(&sc, 47_630).expect("loopback ports")));
+        let truth_2 = paper_truth();
+        let late = paper_input(&truth_2);
+        let due = {
+            let (lo, hi) = sc.vehicle().input_bounds(&truth_2, sc.dt_s());
+            lo.zip_map(&hi, |l, h| l + 0.3 * (h - l))
+        };
+        let frame = swarm.borrow().frame;
+        let from = MavHeader { system_id: 2, component_id: 191, sequence: 0 };
+        let to_vehicle = {
+            let mut s = swarm.borrow_mut();
+            let t = s.start.elapsed().as_secs_f64();
+            let offboard = MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+                param1: 1.0,
+                param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
+                param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
+                command: MavCmd::MAV_CMD_DO_SET_MODE,
+                target_system: 2,
+                target_component: 1,
+                ..Default::default()
+            });
+            let [setpoint, attitude] = targets(&sc, frame, &late, &truth_2, stamp_ms(0.9));
+            for m in [&setpoint, &offboard, &attitude] {
+                s.vehicles[1].served.handle(&from, m, t);
+            }
+            assert!(s.offboard(1));
+            s.vehicles[1].link.local_addr().expect("bound")
+        };
+        let [setpoint, attitude] = targets(&sc, frame, &due, &truth_2, stamp_ms(1.0));
+        let agent = std::thread::spawn(move || {
+            let mut link = Link::open(Endpoint::Out(to_vehicle), 2, 191).expect("bound");
+            std::thread::sleep(Duration::from_millis(5));
+            link.send(&setpoint).expect("sent");
+            link.send(&attitude).expect("sent");
+        });
+        let nav = sc.path().state_at(1.0, [0.0; 3]);
+        let truth: Vec<State9> = (0..sc.len()).map(|i| sc.slot_state(i, &nav)).collect();
+        let mut sensed = Sensed::default();
+        sensed.uavs.push(proxform_core::UavId(1));
+        sensed.own.push(truth_2);
+        sensed.spans.push(0..0);
+        let request = StepRequest { run: 0, k: 10, t_s: 1.0, phase: Phase::Fly, sensed: &sensed, truth: &truth };
+        let mut out = Vec::new();
+        WithMavlink { agents: &mut AdjustedAt1s, swarm: swarm.clone() }.decide(&request, &mut out);
+        agent.join().expect("sent");
+        for j in 0..due.len() {
+            assert!(
+                (out[0].input[j] - due[j]).abs() < 1e-5,
+                "input {j}: {} for {} (late {})",
+                out[0].input[j],
+                due[j],
+                late[j]
+            );
         }
     }
 }

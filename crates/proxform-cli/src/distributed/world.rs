@@ -170,6 +170,9 @@ struct OwnClock {
     /// Commands received and not yet applied, by the instant they act at.
     pending: Pending,
     applied_t_s: Option<f64>,
+    /// The flight time of the update the command applied this step was decided on (None:
+    /// none applied).
+    decided_on_t_s: Option<f64>,
     setpoint: Option<Setpoint>,
     /// Steps in a row without a command to apply.
     held_periods: u32,
@@ -597,6 +600,7 @@ impl NetAgents {
             let decision = match fresh {
                 Some(c) => {
                     slot.applied_t_s = Some(c.t_s);
+                    slot.decided_on_t_s = Some(c.k as f64 * self.dt_s);
                     slot.held_periods = 0;
                     if c.decision.setpoint.is_some() {
                         slot.setpoint = c.decision.setpoint;
@@ -606,6 +610,7 @@ impl NetAgents {
                     c.decision
                 }
                 None => {
+                    slot.decided_on_t_s = None;
                     slot.held_periods = slot.held_periods.saturating_add(1);
                     self.stats.missing += 1;
                     // A multirotor's autopilot keeps flying its last setpoint.
@@ -653,6 +658,10 @@ impl Agents for NetAgents {
 
     fn refused(&mut self, _: proxform_core::UavId) {
         self.stats.refused += 1;
+    }
+
+    fn decided_on(&mut self, uav: proxform_core::UavId) -> Option<f64> {
+        self.own_clock.get(&(uav.0 + 1)).and_then(|o| o.decided_on_t_s)
     }
 
     fn decide(&mut self, request: &StepRequest<'_>, out: &mut Vec<Decision>) {

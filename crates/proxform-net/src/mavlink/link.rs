@@ -202,7 +202,11 @@ pub fn decode(datagram: &[u8], stats: &mut LinkStats, out: &mut Vec<(MavHeader, 
 /// (appended) and removed with whatever was no frame (counted); a frame's start whose rest
 /// has not arrived stays. A frame whose checksum fails may be bytes that only look like one
 /// (a start marker inside noise, a frame cut by a lost byte): the stream is read on from the
-/// next start marker after its first byte, so a frame hidden in it is not lost.
+/// next start marker after its first byte, so a frame hidden in it is not lost. A frame of a
+/// message outside the common dialect (an ArduPilot's own) is skipped whole, as MAVLink's
+/// parsers do: its checksum cannot be checked, and its payload read as a stream could hold
+/// false frames; a frame whose header lost a byte may read as one, and take the next frame
+/// with it.
 pub fn decode_stream(pending: &mut Vec<u8>, stats: &mut LinkStats, out: &mut Vec<(MavHeader, MavMessage)>) {
     let mut at = 0;
     let mut in_noise = false;

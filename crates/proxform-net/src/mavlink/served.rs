@@ -63,6 +63,8 @@ pub struct Served {
     setpoint: Option<Setpoint>,
     /// The last attitude target's roll and pitch (rad) and when it arrived (s).
     attitude: Option<([f64; 2], f64)>,
+    /// The last attitude target's sender's time stamp (`time_boot_ms`).
+    attitude_stamp_ms: Option<u32>,
     /// Whether an outside controller may fly it (OFFBOARD).
     offboard: bool,
     /// What it refused.
@@ -84,6 +86,7 @@ impl Served {
             mode: Mode::Hold,
             setpoint: None,
             attitude: None,
+            attitude_stamp_ms: None,
             offboard: true,
             refused: Refused::default(),
             setpoints: 0,
@@ -101,6 +104,12 @@ impl Served {
     /// The mode it flies in.
     pub fn mode(&self) -> Mode {
         self.mode
+    }
+
+    /// The sender's time stamps (`time_boot_ms`) of the last setpoint and the last attitude
+    /// target it accepted.
+    pub fn stamps(&self) -> (Option<u32>, Option<u32>) {
+        (self.setpoint.map(|s| s.stamp_ms), self.attitude_stamp_ms)
     }
 
     /// The setpoint to fly at `now_s`: in OFFBOARD, the last one; None in HOLD. Setpoints that
@@ -153,6 +162,7 @@ impl Served {
                 match rotation {
                     Some([roll, pitch, _]) => {
                         self.attitude = Some(([roll, pitch], now_s));
+                        self.attitude_stamp_ms = Some(a.time_boot_ms);
                         self.attitude_targets += 1;
                     }
                     None => self.refused.invalid += 1,

@@ -121,6 +121,16 @@ pub trait Agents {
         let _ = (t_s, truth);
         None
     }
+
+    /// The flight time (s) of the update that UAV `uav`'s decision applied this step was
+    /// decided on, when its agent said (on the own clock a decision may act a period or more
+    /// after its update); None (the default) when it is not known or none was applied. What
+    /// the same decision sent another way (a MAVLink setpoint stamped with that instant) is
+    /// matched by.
+    fn decided_on(&mut self, uav: UavId) -> Option<f64> {
+        let _ = uav;
+        None
+    }
 }
 
 impl<A: Agents + ?Sized> Agents for &mut A {
@@ -142,6 +152,10 @@ impl<A: Agents + ?Sized> Agents for &mut A {
 
     fn navigator(&mut self, t_s: f64, truth: &State9) -> Option<Decision> {
         (**self).navigator(t_s, truth)
+    }
+
+    fn decided_on(&mut self, uav: UavId) -> Option<f64> {
+        (**self).decided_on(uav)
     }
 }
 
