@@ -7,7 +7,8 @@
 #   scripts/mavlink-compare.sh OUT                                   the table of what OUT holds
 #
 # One flight at a time (they are real time: about 35 s each for 30 s flights); a seed already
-# in OUT is not flown again. PORTBASE (default 42000) is where the vehicles' UDP ports start.
+# in OUT is not flown again. PORTBASE (default 24000) is where the vehicles' UDP ports start:
+# below Linux's ephemeral ports (32768-60999), which the world's own sockets may take.
 # Needs the release build: cargo build --release --features net -p proxform-cli -p proxform-net
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
@@ -20,7 +21,7 @@ if [ $# -ge 2 ]; then
     [ -f "$out/in-$s/summary.json" ] || "$bin" run "$@" --duration-s 30 --seed "$s" --no-figures --no-trajectories -q \
       --out "$out/in-$s" >/dev/null 2>&1 || true
     [ -f "$out/mav-$s/summary.json" ] || timeout 150 "$bin" run "$@" --distributed --clock realtime --agents-mavlink \
-      --mavlink-port $(( ${PORTBASE:-42000} + 20 * (s % 50) )) --duration-s 30 --seed "$s" --no-figures \
+      --mavlink-port $(( ${PORTBASE:-24000} + 20 * (s % 50) )) --duration-s 30 --seed "$s" --no-figures \
       --no-trajectories -q --out "$out/mav-$s" >"$out/mav-$s.log" 2>&1 || echo "seed $s: exit $?"
   done
 fi
