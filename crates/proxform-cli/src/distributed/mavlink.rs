@@ -389,6 +389,19 @@ mod tests {
         }
     }
 
+    /// UAV 2's switch to OFFBOARD, as PX4 numbers it.
+    fn offboard() -> MavMessage {
+        MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: 1.0,
+            param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
+            param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
+            command: MavCmd::MAV_CMD_DO_SET_MODE,
+            target_system: 2,
+            target_component: 1,
+            ..Default::default()
+        })
+    }
+
     /// UAV 2's velocity and attitude targets of the paper for input `u` decided at
     /// `decided_at`, stamped `stamp`.
     fn targets(
@@ -441,15 +454,7 @@ mod tests {
         let frame = swarm.borrow().frame;
         let from = MavHeader { system_id: 2, component_id: 191, sequence: 0 };
         let [setpoint, attitude] = targets(&sc, frame, u, decided_at, stamp);
-        let offboard = MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-            param1: 1.0,
-            param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
-            param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
-            command: MavCmd::MAV_CMD_DO_SET_MODE,
-            target_system: 2,
-            target_component: 1,
-            ..Default::default()
-        });
+        let offboard = offboard();
         let messages = [setpoint, offboard, attitude];
         {
             let mut s = swarm.borrow_mut();
@@ -552,15 +557,7 @@ mod tests {
         let to_vehicle = {
             let mut s = swarm.borrow_mut();
             let t = s.start.elapsed().as_secs_f64();
-            let offboard = MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-                param1: 1.0,
-                param2: Flavour::Px4.set_mode_params(Mode::Offboard).0,
-                param3: Flavour::Px4.set_mode_params(Mode::Offboard).1,
-                command: MavCmd::MAV_CMD_DO_SET_MODE,
-                target_system: 2,
-                target_component: 1,
-                ..Default::default()
-            });
+            let offboard = offboard();
             let [setpoint, attitude] = targets(&sc, frame, &late, &truth_2, stamp_ms(0.9));
             for m in [&setpoint, &offboard, &attitude] {
                 s.vehicles[1].served.handle(&from, m, t);

@@ -126,8 +126,10 @@ enum Frame {
     Noise,
 }
 
-/// The frame at the start of `b` (not empty), its message appended to `out` if it holds.
-fn frame_at(b: &[u8], out: &mut Vec<(MavHeader, MavMessage)>) -> Frame {
+/// The frame at the start of `b` (not empty), its message appended to `out` if it holds; a
+/// whole frame counted in `stats` as decoded, unknown or failing its checksum (what is no
+/// frame is counted by the caller, which knows where it ends).
+fn frame_at(b: &[u8], stats: &mut LinkStats, out: &mut Vec<(MavHeader, MavMessage)>) -> Frame {
     let (version, header_len) = match b[0] {
         0xFD => (mavlink::MavlinkVersion::V2, 10),
         0xFE => (mavlink::MavlinkVersion::V1, 6),
@@ -153,14 +155,17 @@ fn frame_at(b: &[u8], out: &mut Vec<(MavHeader, MavMessage)>) -> Frame {
     let payload = &frame[header_len..header_len + len];
     let crc = u16::from_le_bytes([frame[header_len + len], frame[header_len + len + 1]]);
     let Some(extra) = known_extra_crc(id) else {
+        stats.unknown += 1;
         return Frame::Unknown { len: total };
     };
     if mavlink::calculate_crc(&frame[1..header_len + len], extra) != crc {
+        stats.bad_crc += 1;
         return Frame::BadCrc { len: total };
     }
     match MavMessage::parse(version, id, payload) {
         Ok(message) => {
             out.push((MavHeader { system_id: u32::from(system), component_id: component, sequence }, message));
+            stats.decoded += 1;
             Frame::Decoded { len: total }
         }
         Err(_) => Frame::Unparsed { len: total },
@@ -171,19 +176,8 @@ fn frame_at(b: &[u8], out: &mut Vec<(MavHeader, MavMessage)>) -> Frame {
 pub fn decode(datagram: &[u8], stats: &mut LinkStats, out: &mut Vec<(MavHeader, MavMessage)>) {
     let mut b = datagram;
     while !b.is_empty() {
-        let len = match frame_at(b, out) {
-            Frame::Decoded { len } => {
-                stats.decoded += 1;
-                len
-            }
-            Frame::Unknown { len } => {
-                stats.unknown += 1;
-                len
-            }
-            Frame::BadCrc { len } => {
-                stats.bad_crc += 1;
-                len
-            }
+        let len = match frame_at(b, stats, out) {
+            Frame::Decoded { len } | Frame::Unknown { len } | Frame::BadCrc { len } => len,
             Frame::Unparsed { len } => {
                 stats.malformed += 1;
                 len
@@ -211,20 +205,10 @@ pub fn decode_stream(pending: &mut Vec<u8>, stats: &mut LinkStats, out: &mut Vec
     let mut at = 0;
     let mut in_noise = false;
     while at < pending.len() {
-        let skip = match frame_at(&pending[at..], out) {
-            Frame::Decoded { len } => {
-                stats.decoded += 1;
-                len
-            }
-            Frame::Unknown { len } => {
-                stats.unknown += 1;
-                len
-            }
+        let skip = match frame_at(&pending[at..], stats, out) {
+            Frame::Decoded { len } | Frame::Unknown { len } => len,
             Frame::Short => break,
-            Frame::BadCrc { .. } => {
-                stats.bad_crc += 1;
-                1
-            }
+            Frame::BadCrc { .. } => 1,
             Frame::Unparsed { .. } | Frame::Noise => {
                 // One count per stretch of noise, as a datagram of noise counts once.
                 if !in_noise {
