@@ -149,12 +149,21 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         rows.push(row);
     }
     // Instructions per update, counted by callgrind where it is installed.
+    let mut by_phase: Vec<(String, Vec<(&'static str, f64)>)> = Vec::new();
     if args.instructions_uavs > 0 {
         let n = args.instructions_uavs.min(args.max_uavs);
         for engine in ["fast", "reference", "minimal-law"] {
             spinner.set_message(format!("counting instructions: {n} UAVs, {engine} (callgrind)"));
-            match count_instructions(&exe, n, engine) {
+            let profile = out.join(format!("callgrind.{engine}.out"));
+            match count_instructions(&exe, n, engine, &profile) {
                 Ok(Some(row)) => {
+                    let updates = ((n - 1) * row.steps) as f64;
+                    if engine != "minimal-law" {
+                        match phases(&profile, updates) {
+                            Ok(p) => by_phase.push((engine.to_string(), p)),
+                            Err(e) => spinner.suspend(|| println!("(no instructions by phase: {e:#})")),
+                        }
+                    }
                     let per = row.instructions_per_update.unwrap_or(f64::NAN);
                     spinner.suspend(|| {
                         println!(
@@ -173,6 +182,26 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         }
     }
     spinner.finish_and_clear();
+    if let Some((_, first)) = by_phase.first() {
+        println!("\ninstructions per agent-update by phase (callgrind, the steps only; {}):", out.display());
+        print!("{:<12}", "phase");
+        for (engine, _) in &by_phase {
+            print!(" {engine:>10}");
+        }
+        println!();
+        let mut w =
+            csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(&out.join("phases.csv"))?));
+        w.write_record(["engine", "phase", "instructions_per_update"])?;
+        for (k, (phase, _)) in first.iter().enumerate() {
+            print!("{phase:<12}");
+            for (engine, p) in &by_phase {
+                print!(" {:>10.0}", p[k].1);
+                w.write_record([engine.as_str(), phase, &format!("{:.1}", p[k].1)])?;
+            }
+            println!();
+        }
+        w.flush()?;
+    }
     let mut w = csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(&out.join("bench.csv"))?));
     for r in &rows {
         w.serialize(r)?;
@@ -235,18 +264,15 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
 }
 
 /// Instructions per agent-update of `engine` at `n` UAVs (grid search, one thread), counted by
-/// callgrind over the timed steps only (`proxform_sim::batch::throughput::timed_steps`); None
-/// when valgrind is not installed.
-fn count_instructions(exe: &std::path::Path, n: u64, engine: &str) -> Result<Option<Row>> {
+/// callgrind over the timed steps only (`proxform_sim::batch::throughput::timed_steps`), its
+/// profile written to `profile` (for `callgrind_annotate`); None when valgrind is not
+/// installed.
+fn count_instructions(exe: &std::path::Path, n: u64, engine: &str, profile: &std::path::Path) -> Result<Option<Row>> {
     let steps = 5u64;
     let one = [n.to_string(), steps.to_string(), "1".into(), "grid".into(), engine.into()];
     let output = match Command::new("valgrind")
-        .args([
-            "--tool=callgrind",
-            "--callgrind-out-file=/dev/null",
-            "--collect-atstart=no",
-            "--toggle-collect=*timed_steps*",
-        ])
+        .args(["--tool=callgrind", "--collect-atstart=no", "--toggle-collect=*timed_steps*"])
+        .arg(format!("--callgrind-out-file={}", profile.display()))
         .arg(exe)
         .arg("bench")
         .arg("--one")
@@ -269,4 +295,145 @@ fn count_instructions(exe: &std::path::Path, n: u64, engine: &str) -> Result<Opt
     let mut row: Row = serde_json::from_slice(&output.stdout).context("unreadable measurement")?;
     row.instructions_per_update = Some(collected / ((n - 1) * row.steps) as f64);
     Ok(Some(row))
+}
+
+/// The phases of an agent-update and the functions whose instructions (with all they call)
+/// each counts, in either engine: the functions are kept apart from their callers
+/// (`#[inline(never)]`) so that a profile names them. The functions in `less` are called only
+/// inside this phase's and counted in another phase: they are taken out of this one.
+struct Phase {
+    name: &'static str,
+    functions: &'static [&'static str],
+    less: &'static [&'static str],
+}
+
+const TRACKS: [&str; 4] = [
+    "proxform_core::predictor::NeighbourTracks::predict",
+    "proxform_core::predictor::NeighbourTracks::state_at",
+    "<proxform_sim::fast::tracks::StepTracks<S> as proxform_core::controller::tracks::Tracks>::predict",
+    "<proxform_sim::fast::tracks::StepTracks<S> as proxform_core::controller::tracks::Tracks>::state_at",
+];
+const AVOIDANCE: [&str; 3] = [
+    "proxform_core::controller::avoid::Avoidance::may_bind",
+    "proxform_core::controller::avoid::Avoidance::perceive",
+    "proxform_core::controller::avoid::Avoidance::limit",
+];
+const TRACKS_AND_AVOIDANCE: [&str; 7] =
+    [TRACKS[0], TRACKS[1], TRACKS[2], TRACKS[3], AVOIDANCE[0], AVOIDANCE[1], AVOIDANCE[2]];
+
+const PHASES: [Phase; 8] = [
+    Phase {
+        name: "perception",
+        functions: &["proxform_sim::fast::update::perceive", "proxform_sim::world::sensing::ProximitySensor::perceive"],
+        less: &["proxform_sim::world::sensing::ProximitySensor::observe"],
+    },
+    Phase {
+        name: "noise",
+        functions: &[
+            "proxform_sim::fast::update::build_observations",
+            "proxform_sim::fast::update::own_measurement",
+            "proxform_sim::world::sensing::noisy",
+        ],
+        less: &[],
+    },
+    Phase { name: "tracks", functions: &TRACKS, less: &[] },
+    Phase { name: "avoidance", functions: &AVOIDANCE, less: &[] },
+    Phase {
+        name: "controller",
+        functions: &["proxform_core::controller::UavView<T>::step"],
+        less: &TRACKS_AND_AVOIDANCE,
+    },
+    Phase {
+        name: "index",
+        functions: &["proxform_core::grid::NeighbourGrid::rebuild_ids", "proxform_core::grid::NeighbourGrid::rebuild"],
+        less: &[],
+    },
+    Phase {
+        name: "propagate",
+        functions: &[
+            "proxform_sim::fast::FastSimulation::propagate",
+            "proxform_sim::world::phases::StepContext::propagate",
+        ],
+        less: &[],
+    },
+    Phase {
+        name: "metrics",
+        functions: &[
+            "<proxform_sim::measure::metrics::RunMetrics as proxform_sim::measure::observer::Observer>::on_step",
+        ],
+        less: &[],
+    },
+];
+
+/// Instructions per update by phase from callgrind `profile` over `updates` agent-updates
+/// (read with `callgrind_annotate`): each phase of [`PHASES`], then the rest of the step as
+/// "other" and the whole as "total".
+fn phases(profile: &std::path::Path, updates: f64) -> Result<Vec<(&'static str, f64)>> {
+    let output = Command::new("callgrind_annotate")
+        .args(["--inclusive=yes", "--threshold=100"])
+        .arg(profile)
+        .output()
+        .context("cannot start callgrind_annotate")?;
+    if !output.status.success() {
+        bail!("callgrind_annotate failed: {}", String::from_utf8_lossy(&output.stderr));
+    }
+    let (total, inclusive) = inclusive_costs(&String::from_utf8_lossy(&output.stdout))?;
+    let sum = |functions: &[&str]| -> f64 { functions.iter().filter_map(|f| inclusive.get(*f)).sum() };
+    let mut rows: Vec<(&'static str, f64)> =
+        PHASES.iter().map(|p| (p.name, (sum(p.functions) - sum(p.less)).max(0.0))).collect();
+    let phased: f64 = rows.iter().map(|r| r.1).sum();
+    rows.push(("other", (total - phased).max(0.0)));
+    rows.push(("total", total));
+    Ok(rows.into_iter().map(|(n, v)| (n, v / updates)).collect())
+}
+
+/// From `callgrind_annotate --inclusive=yes` output: the program's total and each function's
+/// inclusive count (the lines that name a function of an object file; inlined code, listed by
+/// the file it came from, is part of its caller's).
+fn inclusive_costs(text: &str) -> Result<(f64, std::collections::HashMap<String, f64>)> {
+    let count = |field: &str| field.replace(',', "").parse::<f64>().ok();
+    let mut total = None;
+    let mut functions = std::collections::HashMap::new();
+    for line in text.lines() {
+        let line = line.trim();
+        let Some((n, rest)) = line.split_once(' ') else { continue };
+        let Some(n) = count(n) else { continue };
+        if rest.ends_with("PROGRAM TOTALS") {
+            total = Some(n);
+            continue;
+        }
+        // "N (p%)  file:function [object]"
+        let Some(rest) = rest.split_once(")  ").map(|r| r.1) else { continue };
+        let Some((site, _object)) = rest.rsplit_once(" [") else { continue };
+        let Some((_file, function)) = site.split_once(':') else { continue };
+        *functions.entry(function.to_string()).or_insert(0.0) += n;
+    }
+    Ok((total.context("callgrind_annotate printed no total")?, functions))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn instructions_are_read_by_function_and_phase() {
+        let text = "\
+--------------------------------------------------------------------------------
+1,000 (100.0%)  PROGRAM TOTALS
+--------------------------------------------------------------------------------
+  900 (90.00%)  /w/crates/proxform-core/src/controller/mod.rs:proxform_core::controller::UavView<T>::step [/bin/proxform]
+  300 (30.00%)  /w/crates/proxform-core/src/predictor.rs:proxform_core::predictor::NeighbourTracks::predict [/bin/proxform]
+  200 (20.00%)  /w/crates/proxform-core/src/azimuth.rs:proxform_core::controller::UavView<T>::step
+   50 ( 5.00%)  /w/crates/proxform-core/src/controller/avoid.rs:proxform_core::controller::avoid::Avoidance::may_bind [/bin/proxform]
+";
+        let (total, f) = inclusive_costs(text).expect("read");
+        assert_eq!(total, 1000.0);
+        assert_eq!(
+            f.get("proxform_core::controller::UavView<T>::step"),
+            Some(&900.0),
+            "inlined code is not a function"
+        );
+        assert_eq!(f.get("proxform_core::predictor::NeighbourTracks::predict"), Some(&300.0));
+        assert!(inclusive_costs("nothing").is_err());
+    }
 }

@@ -12,6 +12,8 @@
 //! displacement, its change of velocity and of attitude), and in a formation frame that turns
 //! with the course or the heading, the report's velocity relative to the plan turns with it.
 
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use crate::angle;
@@ -21,8 +23,23 @@ use crate::state::{self, State9};
 /// The navigator's planned state at a time (s), from any fixed start: only its differences
 /// over time are used.
 pub trait Plan: std::fmt::Debug + Send + Sync {
-    /// The planned state at `t_s`.
+    /// The planned state at `t_s`: a function of `t_s` alone (a [`Carry`] remembers the
+    /// states it asked for last).
     fn state_at(&self, t_s: f64) -> State9;
+}
+
+/// Slots of the per-thread memo of planned states ([`Carry::plan_state`]).
+const MEMO: usize = 16;
+
+/// Identities of the carries, for the memo (a carry and its clones share one).
+static NEXT_CARRY: AtomicU64 = AtomicU64::new(1);
+
+thread_local! {
+    /// The planned states a thread asked for last, by (carry, time): within a step every UAV
+    /// brings its tracks to the same few times, and a plan's state costs hundreds of
+    /// instructions (a path's profile, its sines and cosines). The state is a function of the
+    /// time, so the memo changes no result.
+    static PLAN_STATES: RefCell<[(u64, u64, State9); MEMO]> = RefCell::new([(0, 0, State9::zeros()); MEMO]);
 }
 
 /// How reports are brought forward: the plan, the frame the formation turns in, and the
@@ -32,12 +49,29 @@ pub struct Carry {
     plan: Arc<dyn Plan>,
     frame: FormationFrame,
     period_s: f64,
+    /// This carry's key in the memo of planned states.
+    id: u64,
 }
 
 impl Carry {
     /// Reports carried by `plan` in a formation of frame `frame`, beyond `period_s`.
     pub fn new(plan: Arc<dyn Plan>, frame: FormationFrame, period_s: f64) -> Self {
-        Self { plan, frame, period_s }
+        Self { plan, frame, period_s, id: NEXT_CARRY.fetch_add(1, Ordering::Relaxed) }
+    }
+
+    /// The plan's state at `t`, from this thread's memo when asked for lately.
+    #[inline]
+    fn plan_state(&self, t: f64) -> State9 {
+        let bits = t.to_bits();
+        let slot = ((bits ^ (bits >> 31) ^ self.id.wrapping_mul(0x9e37_79b9_7f4a_7c15)) % MEMO as u64) as usize;
+        PLAN_STATES.with_borrow_mut(|memo| {
+            let (id, at, state) = &mut memo[slot];
+            if *id != self.id || *at != bits {
+                *state = self.plan.state_at(t);
+                (*id, *at) = (self.id, bits);
+            }
+            *state
+        })
     }
 
     /// The plan.
@@ -60,7 +94,7 @@ impl Carry {
         if h.is_nan() || h <= 0.0 {
             return *s;
         }
-        let (pa, p1) = (self.plan.state_at(ta), self.plan.state_at(t1));
+        let (pa, p1) = (self.plan_state(ta), self.plan_state(t1));
         let (ca, sa) = self.frame.course_cos_sin(&pa);
         let (c1, s1) = self.frame.course_cos_sin(&p1);
         // The frame's turn from ta to t1, Δψ, and its mean rate ω̄.

@@ -279,6 +279,8 @@ impl NeighbourTracks {
 
     /// Feeds observation `obs` (taken at `now − obs.age_s`) and returns the neighbour's
     /// predicted state at `now + horizon_s`.
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     pub fn predict(&mut self, obs: &Observation, now: f64, horizon_s: f64) -> State9 {
         let t_obs = now - obs.age_s;
         let track = match self.kind {
@@ -379,7 +381,7 @@ impl NeighbourTracks {
     /// Whether UAV `id`'s last report came from the owner's own sensors, no longer than
     /// `max_s` before `now` (and its measurement within the timeout).
     pub fn heard_onboard(&self, id: UavId, now: f64, max_s: f64) -> bool {
-        self.ids.iter().position(|t| t.0 == id.0 && t.0 != FREE).is_some_and(|s| {
+        self.slot_of(id).is_some_and(|s| {
             let tr = &self.tracks[s];
             self.ids[s].1 & ONBOARD != 0 && now - tr.heard <= max_s + SAME_INSTANT_S && now - tr.t <= self.timeout_s
         })
@@ -394,6 +396,11 @@ impl NeighbourTracks {
                 && now - tr.heard <= max_s + SAME_INSTANT_S
                 && now - tr.t <= self.timeout_s
         })
+    }
+
+    /// The slot of `id`'s track, if it has one (a UAV has at most one).
+    pub fn slot_of(&self, id: UavId) -> Option<usize> {
+        self.ids.iter().position(|t| t.0 == id.0 && t.0 != FREE)
     }
 
     /// Number of track slots in use.
@@ -455,7 +462,7 @@ impl NeighbourTracks {
     /// keeps no tracks). A track fed by relays keeps the time of the measurement they
     /// describe, so that age is how old the information is.
     pub fn report(&self, id: UavId, now: f64, max_age_s: f64) -> Option<(State9, f64)> {
-        let s = self.ids.iter().position(|t| t.0 == id.0 && t.0 != FREE)?;
+        let s = self.slot_of(id)?;
         let tr = &self.tracks[s];
         let age = now - tr.t;
         let alive = now - tr.heard <= self.timeout_s && age <= max_age_s;
@@ -471,6 +478,8 @@ impl NeighbourTracks {
     /// The state of track slot `s` extrapolated to time `t` (a coasting neighbour): its
     /// acceleration is extrapolated for at most `coast_accel_s`, after which it goes on at the
     /// velocity reached; attitude rates carry on.
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     pub fn state_at(&self, s: usize, t: f64) -> State9 {
         let tr = &self.tracks[s];
         let h = t - tr.t;

@@ -31,9 +31,7 @@ pub const FORM_WITHIN_S: f64 = 120.0;
 pub const AVOID_PER_SAFETY: f64 = 1.25;
 /// Robust fusion's gate (in permissible errors) when `controller.isolation_gate` is unset: a
 /// neighbour far from its own slot (one whose own sensor failed, one joining, re-assigned or
-/// forming) must not drag the UAVs that lean on it (METHOD §8). Unset with `method = "paper"`
-/// and where the fast engine flies a formation that keeps its slots (it does not run the
-/// fusion).
+/// forming) must not drag the UAVs that lean on it (METHOD §8). Unset with `method = "paper"`.
 pub const ISOLATION_GATE: f64 = 1.0;
 
 /// The own-sensor check's gate (m) when `controller.own_gate_m` is unset (METHOD §8): a reading

@@ -225,6 +225,8 @@ impl Avoidance {
     /// extrapolated to the next update at its velocity (from the moment it describes: a radio
     /// report's or a relay's age included). A report older than `track_timeout_s` (a relay's
     /// information, carried hop by hop) says too little of where a UAV is now to avoid it.
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     pub fn perceive(
         &mut self,
         formation: &Formation,
@@ -254,6 +256,8 @@ impl Avoidance {
     /// keeps its course) so that the UAV closes on no neighbour faster than it can stop.
     /// True when a limit bound.
     /// `goal` is where the centre is, from X_hold (m).
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     pub fn limit(
         &mut self,
         vehicle: &VehicleModel,
@@ -354,6 +358,8 @@ impl Avoidance {
     /// its largest). Observations older than `max_age_s` do not count, as in [`Self::perceive`]
     /// (`track_timeout_s`). A rule that remembers no side and could bind on nothing leaves the centre
     /// and itself as they are, so the caller may skip it (and the list it would fill).
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     pub fn may_bind(
         &self,
         vehicle: &VehicleModel,

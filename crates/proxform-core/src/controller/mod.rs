@@ -20,6 +20,7 @@ mod decision;
 mod fusion;
 mod params;
 mod setup;
+mod tracks;
 
 use std::sync::Arc;
 
@@ -27,6 +28,7 @@ pub use avoid::{relative_speed_bound, Avoidance, CloseWatch};
 pub use decision::{Decision, Outcome};
 pub use params::{ControllerParams, AVOID_BRAKING_SHARE, AVOID_WATCH, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
 pub use setup::ControllerSetup;
+pub use tracks::Tracks;
 
 use fusion::{Fusion, Implied};
 
@@ -52,12 +54,8 @@ pub struct ProximityController {
     formation: Arc<Formation>,
     dependency: DependencySet,
     tracks: NeighbourTracks,
-    /// S_i: per area, index into the observation slice of the nearest UAV (or `EMPTY`, or a
-    /// coasting track marked `TRACK`) and its squared distance (f32 is ample to rank
-    /// neighbours). Working memory, allocated once.
-    nearest: Box<[(u32, f32)]>,
-    /// Robust fusion's working memory (only with `isolation_gate`): allocated once.
-    fusion: Option<Box<Fusion>>,
+    /// The step's working memory, allocated once.
+    scratch: StepScratch,
     /// The navigator, when known: the robust fusion never leaves it out, and weighs the others
     /// against the UAVs no farther from it than this one.
     navigator: Option<UavId>,
@@ -72,8 +70,8 @@ pub struct ProximityController {
     own_frame: Option<Box<OwnFix>>,
 }
 
-/// Up to this many observations a step, the controller searches them for the UAVs it has
-/// counted; beyond, it looks them up in [`COUNTED`].
+/// Up to this many observations a step, the controller keeps the UAVs it has counted in a short
+/// list on the stack ([`FewIds`]); beyond, it looks them up in [`COUNTED`].
 const SCAN_UP_TO: usize = 32;
 
 thread_local! {
@@ -83,6 +81,65 @@ thread_local! {
     /// per UAV. The thread's scratch (cleared at each use), so a controller keeps no memory
     /// for it.
     static COUNTED: std::cell::RefCell<std::collections::HashSet<u32>> = std::cell::RefCell::default();
+}
+
+/// Up to [`SCAN_UP_TO`] UAV ids, with a 64-bit filter of `id mod 64` in front: a UAV not
+/// counted is told by one test, and only a filter's hit searches the ids (compact, where a
+/// search of the observations themselves read a hundred bytes each).
+struct FewIds {
+    ids: [u32; SCAN_UP_TO],
+    n: usize,
+    filter: u64,
+}
+
+impl FewIds {
+    fn new() -> Self {
+        Self { ids: [0; SCAN_UP_TO], n: 0, filter: 0 }
+    }
+
+    /// Whether `id` is counted.
+    #[inline]
+    fn contains(&self, id: u32) -> bool {
+        self.filter & (1 << (id & 63)) != 0 && self.ids[..self.n].contains(&id)
+    }
+
+    /// Counts `id`; false when it was counted already. At most [`SCAN_UP_TO`] ids are kept.
+    #[inline]
+    fn insert(&mut self, id: u32) -> bool {
+        if self.contains(id) {
+            return false;
+        }
+        if let Some(slot) = self.ids.get_mut(self.n) {
+            *slot = id;
+            self.n += 1;
+            self.filter |= 1 << (id & 63);
+        }
+        true
+    }
+}
+
+/// The UAVs counted in a step: few on the stack, many in the thread's set.
+enum Counted<'a> {
+    Few(FewIds),
+    Many(&'a mut std::collections::HashSet<u32>),
+}
+
+impl Counted<'_> {
+    #[inline]
+    fn insert(&mut self, id: u32) -> bool {
+        match self {
+            Counted::Few(f) => f.insert(id),
+            Counted::Many(c) => c.insert(id),
+        }
+    }
+
+    #[inline]
+    fn contains(&self, id: u32) -> bool {
+        match self {
+            Counted::Few(f) => f.contains(id),
+            Counted::Many(c) => c.contains(&id),
+        }
+    }
 }
 
 /// A UAV's own measured position and velocity at a time (relative sensing).
@@ -96,9 +153,10 @@ struct OwnFix {
 /// The formation's turn rate as one UAV sees it (the mean of its neighbours' turn rates) and
 /// that rate's rate of change, low-passed over [`ControllerParams::turn_trend_s`]: a slot at
 /// `r` from its reference moves with the tangential acceleration `ω̇ × r` as a turn begins or
-/// ends, which a vehicle that lags its setpoints must be asked for ahead.
+/// ends, which a vehicle that lags its setpoints must be asked for ahead. Kept per UAV from
+/// one step to the next.
 #[derive(Debug, Clone, Copy, Default)]
-struct TurnTrend {
+pub struct TurnTrend {
     /// When the mean was last taken (s).
     t: f64,
     /// The mean turn rate then (rad/s).
@@ -209,14 +267,11 @@ impl ProximityController {
             }
         }
         let p = &setup.params;
-        let m = p.areas.areas;
-        let slots = m + dependency.refs().len();
+        let slots = p.areas.areas + dependency.refs().len();
         let tracks = NeighbourTracks::new(p.predictor, slots, p.track_timeout_s, p.coast_accel_s)
             .with_carry(setup.carry(formation.frame));
-        let fusion = p
-            .isolation_gate
-            .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
         let avoidance = p.avoid_m.filter(|&d| d > 0.0).map(|d| Box::new(Avoidance::new(d, setup.braking_mps2)));
+        let scratch = StepScratch::new(p, slots);
         let trend = (p.turn_feedforward && setup.vehicle.setpoint_lag_s() > 0.0).then(Box::default);
         Ok(Self {
             id,
@@ -224,8 +279,7 @@ impl ProximityController {
             formation,
             dependency,
             tracks,
-            nearest: vec![(EMPTY, 0.0); m].into_boxed_slice(),
-            fusion,
+            scratch,
             navigator: None,
             avoidance,
             trend,
@@ -331,34 +385,138 @@ impl ProximityController {
 
     /// Bytes this controller holds on the heap (shared setup and formation excluded).
     pub fn heap_bytes(&self) -> usize {
-        self.tracks.heap_bytes()
-            + std::mem::size_of_val(&*self.nearest)
-            + self.fusion.as_ref().map_or(0, |f| {
-                std::mem::size_of::<Fusion>()
-                    + f.implied.capacity() * std::mem::size_of::<Implied>()
-                    + f.scratch.capacity() * std::mem::size_of::<f64>()
-            })
-            + self.avoidance.as_ref().map_or(0, |a| a.heap_bytes())
+        self.tracks.heap_bytes() + self.scratch.heap_bytes() + self.avoidance.as_ref().map_or(0, |a| a.heap_bytes())
     }
 
     /// One update period at time `now_s`: `own` is the UAV's estimate of its own state X_i,
     /// `observations` what it perceives of the others (a UAV reported more than once
     /// counts once; its further reports feed its track).
     pub fn step(&mut self, now_s: f64, own: &State9, observations: &[Observation]) -> Decision {
+        if self.formation.slot(self.id).is_none() {
+            return Decision::alone();
+        }
+        if self.setup.params.relative_sensing {
+            self.follow_own_frame(now_s, own);
+        }
+        let Self { id, setup, formation, dependency, tracks, scratch, navigator, avoidance, trend, .. } = self;
+        let uav = UavView {
+            id: *id,
+            setup,
+            formation,
+            dependency,
+            navigator: *navigator,
+            tracks,
+            avoidance: avoidance.as_deref_mut(),
+            trend: trend.as_deref_mut(),
+        };
+        uav.step(scratch, now_s, own, observations)
+    }
+
+    /// Relative sensing: every onboard observation is the UAV's own measured position plus the
+    /// neighbour's relative one, so a change of its own position fix's error (a GNSS bias that
+    /// wanders) moves all of them alike. The tracks move with it: by what the own measured
+    /// position moved beyond its measured velocity since the last period (trapezoid rule), so
+    /// that a track coasting from then and the UAV's own state keep the same error.
+    fn follow_own_frame(&mut self, now_s: f64, own: &State9) {
+        let pos = [own[X], own[X + 1], own[X + 2]];
+        let vel = [own[VX], own[VX + 1], own[VX + 2]];
+        let now = OwnFix { t: now_s, pos, vel };
+        if let Some(last) = self.own_frame.as_deref_mut() {
+            let h = now_s - last.t;
+            if h > 0.0 && h <= self.setup.params.track_timeout_s {
+                let d: [f64; 3] = std::array::from_fn(|k| pos[k] - last.pos[k] - 0.5 * h * (last.vel[k] + vel[k]));
+                if d.iter().all(|x| x.is_finite()) {
+                    self.tracks.shift(d);
+                }
+            }
+            *last = now;
+        } else {
+            self.own_frame = Some(Box::new(now));
+        }
+    }
+}
+
+/// The step's working memory, allocated once: S_i per azimuth area and the robust fusion's
+/// list. A controller holds its own; an engine that steps many UAVs keeps one per thread.
+#[derive(Debug, Clone)]
+pub struct StepScratch {
+    /// S_i: per area, index into the observation slice of the nearest UAV (or `EMPTY`, or a
+    /// coasting track marked `TRACK`) and its squared distance (f32 is ample to rank
+    /// neighbours).
+    nearest: Box<[(u32, f32)]>,
+    /// Robust fusion's working memory (only with `isolation_gate`).
+    fusion: Option<Box<Fusion>>,
+}
+
+impl StepScratch {
+    /// Working memory for a UAV with `params` and up to `slots` neighbours estimated (its
+    /// areas and main references).
+    pub fn new(params: &ControllerParams, slots: usize) -> Self {
+        let fusion = params
+            .isolation_gate
+            .map(|_| Box::new(Fusion { implied: Vec::with_capacity(slots), scratch: Vec::with_capacity(slots) }));
+        Self { nearest: vec![(EMPTY, 0.0); params.areas.areas].into_boxed_slice(), fusion }
+    }
+
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        std::mem::size_of_val(&*self.nearest)
+            + self.fusion.as_ref().map_or(0, |f| {
+                std::mem::size_of::<Fusion>()
+                    + f.implied.capacity() * std::mem::size_of::<Implied>()
+                    + f.scratch.capacity() * std::mem::size_of::<f64>()
+            })
+    }
+}
+
+/// One UAV as the method's step sees it, over any store of its tracks ([`Tracks`]): who it
+/// is, the swarm's setup and formation, its table of main references, and what it keeps from
+/// one step to the next. [`ProximityController`] is one UAV's own; an engine that keeps the
+/// tracks of many UAVs in its own arrays builds one per update and runs the same step.
+#[derive(Debug)]
+pub struct UavView<'a, T: Tracks> {
+    /// The UAV.
+    pub id: UavId,
+    /// The swarm's parameters, vehicle and plan.
+    pub setup: &'a ControllerSetup,
+    /// The formation it keeps.
+    pub formation: &'a Formation,
+    /// Its main references and their dependency degrees.
+    pub dependency: &'a DependencySet,
+    /// The formation's navigator, when named ([`ProximityController::with_navigator`]).
+    pub navigator: Option<UavId>,
+    /// Its tracks of its neighbours.
+    pub tracks: &'a mut T,
+    /// Collision avoidance's memory (with `avoid_m` > 0).
+    pub avoidance: Option<&'a mut Avoidance>,
+    /// The formation's turn as this UAV sees it (the turn feed-forward of a vehicle that lags
+    /// its setpoints).
+    pub trend: Option<&'a mut TurnTrend>,
+}
+
+impl<T: Tracks> UavView<'_, T> {
+    /// One update period at time `now_s` (METHOD §6): `own` is the UAV's estimate of its own
+    /// state X_i, `observations` what it perceives of the others (a UAV reported more than
+    /// once counts once; its further reports feed its track).
+    #[inline(never)] // a phase of `proxform bench`'s instruction table
+    pub fn step(
+        mut self,
+        scratch: &mut StepScratch,
+        now_s: f64,
+        own: &State9,
+        observations: &[Observation],
+    ) -> Decision {
         let Some(slot_i) = self.formation.slot(self.id).copied() else { return Decision::alone() };
-        let setup = Arc::clone(&self.setup);
+        let setup = self.setup;
         let (params, vehicle) = (&setup.params, &setup.vehicle);
         // F·X_i: the state the UAV will have if it keeps its present course.
         let x_hold = vehicle.hold(own, params.dt_s);
 
         // §2: S_i, the nearest perceived UAV in each azimuth area (§3: a repeated report of a
         // neighbour updates its track and takes no place of its own).
-        if params.relative_sensing {
-            self.follow_own_frame(now_s, own);
-        }
-        self.sort_into_areas(now_s, own, observations);
+        self.sort_into_areas(&mut scratch.nearest, now_s, own, observations);
         // Steps 1-3: X̂_ij per neighbour, accumulated into X̄_i and X̂ᴰ_i.
-        let est = self.estimate(now_s, own, &slot_i, &x_hold, observations);
+        let est = self.estimate(scratch, now_s, own, &slot_i, &x_hold, observations);
         // Step 8: nothing perceived.
         if est.n_bar == 0 && est.main_refs == 0 {
             return Decision::alone();
@@ -366,11 +524,11 @@ impl ProximityController {
         // Step 4: the envelope centre O_i (as O_i − X_hold).
         let (mut o_i, goal) = envelope_centre(params, &est, params.stop_closing.then_some(setup.braking_mps2));
         // Collision avoidance (beyond the paper): no closing faster than braking can stop.
-        if let Some(av) = &mut self.avoidance {
+        if let Some(av) = self.avoidance {
             // Skipped (with the same result) when it remembers nothing and cannot bind.
             if av.remembers() || av.may_bind(vehicle, &x_hold, params.dt_s, &o_i, observations, params.track_timeout_s)
             {
-                av.perceive(&self.formation, self.id, &slot_i, &x_hold, params, observations);
+                av.perceive(self.formation, self.id, &slot_i, &x_hold, params, observations);
                 av.limit(vehicle, &x_hold, params.dt_s, &mut o_i, &goal);
             }
         }
@@ -399,64 +557,37 @@ impl ProximityController {
         decide(Outcome::Adjusted { normalised_sq }, input)
     }
 
-    /// Relative sensing: every onboard observation is the UAV's own measured position plus the
-    /// neighbour's relative one, so a change of its own position fix's error (a GNSS bias that
-    /// wanders) moves all of them alike. The tracks move with it: by what the own measured
-    /// position moved beyond its measured velocity since the last period (trapezoid rule), so
-    /// that a track coasting from then and the UAV's own state keep the same error.
-    fn follow_own_frame(&mut self, now_s: f64, own: &State9) {
-        let pos = [own[X], own[X + 1], own[X + 2]];
-        let vel = [own[VX], own[VX + 1], own[VX + 2]];
-        let now = OwnFix { t: now_s, pos, vel };
-        if let Some(last) = self.own_frame.as_deref_mut() {
-            let h = now_s - last.t;
-            if h > 0.0 && h <= self.setup.params.track_timeout_s {
-                let d: [f64; 3] = std::array::from_fn(|k| pos[k] - last.pos[k] - 0.5 * h * (last.vel[k] + vel[k]));
-                if d.iter().all(|x| x.is_finite()) {
-                    self.tracks.shift(d);
-                }
-            }
-            *last = now;
-        } else {
-            self.own_frame = Some(Box::new(now));
-        }
-    }
-
-    /// §2: fills S_i (`self.nearest`) with the nearest UAV per azimuth area, from the UAV's
+    /// §2: fills S_i (`nearest`) with the nearest UAV per azimuth area, from the UAV's
     /// own view of the observations; then neighbours perceived recently but missing now coast
     /// on their tracks (§3) into areas that have no fresh observation. Every report of a UAV
     /// after its first one (with a predictor that fuses, the sensor passes a radio report
     /// beside the onboard detection of the same UAV) only feeds its track; the first report
     /// stands for it in the areas.
-    fn sort_into_areas(&mut self, now_s: f64, own: &State9, observations: &[Observation]) {
+    fn sort_into_areas(&mut self, nearest: &mut [(u32, f32)], now_s: f64, own: &State9, observations: &[Observation]) {
         match observations.len() > SCAN_UP_TO {
             true => COUNTED.with_borrow_mut(|c| {
                 c.clear();
-                self.sort_into_areas_with(now_s, own, observations, Some(c));
+                self.sort_into_areas_with(nearest, now_s, own, observations, Counted::Many(c));
             }),
-            false => self.sort_into_areas_with(now_s, own, observations, None),
+            false => self.sort_into_areas_with(nearest, now_s, own, observations, Counted::Few(FewIds::new())),
         }
     }
 
-    /// [`Self::sort_into_areas`], with the set of the UAVs counted so far, or none to search
-    /// the observations for them.
+    /// [`Self::sort_into_areas`], with the UAVs counted so far.
     fn sort_into_areas_with(
         &mut self,
+        nearest: &mut [(u32, f32)],
         now_s: f64,
         own: &State9,
         observations: &[Observation],
-        mut counted: Option<&mut std::collections::HashSet<u32>>,
+        mut counted: Counted<'_>,
     ) {
-        let Self { id: me, setup, tracks, nearest, .. } = self;
+        let Self { id: me, setup, tracks, .. } = self;
         let me = *me;
+        let tracks = &mut **tracks;
         let params = &setup.params;
         let r2 = params.areas.sensing_range_m.powi(2);
         nearest.iter_mut().for_each(|a| a.0 = EMPTY);
-        // Whether an observation of `id` that counts was met (among the first `k`), and
-        // remember `id`'s (the k-th observation counts).
-        let valid = |p: &Observation, tracks: &NeighbourTracks| {
-            p.source != ObservationSource::Close && !out_of_frame(params, tracks, p, observations, now_s)
-        };
         let (sin_yaw, cos_yaw) = own[state::BETA].sin_cos();
         for (k, o) in observations.iter().enumerate() {
             if o.source == ObservationSource::Close {
@@ -468,11 +599,7 @@ impl ProximityController {
             // (A report left out of the frame stands for nothing: a later one of the same UAV,
             // a relay placed in the frame, takes the place.) A UAV observed again: its track
             // takes this one too.
-            let again = match counted.as_deref_mut() {
-                Some(c) => !c.insert(o.id.0),
-                None => observations[..k].iter().any(|p| p.id == o.id && valid(p, tracks)),
-            };
-            if again {
+            if !counted.insert(o.id.0) {
                 tracks.predict(o, now_s, params.dt_s);
                 continue;
             }
@@ -494,11 +621,7 @@ impl ProximityController {
         let navigator = self.navigator;
         for s in 0..tracks.slots() {
             let Some((id, _)) = coast(params, tracks, navigator, s, now_s) else { continue };
-            let observed = match counted.as_deref() {
-                Some(c) => c.contains(&id.0),
-                None => observations.iter().any(|o| o.id == id && valid(o, tracks)),
-            };
-            if id == me || observed {
+            if id == me || counted.contains(id.0) {
                 continue;
             }
             let x = tracks.state_at(s, now_s);
@@ -522,14 +645,16 @@ impl ProximityController {
     /// count too (METHOD §6 Choice).
     fn estimate(
         &mut self,
+        scratch: &mut StepScratch,
         now_s: f64,
         own: &State9,
         slot_i: &FormationSlot,
         x_hold: &State9,
         observations: &[Observation],
     ) -> Estimates {
-        let Self { setup, formation, dependency, tracks, nearest, fusion, navigator, trend, .. } = self;
-        let (params, formation) = (&setup.params, &**formation);
+        let Self { setup, formation, dependency, tracks, navigator, trend, .. } = self;
+        let (params, formation, tracks) = (&setup.params, *formation, &mut **tracks);
+        let StepScratch { nearest, fusion } = scratch;
         let navigator = *navigator;
         // The robust fusion's view of a neighbour: whether it may be left out, and whether it
         // counts in the median.
@@ -647,7 +772,7 @@ impl ProximityController {
                 }
                 None => {
                     // Not observed now: coast on its track, unless its area already did.
-                    let Some((s, f)) = (0..tracks.slots()).find_map(|s| {
+                    let Some((s, f)) = tracks.slot_of(id).and_then(|s| {
                         coast(params, tracks, navigator, s, now_s).filter(|c| c.0 == id).map(|c| (s, c.1))
                     }) else {
                         continue;
@@ -685,7 +810,7 @@ impl ProximityController {
 /// will fly once the loss is known, a timeout later; METHOD §3).
 fn coast(
     params: &ControllerParams,
-    tracks: &NeighbourTracks,
+    tracks: &impl Tracks,
     navigator: Option<UavId>,
     s: usize,
     now_s: f64,
@@ -703,7 +828,7 @@ fn coast(
 
 /// How old what a UAV forwards of the navigator may be (s): `relay_max_age_s` where the plan
 /// brings old reports forward, the track timeout otherwise.
-fn relay_max_age_s(params: &ControllerParams, tracks: &NeighbourTracks) -> f64 {
+fn relay_max_age_s(params: &ControllerParams, tracks: &impl Tracks) -> f64 {
     if tracks.carries() {
         params.relay_max_age_s
     } else {
@@ -722,7 +847,7 @@ fn relay_max_age_s(params: &ControllerParams, tracks: &NeighbourTracks) -> f64 {
 #[inline]
 fn out_of_frame(
     params: &ControllerParams,
-    tracks: &NeighbourTracks,
+    tracks: &impl Tracks,
     o: &Observation,
     observations: &[Observation],
     now_s: f64,
@@ -794,7 +919,7 @@ pub fn centre_from(
 /// the time from then to its prediction one period ahead, `times` = (now, the period,
 /// `max_age_s`); only when `needed` (a zero state otherwise).
 #[inline]
-fn seen_now(tracks: &NeighbourTracks, o: &Observation, times: (f64, f64, f64), needed: bool) -> (State9, f64) {
+fn seen_now(tracks: &impl Tracks, o: &Observation, times: (f64, f64, f64), needed: bool) -> (State9, f64) {
     let (now_s, dt, max_age_s) = times;
     if !needed {
         return (State9::zeros(), dt);

@@ -313,22 +313,16 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
-        // Where the fast engine flies the scenario (it runs neither the fusion nor the own
-        // check).
+        // Where the fast engine flies the scenario (it does not run the own check).
         let fast = match engine {
             crate::scenario::EngineChoice::Fast => true,
             crate::scenario::EngineChoice::Auto => n >= crate::scenario::EngineChoice::AUTO_FAST_FROM,
             crate::scenario::EngineChoice::Reference => false,
         };
-        // Robust fusion by default (METHOD §8): a neighbour far from its own slot (its sensor
-        // failed; it joins, forms or was re-assigned) must not drag the UAVs that lean on it.
-        // Where UAVs are off their slots by design the fusion is needed, and the fast engine
-        // does not fly such scenarios anyway.
-        let off_slots = !placement.in_slots()
-            || !schedule.is_empty()
-            || reassign_on_loss.is_some()
-            || faults.iter().any(|f| matches!(f, crate::faults::Fault::Join { .. }));
-        if spec.controller.isolation_gate.is_none() && !paper && (off_slots || !fast) {
+        // Robust fusion by default (METHOD §8), whichever engine flies: a neighbour far from its
+        // own slot (its sensor failed; it joins, forms or was re-assigned) must not drag the
+        // UAVs that lean on it.
+        if spec.controller.isolation_gate.is_none() && !paper {
             params.isolation_gate = Some(defaults::ISOLATION_GATE);
         }
         // Collision avoidance by default for the kinematic vehicle; the fixed wing's braking is a

@@ -2,9 +2,12 @@
 //!
 //! The reference engine ([`crate::world`]) steps one [`proxform_core::Agent`] object per UAV,
 //! each with its own tracks and controller, through every phase. This engine runs the same
-//! method (`update`: the reference controller's steps, its α-β tracks, its collision
-//! avoidance) over flat arrays: the true states, one array of every UAV's tracks in f32
-//! (`tracks`), the inputs and the per-UAV records, with per-thread scratch allocated once.
+//! method over flat arrays: the true states, one array of every UAV's tracks in compact f32
+//! records (`tracks`), the inputs and the per-UAV records, with per-thread scratch allocated
+//! once. Its controller step is the reference's own ([`proxform_core::controller::UavView`]
+//! over the records, `tracks::StepTracks`), and so is its sensor
+//! ([`crate::world::sensing::ProximitySensor::pick`]); the noise of what it picks is drawn in
+//! bulk (`update`).
 //! A step is:
 //! 0. **environment** (with wind, a position-fix bias or bursty radio losses): every UAV's
 //!    wind, bias and radio channel over the step, by the reference engine's own pass
@@ -43,12 +46,15 @@ use rayon::prelude::*;
 use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::RunKey;
 use crate::world::environment::{self, EnvStep, UavEnv};
+use crate::world::measurement::Message;
 use crate::world::options::RunOptions;
 use crate::world::reach::Reach;
+use crate::world::sensing::ProximitySensor;
+use proxform_scenario::radio::RadioModel;
 use setup::Consts;
 pub use setup::{supports, Unsupported};
 use tracks::{Owner, Track};
-use update::{Message, Scratch, View};
+use update::{Scratch, View};
 
 /// UAVs per block of the per-UAV phases.
 pub const BLOCK: usize = 256;
@@ -88,6 +94,10 @@ pub struct FastSimulation<'s> {
     /// empty when the scenario has neither.
     env: Vec<UavEnv>,
     messages: Vec<Message>,
+    /// The sensor (the reference engine's own).
+    sensor: ProximitySensor,
+    /// The warm-up's radio, without losses.
+    ideal: RadioModel,
     /// The messages' index by sender position.
     reach: Reach,
     /// Origins of the reference points of the last steps.
@@ -130,6 +140,8 @@ impl<'s> FastSimulation<'s> {
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
             messages: Vec::with_capacity(c.broadcasters.len()),
+            sensor: ProximitySensor::of(sc),
+            ideal: sc.radio().ideal(),
             reach: Reach::new(),
             ring: vec![[p0[X], p0[X + 1], p0[X + 2]]; ring_len],
             start,
@@ -218,7 +230,7 @@ impl<'s> FastSimulation<'s> {
             self.c.range,
         );
         let spread = relative_speed_bound(self.states.iter().map(|s| [s[VX], s[VX + 1], s[VX + 2]]));
-        self.c.watch = self.c.watch.for_speeds(spread);
+        self.sensor.set_speeds(spread);
         let Self {
             sc,
             c,
@@ -235,6 +247,9 @@ impl<'s> FastSimulation<'s> {
             reach,
             ring,
             origin0,
+            sensor,
+            ideal,
+            active,
             ..
         } = self;
         let view = View {
@@ -242,6 +257,9 @@ impl<'s> FastSimulation<'s> {
             sc,
             states,
             grid,
+            sensor,
+            active,
+            ideal,
             run: *run,
             draw_step,
             k: k as i32,
@@ -259,8 +277,11 @@ impl<'s> FastSimulation<'s> {
             let s = &states[j];
             messages.push(Message {
                 sender: j as u32,
+                about: j as u32,
                 state: update::own_measurement(&view, j),
+                age_s: 0.0,
                 at: [s[X], s[X + 1], s[X + 2]],
+                relative: false,
             });
         }
         reach.rebuild(messages.iter().map(|m| m.at), sc.radio().range_m);
@@ -276,10 +297,10 @@ impl<'s> FastSimulation<'s> {
                     applied[o] = [0.0; 6];
                     continue;
                 }
-                let mut owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
+                let owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
                 let at = avoid.iter().position(|a| a.0 as usize == i);
                 let mut kept = at.map(|p| avoid.swap_remove(p).1);
-                let u = update::update(&view, i, scratch, &mut owner, &mut kept);
+                let u = update::update(&view, i, scratch, owner, &mut kept);
                 if let Some(k) = kept {
                     avoid.push((i as u32, k));
                 }
@@ -296,9 +317,9 @@ impl<'s> FastSimulation<'s> {
                 .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)))
                 .zip(avoid.par_iter_mut())
                 .enumerate()
-                .for_each_init(|| Scratch::new(c), block);
+                .for_each_init(|| Scratch::new(c, sc), block);
         } else {
-            let mut scratch = Scratch::new(c);
+            let mut scratch = Scratch::new(c, sc);
             uavs.chunks_mut(BLOCK)
                 .zip(applied.chunks_mut(BLOCK))
                 .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)))
@@ -320,9 +341,18 @@ impl<'s> FastSimulation<'s> {
             crate::parallel::for_each_mut(&mut self.env, self.parallel, |i, e| step.advance(i, &states[i], e));
         }
         self.decide_all(k as i64, k, false);
-        // Propagate: the navigator along its path, the followers through the kinematic vehicle
-        // in the air, carried by the wind from its value now to its value at the step's end
-        // (as the reference engine does).
+        self.propagate();
+        self.k += 1;
+    }
+
+    /// Propagate: the navigator along its path, the followers through the kinematic vehicle in
+    /// the air, carried by the wind from its value now to its value at the step's end (as the
+    /// reference engine does). A function of its own: a phase of `proxform bench`'s
+    /// instruction table.
+    #[inline(never)]
+    fn propagate(&mut self) {
+        let k = self.k;
+        let dt = self.c.dt;
         let nav = self.c.nav;
         let nav_next = self.sc.path().state_at((k + 1) as f64 * dt, self.start);
         let env = &self.env;
@@ -346,7 +376,6 @@ impl<'s> FastSimulation<'s> {
         } else {
             self.states.iter_mut().zip(self.applied.iter()).enumerate().for_each(propagate);
         }
-        self.k += 1;
     }
 
     fn frame(&self) -> StepFrame<'_> {

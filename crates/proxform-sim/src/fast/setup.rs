@@ -1,8 +1,7 @@
 //! What the fast engine derives once from a scenario: which scenarios it runs (the rest stay
 //! with the reference engine) and the constants every UAV's update reads.
 
-use proxform_core::azimuth::AreaClassifier;
-use proxform_core::state::{ALPHA, VX};
+use proxform_core::state::VX;
 use proxform_core::{Method, PredictorKind, VehicleModel};
 use proxform_scenario::wind::Wind;
 use proxform_scenario::Scenario;
@@ -14,24 +13,24 @@ use super::tracks::{Filter, MAX_AGE_STEPS, MAX_ID};
 #[error("the fast engine does not run {0} (use the reference engine)")]
 pub struct Unsupported(pub String);
 
-/// Checks that the fast engine runs every feature `sc` uses: the proximity method on the
-/// kinematic vehicle with α-β tracks and the one-step input; measurement noise, actuation
-/// error, onboard dropout, beacons and radio loss (i.i.d. and bursty), separation keeping, the
-/// stopping limit and collision avoidance, wind (steady, gusts, turbulence) and the position
-/// fix's bias. Faults, formation changes, scattered starts, radio delay and relays, the robust
-/// fusion, the own-state filter and check, the horizon, the fixed wing, the multirotor and the
-/// heading frame stay with the reference engine.
+/// Checks that the fast engine runs every feature `sc` uses. Its controller step is the
+/// reference's own ([`proxform_core::controller::UavView::step`]), so every controller setting
+/// runs (the robust fusion, the horizon, separation keeping, the stopping limit, collision
+/// avoidance, every formation frame) but what its records or its world cannot represent: its
+/// tracks are α-β filters that keep no report's source (no other predictor, no relative
+/// sensing), it keeps no turn trend per UAV (no turn feed-forward), and its world flies the
+/// kinematic vehicle with measurement noise, actuation error, onboard dropout, beacons and
+/// radio loss (i.i.d. and bursty), wind (steady, gusts, turbulence) and the position fix's
+/// bias. Faults, formation changes, scattered starts, radio delay and relays, the own-state
+/// filter and check, the fixed wing and the multirotor stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 19] = [
+    let checks: [(bool, &'static str); 16] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
-        (sc.formation().frame != proxform_core::FormationFrame::Heading, "a heading frame (formation.frame)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
-        (p.horizon <= 1, "a prediction horizon"),
-        (p.isolation_gate.is_none(), "the robust fusion"),
         (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
         (!p.turn_feedforward, "the turn feed-forward"),
         (sc.faults().is_empty(), "faults"),
@@ -46,7 +45,7 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (p.track_timeout_s / p.dt_s <= MAX_AGE_STEPS as f64, "a track timeout over 120 update periods"),
     ];
     // Every reason, in this order: the first alone misled (a formation change's file was told
-    // of "the robust fusion", which the change turned on by default).
+    // of a setting the change turned on by default, not of the change).
     let missing: Vec<&str> = checks.iter().filter(|c| !c.0).map(|c| c.1).collect();
     match missing.is_empty() {
         true => Ok(()),
@@ -83,54 +82,25 @@ pub struct Consts {
     pub nav: usize,
     pub dt: f64,
     pub areas: usize,
-    pub classifier: AreaClassifier,
-    /// Sensing range (m) and its square.
+    /// Sensing range (m).
     pub range: f64,
-    pub r2: f64,
-    /// Which UAVs are close-range detections (as the reference engine's sensor).
-    pub watch: proxform_core::controller::CloseWatch,
     /// Track records per UAV.
     pub capacity: usize,
     pub filter: Filter,
     /// A track coasts for at most this many steps.
     pub coast_steps: i64,
-    /// The navigator, where the plan carries reports (`carry`): its track coasts up to the
-    /// track timeout at full weight (as the reference controller's, METHOD §3).
-    pub plan_navigator: Option<u32>,
-    /// The track timeout (steps).
-    pub timeout_steps: i64,
     /// Tracks older than this (steps) are freed: the longer of the timeout and the coasting.
     pub track_limit: i64,
-    pub coast_decay_s: f64,
     /// Coasting tracks are brought forward beyond one period by the mission plan
     /// ([`proxform_core::plan`]), as the reference's.
     pub carry: Option<std::sync::Arc<proxform_core::plan::Carry>>,
     /// Measurement noise σ per parameter.
     pub sigma: [f32; 9],
-    /// The formation turns with the course (W's offset rotated by the neighbour's course).
-    pub course_frame: bool,
-    /// Envelope: Δ per parameter and ρ².
-    pub inv_threshold: [f64; 9],
-    pub rho2: f64,
-    /// The stopping limit's deceleration (m/s²), when on.
-    pub stopping: Option<f64>,
-    pub separation: f64,
     /// Collision avoidance: distance (m) and deceleration (m/s²).
     pub avoid: Option<(f64, f64)>,
-    /// The one-step input's diagonal: `g_a = Σ_k B_ka·q_k·r_k`, `u_a = −g_a/h_a`.
-    pub q: [f64; 9],
-    pub h: [f64; 6],
-    /// Per-step input limits (rate·Δt) and the state box of velocity and attitude.
+    /// Per-step input limits (rate·Δt).
     pub scale: [f64; 6],
-    pub state_min: [f64; 6],
-    pub state_max: [f64; 6],
-    pub dropout: f64,
-    pub reference_dropout: f64,
     pub actuation_error: f64,
-    pub radio_loss: f64,
-    /// The loss in a receiver's bad channel state (bursty losses), when the radio has one.
-    pub burst_loss: Option<f64>,
-    pub radio_range2: f64,
     /// The UAVs that broadcast, in the order their messages are heard.
     pub broadcasters: Vec<usize>,
 }
@@ -148,22 +118,8 @@ impl Consts {
         let range = p.areas.sensing_range_m;
         let steps = |s: f64| (s / dt + 1e-6).floor() as i64;
         let timeout_steps = steps(p.track_timeout_s);
-        let q: [f64; 9] = std::array::from_fn(|k| setup.q()[k]);
-        let w = setup.input_weights();
-        let half = 0.5 * dt;
-        let h: [f64; 6] =
-            std::array::from_fn(
-                |a| {
-                    if a < 3 {
-                        half * half * q[a] + q[VX + a] + w[a]
-                    } else {
-                        q[ALPHA + a - 3] + w[a]
-                    }
-                },
-            );
         let scale_v = kin.input_scale(dt);
         let l = &kin.limits;
-        let am = l.attitude_max_rad;
         let sigma = sc.noise().sigma();
         let fastest = (l.vx_max_mps.powi(2) + l.vy_max_mps.powi(2) + l.vz_max_mps.powi(2)).sqrt();
         let wind = wind_acceleration(sc.wind(), fastest, dt);
@@ -175,10 +131,7 @@ impl Consts {
             nav,
             dt,
             areas: p.areas.areas,
-            classifier: AreaClassifier::new(p.areas.areas),
             range,
-            r2: range * range,
-            watch: crate::world::engine::close_watch(sc),
             capacity: (p.areas.areas + max_refs(sc)).max(1),
             filter: Filter::new(
                 alpha,
@@ -193,29 +146,12 @@ impl Consts {
                 ),
             ),
             coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
-            plan_navigator: setup.carry(sc.formation().frame).map(|_| sc.navigator().0),
-            timeout_steps,
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
-            coast_decay_s: p.coast_decay_s,
             carry: setup.carry(sc.formation().frame),
             sigma: std::array::from_fn(|k| sigma[k] as f32),
-            course_frame: sc.formation().frame == proxform_core::FormationFrame::Course,
-            inv_threshold: std::array::from_fn(|k| 1.0 / p.envelope.thresholds[k]),
-            rho2: p.envelope.rho * p.envelope.rho,
-            stopping: p.stop_closing.then_some(setup.braking_mps2()),
-            separation: p.separation_m.unwrap_or(0.0),
             avoid: p.avoid_m.filter(|&d| d > 0.0).map(|d| (d, setup.braking_mps2())),
-            q,
-            h,
             scale: std::array::from_fn(|a| scale_v[a]),
-            state_min: [l.vx_min_mps, -l.vy_max_mps, -l.vz_max_mps, -am.x, -am.y, -am.z],
-            state_max: [l.vx_max_mps, l.vy_max_mps, l.vz_max_mps, am.x, am.y, am.z],
-            dropout: sc.dropout(),
-            reference_dropout: sc.reference_dropout(),
             actuation_error: sc.actuation_error(),
-            radio_loss: radio.loss,
-            burst_loss: radio.burst.map(|b| b.loss_bad),
-            radio_range2: radio.range_m * radio.range_m,
             broadcasters,
         }
     }

@@ -19,7 +19,11 @@
 //! filter over lanes of all of a UAV's tracks, whose fixed width and copies outweigh the
 //! vector arithmetic at a dozen tracks a UAV on 4-wide vectors.)
 
+use proxform_core::controller::Tracks;
+use proxform_core::plan::Carry;
+use proxform_core::predictor::SAME_INSTANT_S;
 use proxform_core::state::{State9, VX};
+use proxform_core::{Observation, UavId};
 
 /// Marks a free track.
 pub const FREE: u32 = u32::MAX;
@@ -216,6 +220,7 @@ impl Owner<'_> {
     /// The slot of `id`, or the one to (re)use for it: a new one while there is room, else the
     /// one measured longest ago (freed). `hint` is where to look first (neighbours are fed in
     /// the same order step after step, so the n-th fed is usually in slot n).
+    #[inline]
     fn slot_for(&mut self, id: u32, k: i32, hint: usize) -> usize {
         let n = usize::from(*self.used);
         if hint < n && self.tracks[hint].is(id) {
@@ -239,14 +244,20 @@ impl Owner<'_> {
         oldest
     }
 
+    /// The slot of `id`'s track, if it has one.
+    #[inline]
+    pub fn find(&self, id: u32) -> Option<usize> {
+        self.tracks[..usize::from(*self.used)].iter().position(|t| t.is(id))
+    }
+
     /// Feeds neighbour `id`'s observation `z` (looked for first in slot `hint`; relative to the
-    /// owner's reference point at step `k`) and returns its slot and its predicted state Δt
-    /// after `k` (position, velocity, attitude). `shift(k0)` is how far the reference point of
-    /// step `k0` lies from that of step `k` (m).
+    /// owner's reference point at step `k`) and returns its slot and its predicted state `h`
+    /// seconds after `k` (position, velocity, attitude). `shift(k0)` is how far the reference
+    /// point of step `k0` lies from that of step `k` (m).
     pub fn predict(
         &mut self,
         f: &Filter,
-        (id, hint): (u32, usize),
+        (id, hint, h): (u32, usize, f32),
         k: i32,
         z: &State9,
         shift: impl Fn(i32) -> [f64; 3],
@@ -294,22 +305,7 @@ impl Owner<'_> {
         } else {
             v = f.load(tr);
         }
-        (s, extrapolate(&v, f.dt as f32, [0.0; 3], f32::INFINITY))
-    }
-
-    /// The neighbour of slot `s` if its track can coast at step `k`: measured before, no longer
-    /// ago than `max_steps`.
-    #[inline]
-    pub fn coasting(&self, s: usize, k: i32, max_steps: i64) -> Option<u32> {
-        let tr = &self.tracks[s];
-        let age = tr.age(k);
-        tr.id().filter(|_| age >= 1 && age <= max_steps)
-    }
-
-    /// Steps since slot `s` was measured, at step `k`.
-    #[inline]
-    pub fn age_steps(&self, s: usize, k: i32) -> i64 {
-        self.tracks[s].age(k)
+        (s, extrapolate(&v, h, [0.0; 3], f32::INFINITY))
     }
 
     /// The step slot `s` was last measured, seen from step `k`.
@@ -353,6 +349,121 @@ impl Owner<'_> {
     }
 }
 
+/// One UAV's tracks at one update as the controller's step reads them
+/// ([`proxform_core::controller::Tracks`]): the update is at step `k`, `t = k·Δt` on the
+/// step's clock, and states come back in f64, relative to the owner's reference point at `k`.
+/// The engine hears every report as it is measured (no radio delay), so a track's last report
+/// arrived at its last measurement; its records keep no source (the engine runs no relative
+/// sensing).
+pub struct StepTracks<'a, 'v, S: Fn(i32) -> [f64; 3]> {
+    pub owner: Owner<'a>,
+    pub filter: &'v Filter,
+    /// The mission plan's carry of old reports (as the reference tracks' `with_carry`).
+    pub carry: Option<&'v Carry>,
+    /// The update's step.
+    pub k: i32,
+    /// `shift(k0)`: how far the reference point of step `k0` lies from that of step `k` (m).
+    pub shift: S,
+    /// Tracks fed so far in this update (where the next is looked for first).
+    pub fed: usize,
+}
+
+impl<S: Fn(i32) -> [f64; 3]> StepTracks<'_, '_, S> {
+    /// Seconds from slot `s`'s last measurement to time `t`, and that measurement's step.
+    #[inline]
+    fn since(&self, s: usize, t: f64) -> (f64, i32) {
+        let k0 = self.owner.measured_at(s, self.k);
+        (t - f64::from(k0) * self.filter.dt, k0)
+    }
+
+    /// Whether a state `h` seconds after its measurement is brought forward by the plan (past
+    /// the track's own rates' span: a period, at most `coast_accel_s`).
+    #[inline]
+    fn carried(&self, h: f64) -> Option<&Carry> {
+        let f = self.filter;
+        self.carry.filter(|_| h > f.dt.min(f.coast_accel_s) + SAME_INSTANT_S)
+    }
+
+    /// Slot `s`'s state `h` seconds after its measurement at step `k0`.
+    #[inline]
+    fn state_after(&self, s: usize, k0: i32, h: f64) -> State9 {
+        let (f, d) = (self.filter, (self.shift)(k0));
+        let x = match self.carried(h) {
+            Some(carry) => self.owner.carried(f, carry, s, (f64::from(k0) * f.dt, h), d),
+            None => self.owner.state_at(f, s, h, d),
+        };
+        to_f64(&x)
+    }
+}
+
+impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
+    fn predict(&mut self, obs: &Observation, _now: f64, horizon_s: f64) -> State9 {
+        let h = horizon_s + obs.age_s;
+        let hint = self.fed;
+        self.fed += 1;
+        let (s, x) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), self.k, &obs.state, &self.shift);
+        match self.carried(h) {
+            Some(carry) => {
+                let t0 = f64::from(self.k) * self.filter.dt;
+                to_f64(&self.owner.carried(self.filter, carry, s, (t0, h), [0.0; 3]))
+            }
+            None => to_f64(&x),
+        }
+    }
+
+    #[inline]
+    fn slots(&self) -> usize {
+        self.owner.used()
+    }
+
+    #[inline]
+    fn slot_of(&self, id: UavId) -> Option<usize> {
+        self.owner.find(id.0)
+    }
+    #[inline]
+    fn coasting(&self, s: usize, now: f64, max_s: f64, max_age_s: f64) -> Option<UavId> {
+        let (missing, _) = self.since(s, now);
+        let id = self.owner.tracks[s].id()?;
+        (missing >= SAME_INSTANT_S && missing <= max_s.min(max_age_s) + SAME_INSTANT_S).then_some(UavId(id))
+    }
+
+    #[inline]
+    fn missing(&self, s: usize, now: f64) -> f64 {
+        self.since(s, now).0
+    }
+
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
+    fn state_at(&self, s: usize, t: f64) -> State9 {
+        let (h, k0) = self.since(s, t);
+        self.state_after(s, k0, h)
+    }
+
+    #[inline]
+    fn carries(&self) -> bool {
+        self.carry.is_some()
+    }
+
+    fn report(&self, id: UavId, now: f64, max_age_s: f64) -> Option<(State9, f64)> {
+        let s = self.owner.find(id.0)?;
+        let (age, k0) = self.since(s, now);
+        let timeout = self.filter.timeout_steps as f64 * self.filter.dt;
+        (age <= timeout.min(max_age_s) + SAME_INSTANT_S).then(|| (self.state_after(s, k0, 0.0), age.max(0.0)))
+    }
+
+    #[inline]
+    fn heard_onboard(&self, _id: UavId, _now: f64, _max_s: f64) -> bool {
+        false
+    }
+
+    #[inline]
+    fn any_heard_onboard(&self, _now: f64, _max_s: f64) -> bool {
+        false
+    }
+}
+
 /// The track's state `h` seconds after its measurement, its position shifted by `d`: the
 /// acceleration is extrapolated for at most `ha` seconds (then the velocity reached carries
 /// on), attitude rates carry on.
@@ -381,6 +492,12 @@ pub fn to_f32(x: &State9) -> [f32; 9] {
         out[a] = x[a] as f32;
     }
     out
+}
+
+/// A state from f32.
+#[inline]
+pub fn to_f64(x: &[f32; 9]) -> State9 {
+    State9::from_fn(|a, _| f64::from(x[a]))
 }
 
 /// `a` wrapped into (−π, π] (attitude residuals and differences are small: the test is a
@@ -439,7 +556,7 @@ mod tests {
             let z = neighbour(k);
             let obs = Observation { id: UavId(7), state: z, age_s: 0.0, source: ObservationSource::Onboard };
             let want = reference.predict(&obs, f64::from(k) * 0.1, 0.1);
-            let (_, got) = owner.predict(&f, (7, 0), k, &z, |_| [0.0; 3]);
+            let (_, got) = owner.predict(&f, (7, 0, 0.1), k, &z, |_| [0.0; 3]);
             for c in 0..9 {
                 let mut d = f64::from(got[c]) - want[c];
                 if c >= 6 {
@@ -472,14 +589,14 @@ mod tests {
         let mut used = 0u8;
         let mut owner = Owner { tracks: &mut records, used: &mut used };
         let z = neighbour(0);
-        owner.predict(&f, (1, 0), 0, &z, |_| [0.0; 3]);
-        owner.predict(&f, (2, 1), 1, &z, |_| [0.0; 3]);
-        let (s, _) = owner.predict(&f, (3, 0), 2, &z, |_| [0.0; 3]);
+        owner.predict(&f, (1, 0, 0.1), 0, &z, |_| [0.0; 3]);
+        owner.predict(&f, (2, 1, 0.1), 1, &z, |_| [0.0; 3]);
+        let (s, _) = owner.predict(&f, (3, 0, 0.1), 2, &z, |_| [0.0; 3]);
         assert_eq!(s, 0, "the track of UAV 1, measured longest ago, is reused");
         assert_eq!(owner.tracks[0].id(), Some(3));
         assert_eq!(owner.tracks[1].id(), Some(2));
         // A wrong hint still finds the track.
-        let (s, _) = owner.predict(&f, (2, 0), 3, &z, |_| [0.0; 3]);
+        let (s, _) = owner.predict(&f, (2, 0, 0.1), 3, &z, |_| [0.0; 3]);
         assert_eq!(s, 1);
         assert_eq!(wrap_pi(3.5), 3.5 - std::f32::consts::TAU);
     }

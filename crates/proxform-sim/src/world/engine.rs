@@ -185,7 +185,6 @@ impl<'s> Simulation<'s> {
         let n = scenario.len();
         let nav = scenario.navigator().index();
         let s0 = scenario.initial()[nav];
-        let areas = scenario.controller().areas;
         let starts = super::placement::initial_states(scenario, RunKey::new(seed, run));
         let world = World {
             scenario,
@@ -201,8 +200,7 @@ impl<'s> Simulation<'s> {
             sent_now: 0,
             active: initially_flying(scenario),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
-            sensor: ProximitySensor::new(areas.areas, areas.sensing_range_m, scenario.noise().sigma())
-                .with_watch(close_watch(scenario)),
+            sensor: ProximitySensor::of(scenario),
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
             slots: None,

@@ -340,6 +340,8 @@ impl StepContext<'_> {
 
     /// Propagate: each UAV's next state (the navigator along its path, a follower through its
     /// vehicle and the wind), and what its update produced.
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     fn propagate(&self, first: usize, blk: &mut Block<'_>) {
         let sc = self.scenario;
         let dt = sc.dt_s();

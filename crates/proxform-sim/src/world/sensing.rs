@@ -5,6 +5,10 @@
 //! Areas are taken from the true relative geometry; the controller re-sorts the noisy reports
 //! into its own areas. Candidates come from the neighbour grid, or from every UAV for the naive
 //! all-pairs reference search.
+//!
+//! What is picked is decided once, for both engines ([`ProximitySensor::pick`]); what becomes of
+//! a pick (an observation with its noise now, or a note whose noise is drawn in bulk later) and
+//! where its chance comes from is the engine's ([`Picks`]).
 
 use proxform_core::azimuth::AreaClassifier;
 use proxform_core::controller::CloseWatch;
@@ -61,6 +65,22 @@ pub struct SensorScratch {
 }
 
 impl SensorScratch {
+    /// A new perception's stamp, the per-UAV marks sized for `n` UAVs.
+    #[inline]
+    fn next_stamp(&mut self, n: usize) -> u32 {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.seen_any.fill(0);
+            self.seen_onboard.fill(0);
+            self.stamp = 1;
+        }
+        if self.seen_any.len() < n {
+            self.seen_any.resize(n, 0);
+            self.seen_onboard.resize(n, 0);
+        }
+        self.stamp
+    }
+
     /// Scratch for `m` areas.
     pub fn new(m: usize) -> Self {
         Self {
@@ -87,6 +107,13 @@ pub struct ProximitySensor {
 }
 
 impl ProximitySensor {
+    /// The sensor of scenario `sc`'s UAVs: its areas, range and noise, watching for collision
+    /// avoidance where the method avoids.
+    pub fn of(sc: &proxform_scenario::Scenario) -> Self {
+        let areas = &sc.controller().areas;
+        Self::new(areas.areas, areas.sensing_range_m, sc.noise().sigma()).with_watch(super::engine::close_watch(sc))
+    }
+
     /// A sensor with `m` areas, range `range_m` and noise σ per parameter.
     pub fn new(m: usize, range_m: f64, sigma: State9) -> Self {
         Self { classifier: AreaClassifier::new(m), range_m, sigma, watch: CloseWatch::default() }
@@ -106,7 +133,9 @@ impl ProximitySensor {
         self.watch = self.watch.for_speeds(max_relative_mps);
     }
 
-    /// Appends to `out` what UAV `i` perceives of `scene` through `link`.
+    /// Appends to `out` what UAV `i` perceives of `scene` through `link`: each pick observed
+    /// at once, with noise and chance from `draws` (the reference engine's perception).
+    #[inline(never)] // a phase of `proxform bench`'s instruction table
     pub fn perceive(
         &self,
         i: usize,
@@ -116,38 +145,48 @@ impl ProximitySensor {
         scratch: &mut SensorScratch,
         out: &mut Vec<Observation>,
     ) {
+        let start = out.len();
+        let mut observe = Observe { sensor: self, states: scene.states, draws, out, start };
+        self.pick(i, scene, link, &mut observe, scratch);
+    }
+
+    /// What UAV `i`'s sensors pick of `scene` through `link`, told to `picks` in the order of
+    /// the reports (METHOD §2): the nearest UAV of each azimuth area, then its main references
+    /// not among them, each surviving its dropout; the radio messages in range that survive
+    /// the channel, from UAVs not perceived onboard (every one, where its tracks fuse), and the
+    /// freshest relay of the navigator; then the close-range detections not reported onboard.
+    /// Both engines' perception: `picks` observes each pick (with its own noise and chance).
+    pub fn pick(
+        &self,
+        i: usize,
+        scene: &Scene<'_>,
+        link: &Link<'_>,
+        picks: &mut impl Picks,
+        scratch: &mut SensorScratch,
+    ) {
         let states = scene.states;
         let deps = &scene.dependencies[i];
-        let rng = &mut draws.sensing;
-        let start = out.len();
         let me = &states[i];
         let (sin_yaw, cos_yaw) = me[state::BETA].sin_cos();
         scratch.best_d2.iter_mut().for_each(|d| *d = f64::INFINITY);
         scratch.refs.clear();
         scratch.close.clear();
-        let watch = self.watch;
-        let mut consider = |j: u32, q: &[f64; 3], d2: f64| {
-            if j as usize == i {
-                return;
-            }
-            if watch.may_see(d2) {
-                let o = &states[j as usize];
-                let w = [o[state::VX] - me[state::VX], o[state::VY] - me[state::VY], o[state::VZ] - me[state::VZ]];
-                if watch.sees(d2, [q[0] - me[0], q[1] - me[1], q[2] - me[2]], w) {
-                    scratch.close.push(j);
-                }
-            }
-            let a = self.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
-            // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
-            let better = d2 < scratch.best_d2[a];
-            scratch.best_id[a] = if better { j } else { scratch.best_id[a] };
-            scratch.best_d2[a] = if better { d2 } else { scratch.best_d2[a] };
+        let mut nearest = Nearest {
+            sensor: self,
+            i,
+            states,
+            sin_cos_yaw: (sin_yaw, cos_yaw),
+            best_d2: &mut scratch.best_d2,
+            best_id: &mut scratch.best_id,
+            close: &mut scratch.close,
         };
         let p = [me[0], me[1], me[2]];
         match scene.search {
             // A method that reads the radio only scans no neighbours.
             _ if !link.onboard => {}
-            NeighbourSearch::Grid => scene.grid.for_each_within(p, self.range_m, &mut consider),
+            NeighbourSearch::Grid => {
+                scene.grid.for_each_within(p, self.range_m, |j, q, d2| nearest.consider(j, q, d2));
+            }
             NeighbourSearch::AllPairs => {
                 let r2 = self.range_m * self.range_m;
                 for (j, s) in states.iter().enumerate() {
@@ -157,7 +196,7 @@ impl ProximitySensor {
                     let q = [s[0], s[1], s[2]];
                     let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
                     if d2 <= r2 {
-                        consider(j as u32, &q, d2);
+                        nearest.consider(j as u32, &q, d2);
                     }
                 }
             }
@@ -177,6 +216,10 @@ impl ProximitySensor {
         }
         // Deterministic report order: areas in order, then references by id.
         scratch.refs.sort_unstable();
+        // What this perception holds already, by UAV (a lookup per message and detection: a
+        // search of the reports made broadcast to all cubic in the swarm's size).
+        let n = states.len();
+        let stamp = scratch.next_stamp(n);
         // Observations of main references are lost with their own probability.
         let loss = |j: u32| {
             if link.reference_dropout != link.dropout && deps.refs().iter().any(|r| r.0 .0 == j) {
@@ -186,16 +229,21 @@ impl ProximitySensor {
             }
         };
         for a in 0..scratch.best_d2.len() {
-            if scratch.best_d2[a] < f64::INFINITY && kept(loss(scratch.best_id[a]), rng) {
-                out.push(self.observe(scratch.best_id[a], states, rng));
+            let j = scratch.best_id[a];
+            if scratch.best_d2[a] < f64::INFINITY && picks.kept(loss(j)) {
+                picks.onboard(j);
+                scratch.seen_any[j as usize] = stamp;
+                scratch.seen_onboard[j as usize] = stamp;
             }
         }
         for k in 0..scratch.refs.len() {
             let j = scratch.refs[k];
             let picked =
                 (0..scratch.best_d2.len()).any(|a| scratch.best_d2[a] < f64::INFINITY && scratch.best_id[a] == j);
-            if !picked && kept(link.reference_dropout, rng) {
-                out.push(self.observe(j, states, rng));
+            if !picked && picks.kept(link.reference_dropout) {
+                picks.onboard(j);
+                scratch.seen_any[j as usize] = stamp;
+                scratch.seen_onboard[j as usize] = stamp;
             }
         }
         // Messages heard over the radio (crate::radio), unless the sender is perceived onboard.
@@ -204,30 +252,8 @@ impl ProximitySensor {
         if link.radio_up {
             let radio = link.radio;
             let r2 = radio.range_m * radio.range_m;
-            let n = states.len();
             let mut relayed: Option<&Message> = None;
             let messages = link.messages;
-            // What this perception holds already, by UAV (a lookup per message: a search of
-            // the observations made broadcast to all cubic in the swarm's size).
-            scratch.stamp = scratch.stamp.wrapping_add(1);
-            if scratch.stamp == 0 {
-                scratch.seen_any.fill(0);
-                scratch.seen_onboard.fill(0);
-                scratch.stamp = 1;
-            }
-            if scratch.seen_any.len() < n {
-                scratch.seen_any.resize(n, 0);
-                scratch.seen_onboard.resize(n, 0);
-            }
-            let stamp = scratch.stamp;
-            for o in &out[start..] {
-                if let Some(slot) = scratch.seen_any.get_mut(o.id.index()) {
-                    *slot = stamp;
-                    if o.source == ObservationSource::Onboard {
-                        scratch.seen_onboard[o.id.index()] = stamp;
-                    }
-                }
-            }
             let (heard, seen_any, seen_onboard) = (&mut scratch.heard, &mut scratch.seen_any, &scratch.seen_onboard);
             link.reach.for_each(messages.len(), p, radio.range_m, heard, |k| {
                 let m = &messages[k];
@@ -246,29 +272,24 @@ impl ProximitySensor {
                 }
                 let q = &m.at;
                 let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                if d2 > r2 || !super::radio::delivered(radio, link.channel_bad, &mut draws.radio) {
+                if d2 > r2 || !picks.delivered(k, radio, link.channel_bad) {
                     return;
                 }
                 if m.is_relay() {
                     // A relative relay can be placed only from the receiver's own view of its
                     // sender, in this period.
-                    let placeable = !m.relative || onboard_of(&out[start..], m.sender).is_some();
+                    let placeable = !m.relative || picks.seen_onboard(m.sender).is_some();
                     if placeable && relayed.is_none_or(|r| m.age_s < r.age_s) {
                         relayed = Some(m);
                     }
                     return;
                 }
-                out.push(Observation {
-                    id: UavId(j as u32),
-                    state: m.state,
-                    age_s: link.delay_s,
-                    source: ObservationSource::Radio,
-                });
+                picks.heard(k, m, link.delay_s);
                 seen_any[j] = stamp;
             });
             if let Some(m) = relayed {
                 let age_s = link.delay_s + m.age_s;
-                match onboard_of(&out[start..], m.sender).filter(|_| m.relative) {
+                match picks.seen_onboard(m.sender).filter(|_| m.relative) {
                     // Relative: where the receiver sees the sender (moved back over the delay, to
                     // where it was when it sent), plus the relay's position relative to it then. In the receiver's frame, so
                     // the navigator's own broadcast (in its frame) neither stands for it nor
@@ -278,19 +299,14 @@ impl ProximitySensor {
                         for k in 0..3 {
                             state[state::X + k] += seen[state::X + k] - seen[state::VX + k] * link.delay_s;
                         }
-                        out.push(Observation { id: UavId(m.about), state, age_s, source: ObservationSource::Relayed });
+                        picks.relayed(m.about, state, age_s, ObservationSource::Relayed);
                     }
-                    None => {
-                        let fresher = out[start..].iter().any(|o| o.id.0 == m.about && o.age_s <= age_s);
-                        if !fresher {
-                            out.push(Observation {
-                                id: UavId(m.about),
-                                state: m.state,
-                                age_s,
-                                source: ObservationSource::Radio,
-                            });
-                        }
+                    // Unless something of the navigator came onboard or by radio already (its
+                    // age is no more than the relay's).
+                    None if scratch.seen_any[m.about as usize] != stamp => {
+                        picks.relayed(m.about, m.state, age_s, ObservationSource::Radio);
                     }
+                    None => {}
                 }
             }
         }
@@ -301,17 +317,130 @@ impl ProximitySensor {
             scratch.close.sort_unstable();
             for k in 0..scratch.close.len() {
                 let j = scratch.close[k];
-                let reported = out[start..].iter().any(|o| o.id.0 == j && o.source == ObservationSource::Onboard);
-                if !reported && kept(link.dropout, rng) {
-                    let mut o = self.observe(j, states, rng);
-                    o.source = ObservationSource::Close;
-                    out.push(o);
+                if scratch.seen_onboard[j as usize] != stamp && picks.kept(link.dropout) {
+                    picks.close(j);
                 }
             }
         }
     }
+}
+
+/// The scan of UAV `i`'s candidates: the nearest per azimuth area, and the ones the watch sees.
+struct Nearest<'s> {
+    sensor: &'s ProximitySensor,
+    i: usize,
+    states: &'s [State9],
+    sin_cos_yaw: (f64, f64),
+    best_d2: &'s mut [f64],
+    best_id: &'s mut [u32],
+    close: &'s mut Vec<u32>,
+}
+
+impl Nearest<'_> {
+    /// Candidate `j` at `q`, `d2` (m²) from UAV `i` (inlined into each scan: a call per
+    /// candidate cost more than its work).
+    #[inline(always)]
+    fn consider(&mut self, j: u32, q: &[f64; 3], d2: f64) {
+        if j as usize == self.i {
+            return;
+        }
+        let me = &self.states[self.i];
+        let watch = &self.sensor.watch;
+        if watch.may_see(d2) {
+            let o = &self.states[j as usize];
+            let w = [o[state::VX] - me[state::VX], o[state::VY] - me[state::VY], o[state::VZ] - me[state::VZ]];
+            if watch.sees(d2, [q[0] - me[0], q[1] - me[1], q[2] - me[2]], w) {
+                self.close.push(j);
+            }
+        }
+        let (sin_yaw, cos_yaw) = self.sin_cos_yaw;
+        let a = self.sensor.classifier.area(sin_yaw, cos_yaw, q[0] - me[0], q[1] - me[1]);
+        // Branch-free keep-the-nearest: which candidate wins is data, not control flow.
+        let better = d2 < self.best_d2[a];
+        self.best_id[a] = if better { j } else { self.best_id[a] };
+        self.best_d2[a] = if better { d2 } else { self.best_d2[a] };
+    }
+}
+
+/// What a perception does with what the sensor picks ([`ProximitySensor::pick`]), and where
+/// its chance comes from. The reference engine observes each pick at once, with noise from the
+/// same stream as its dropout ([`Observe`]); the fast engine notes its picks and draws their
+/// noise in bulk afterwards, its chances by counter.
+pub trait Picks {
+    /// Whether an onboard report survives a dropout of probability `p`.
+    fn kept(&mut self, p: f64) -> bool;
+    /// Whether message `k` (in range) reaches the receiver over `radio`, its channel in its
+    /// bad state or not.
+    fn delivered(&mut self, k: usize, radio: &RadioModel, bad: bool) -> bool;
+    /// An onboard report of UAV `j`.
+    fn onboard(&mut self, j: u32);
+    /// Message `k`, `m`, heard: its sender's own state, `age_s` old on arrival.
+    fn heard(&mut self, k: usize, m: &Message, age_s: f64);
+    /// A relay of UAV `about` at `state`, `age_s` old, from `source` (radio, or placed from
+    /// the receiver's own view of the relay's sender).
+    fn relayed(&mut self, about: u32, state: State9, age_s: f64, source: ObservationSource);
+    /// A close-range detection of UAV `j`.
+    fn close(&mut self, j: u32);
+    /// The state at which UAV `j` was reported onboard in this perception, if it was (where
+    /// a relative relay of it is placed).
+    fn seen_onboard(&self, j: u32) -> Option<State9>;
+}
+
+/// The reference engine's [`Picks`]: every pick observed at once, with the sensor's noise drawn
+/// from the same stream as the dropout (so that a report's noise follows its survival),
+/// appended to `out` after `start`.
+struct Observe<'s, 'o> {
+    sensor: &'s ProximitySensor,
+    states: &'s [State9],
+    draws: &'s mut PerceptionDraws,
+    out: &'o mut Vec<Observation>,
+    start: usize,
+}
+
+impl Picks for Observe<'_, '_> {
+    #[inline]
+    fn kept(&mut self, p: f64) -> bool {
+        kept(p, &mut self.draws.sensing)
+    }
 
     #[inline]
+    fn delivered(&mut self, _k: usize, radio: &RadioModel, bad: bool) -> bool {
+        super::radio::delivered(radio, bad, &mut self.draws.radio)
+    }
+
+    #[inline]
+    fn onboard(&mut self, j: u32) {
+        let o = self.sensor.observe(j, self.states, &mut self.draws.sensing);
+        self.out.push(o);
+    }
+
+    #[inline]
+    fn heard(&mut self, _k: usize, m: &Message, age_s: f64) {
+        self.out.push(Observation { id: UavId(m.sender), state: m.state, age_s, source: ObservationSource::Radio });
+    }
+
+    #[inline]
+    fn relayed(&mut self, about: u32, state: State9, age_s: f64, source: ObservationSource) {
+        self.out.push(Observation { id: UavId(about), state, age_s, source });
+    }
+
+    #[inline]
+    fn close(&mut self, j: u32) {
+        let mut o = self.sensor.observe(j, self.states, &mut self.draws.sensing);
+        o.source = ObservationSource::Close;
+        self.out.push(o);
+    }
+
+    #[inline]
+    fn seen_onboard(&self, j: u32) -> Option<State9> {
+        onboard_of(&self.out[self.start..], j)
+    }
+}
+
+impl ProximitySensor {
+    // Kept a function of its own: `proxform bench`'s instruction table counts it as noise,
+    // not perception.
+    #[inline(never)]
     fn observe(&self, j: u32, states: &[State9], rng: &mut StepRng) -> Observation {
         Observation {
             id: UavId(j),
@@ -365,8 +494,9 @@ fn kept(p: f64, rng: &mut StepRng) -> bool {
     p <= 0.0 || ((rng.next_u64() >> 11) as f64) / ((1u64 << 53) as f64) >= p
 }
 
-/// `x` plus white Gaussian noise of standard deviation `sigma` per parameter.
-#[inline]
+/// `x` plus white Gaussian noise of standard deviation `sigma` per parameter (a function of its
+/// own: the noise is a phase of `proxform bench`'s instruction table).
+#[inline(never)]
 pub fn noisy(x: &State9, sigma: &State9, rng: &mut StepRng) -> State9 {
     let z = Ziggurat::get();
     let mut s = *x;
