@@ -34,9 +34,10 @@ pub struct BenchArgs {
     /// Steps per measurement [default: about three million updates, 5 to 200 steps].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100_000))]
     steps: Option<u64>,
-    /// Swarm size of the instruction counts (callgrind; 0: none; at most --max-uavs).
-    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
-    instructions_uavs: u64,
+    /// Swarm size of the instruction counts (callgrind; 0: none; else 2 to --max-uavs), over
+    /// --steps steps (5 unless given) [default: 10 000, or --max-uavs when smaller].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=1_000_000))]
+    instructions_uavs: Option<u64>,
     /// Output directory [default: out/bench].
     #[arg(long)]
     out: Option<PathBuf>,
@@ -74,6 +75,14 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     if let Some(one) = &args.one {
         return measure_one(one);
     }
+    let instructions_uavs = match args.instructions_uavs {
+        Some(n) if n == 1 || n > args.max_uavs => bail!(
+            "--instructions-uavs {n} is no swarm this bench measures: give 0 (none) or 2 to --max-uavs ({})",
+            args.max_uavs
+        ),
+        Some(n) => n,
+        None => 10_000.min(args.max_uavs),
+    };
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out/bench"));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let cores = std::thread::available_parallelism().map_or(1, usize::from);
@@ -150,13 +159,15 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     }
     // Instructions per update, counted by callgrind where it is installed.
     let mut by_phase: Vec<(String, Vec<(&'static str, f64)>)> = Vec::new();
-    if args.instructions_uavs > 0 {
-        let n = args.instructions_uavs.min(args.max_uavs);
+    let mut wrote = vec![out.join("bench.csv")];
+    if instructions_uavs > 0 {
+        let n = instructions_uavs;
         for engine in ["fast", "reference", "minimal-law"] {
             spinner.set_message(format!("counting instructions: {n} UAVs, {engine} (callgrind)"));
             let profile = out.join(format!("callgrind.{engine}.out"));
-            match count_instructions(&exe, n, engine, &profile) {
+            match count_instructions(&exe, (n, args.steps.unwrap_or(5)), engine, &profile) {
                 Ok(Some(row)) => {
+                    wrote.push(profile.clone());
                     let updates = ((n - 1) * row.steps) as f64;
                     if engine != "minimal-law" {
                         match phases(&profile, updates) {
@@ -201,6 +212,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             println!();
         }
         w.flush()?;
+        wrote.push(out.join("phases.csv"));
     }
     let mut w = csv::Writer::from_writer(std::io::BufWriter::new(crate::files::create_output(&out.join("bench.csv"))?));
     for r in &rows {
@@ -212,11 +224,8 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         &out,
         &timed.map(|r| (r.uavs, format!("{}, {}", r.engine, r.search), r.threads, r.ns_per_update)).collect::<Vec<_>>(),
     )?;
-    println!(
-        "\nwrote {}, {}",
-        out.join("bench.csv").display(),
-        plot.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
-    );
+    wrote.extend(plot);
+    println!("\nwrote {}", wrote.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     Ok(ExitCode::SUCCESS)
 }
 
@@ -263,12 +272,16 @@ fn measure_one(one: &[String]) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Instructions per agent-update of `engine` at `n` UAVs (grid search, one thread), counted by
+/// Instructions per agent-update of `engine` at `n` UAVs over `steps` steps (grid search, one thread), counted by
 /// callgrind over the timed steps only (`proxform_sim::batch::throughput::timed_steps`), its
 /// profile written to `profile` (for `callgrind_annotate`); None when valgrind is not
 /// installed.
-fn count_instructions(exe: &std::path::Path, n: u64, engine: &str, profile: &std::path::Path) -> Result<Option<Row>> {
-    let steps = 5u64;
+fn count_instructions(
+    exe: &std::path::Path,
+    (n, steps): (u64, u64),
+    engine: &str,
+    profile: &std::path::Path,
+) -> Result<Option<Row>> {
     let one = [n.to_string(), steps.to_string(), "1".into(), "grid".into(), engine.into()];
     let output = match Command::new("valgrind")
         .args(["--tool=callgrind", "--collect-atstart=no", "--toggle-collect=*timed_steps*"])

@@ -311,7 +311,7 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         isolation_gate: follows(
             set.isolation_gate,
             p.isolation_gate.unwrap_or(0.0),
-            ("controller", "isolation_gate", "whether UAVs start or fly off their slots"),
+            ("controller", "isolation_gate", "the method"),
             notes,
         ),
         own_gate_m: follows(

@@ -16,23 +16,28 @@ pub struct Unsupported(pub String);
 /// Checks that the fast engine runs every feature `sc` uses. Its controller step is the
 /// reference's own ([`proxform_core::controller::UavView::step`]), so every controller setting
 /// runs (the robust fusion, the horizon, separation keeping, the stopping limit, collision
-/// avoidance, every formation frame) but what its records or its world cannot represent: its
-/// tracks are α-β filters that keep no report's source (no other predictor, no relative
-/// sensing), it keeps no turn trend per UAV (no turn feed-forward), and its world flies the
-/// kinematic vehicle with measurement noise, actuation error, onboard dropout, beacons and
-/// radio loss (i.i.d. and bursty), wind (steady, gusts, turbulence) and the position fix's
-/// bias. Faults, formation changes, scattered starts, radio delay and relays, the own-state
+/// avoidance, the turn feed-forward, every formation frame) but what its records or its world
+/// cannot represent: its tracks are α-β filters that keep no report's source (no other
+/// predictor, no relative sensing), and its world flies the kinematic vehicle (which follows
+/// its setpoints at once, so no UAV keeps a turn trend from step to step) with measurement
+/// noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
+/// (steady, gusts, turbulence) and the position fix's bias. Faults, formation changes, scattered starts, radio delay and relays, the own-state
 /// filter and check, the fixed wing and the multirotor stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
-    let checks: [(bool, &'static str); 16] = [
+    let tracks = p.areas.areas + max_refs(sc);
+    let too_many = format!(
+        "more than {MAX_TRACKS} areas and main references of a UAV ({} areas and up to {} main references)",
+        p.areas.areas,
+        max_refs(sc)
+    );
+    let checks: [(bool, &str); 15] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
-        (!p.turn_feedforward, "the turn feed-forward"),
         (sc.faults().is_empty(), "faults"),
         (sc.schedule().is_empty(), "formation changes"),
         (sc.placement().in_slots(), "scattered starts"),
@@ -41,7 +46,7 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
         (!radio.relay_navigator, "relays of the navigator"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
-        (p.areas.areas + max_refs(sc) <= MAX_TRACKS, "more than 16 areas and references"),
+        (tracks <= MAX_TRACKS, &too_many),
         (p.track_timeout_s / p.dt_s <= MAX_AGE_STEPS as f64, "a track timeout over 120 update periods"),
     ];
     // Every reason, in this order: the first alone misled (a formation change's file was told

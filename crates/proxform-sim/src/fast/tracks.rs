@@ -328,24 +328,29 @@ impl Owner<'_> {
 
     /// The state of slot `s`, measured at `t0` (s), at `t0 + h` as the reference's tracks
     /// bring it forward with a plan: its own rates over one period (at most `coast_accel_s`),
-    /// `carry` beyond
-    /// (`proxform_core::plan`); relative to the reference point `d` metres from that of its
-    /// measurement.
+    /// `carry` beyond (`proxform_core::plan`); relative to the reference point `d` metres from
+    /// that of its measurement, which lies at `at` in the plan's frame. (The plan turns a report
+    /// about the planned navigator, in absolute positions: a relative one would turn about
+    /// the wrong point.)
     pub fn carried(
         &self,
         f: &Filter,
         carry: &proxform_core::plan::Carry,
         s: usize,
         (t0, h): (f64, f64),
-        d: [f64; 3],
+        (d, at): ([f64; 3], [f64; 3]),
     ) -> [f32; 9] {
         let span = f.dt.min(f.coast_accel_s);
         let own = extrapolate(&f.load(&self.tracks[s]), span as f32, d.map(|x| x as f32), f32::INFINITY);
-        let mut x = State9::zeros();
-        for a in 0..9 {
-            x[a] = f64::from(own[a]);
+        let mut x = to_f64(&own);
+        for k in 0..3 {
+            x[k] += at[k];
         }
-        to_f32(&carry.carry(&x, t0 + span, t0 + h))
+        let mut out = carry.carry(&x, t0 + span, t0 + h);
+        for k in 0..3 {
+            out[k] -= at[k];
+        }
+        to_f32(&out)
     }
 }
 
@@ -364,6 +369,9 @@ pub struct StepTracks<'a, 'v, S: Fn(i32) -> [f64; 3]> {
     pub k: i32,
     /// `shift(k0)`: how far the reference point of step `k0` lies from that of step `k` (m).
     pub shift: S,
+    /// Where the owner's reference point of step `k` lies in the plan's frame (m): the
+    /// absolute position the relative ones are taken from.
+    pub at: [f64; 3],
     /// Tracks fed so far in this update (where the next is looked for first).
     pub fed: usize,
 }
@@ -389,7 +397,7 @@ impl<S: Fn(i32) -> [f64; 3]> StepTracks<'_, '_, S> {
     fn state_after(&self, s: usize, k0: i32, h: f64) -> State9 {
         let (f, d) = (self.filter, (self.shift)(k0));
         let x = match self.carried(h) {
-            Some(carry) => self.owner.carried(f, carry, s, (f64::from(k0) * f.dt, h), d),
+            Some(carry) => self.owner.carried(f, carry, s, (f64::from(k0) * f.dt, h), (d, self.at)),
             None => self.owner.state_at(f, s, h, d),
         };
         to_f64(&x)
@@ -407,7 +415,7 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
         match self.carried(h) {
             Some(carry) => {
                 let t0 = f64::from(self.k) * self.filter.dt;
-                to_f64(&self.owner.carried(self.filter, carry, s, (t0, h), [0.0; 3]))
+                to_f64(&self.owner.carried(self.filter, carry, s, (t0, h), ([0.0; 3], self.at)))
             }
             None => to_f64(&x),
         }

@@ -9,7 +9,7 @@
 //! ([`super::tracks::StepTracks`]). Collision avoidance's memory is kept per UAV only while it
 //! remembers a side.
 
-use proxform_core::controller::{Avoidance, StepScratch, UavView};
+use proxform_core::controller::{Avoidance, Decision, StepScratch, UavView};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{State9, ALPHA, VX, X};
 use proxform_core::{Observation, ObservationSource, Outcome, UavId};
@@ -152,12 +152,15 @@ pub fn update(v: &View<'_>, i: usize, s: &mut Scratch, tracks: Owner<'_>, kept: 
         own[k] -= r_i[k];
     }
     build_observations(v, i, s, &r_i);
-    let d = decide(v, i, &own, s, tracks, kept);
-    let mut step = UavStep { radio_used, ..UavStep::default() };
-    let Some((outcome, input)) = d else {
+    let d = decide(v, i, (&own, r_i), s, tracks, kept);
+    // The robust fusion's count of the neighbours it left out, as the reference records it.
+    let mut step = UavStep { radio_used, isolated: d.isolated, ..UavStep::default() };
+    let outcome = d.outcome;
+    if matches!(outcome, Outcome::Alone) {
         step.outcome = Some(StepOutcome::Alone);
         return Update { applied: [0.0; 6], step };
-    };
+    }
+    let input: [f64; 6] = std::array::from_fn(|a| d.input[a]);
     step.outcome = Some(outcome.into());
     step.effort = (0..6).map(|a| (input[a] / c.scale[a]).powi(2)).sum::<f64>().sqrt() as f32;
     let adjusted = matches!(outcome, Outcome::Adjusted { .. });
@@ -344,19 +347,20 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3]) {
     }
 }
 
-/// The controller's step (METHOD §6) for UAV `i` at its own estimate `own` (relative), on its
-/// tracks: the reference controller's own step ([`UavView::step`]) over the engine's records.
-/// None when it perceives nothing (it flies on), else its outcome and input. Collision
+/// The controller's step (METHOD §6) for UAV `i` at its own estimate `own` (relative to its
+/// reference point, which lies at `r_i`), on its tracks: the reference controller's own step
+/// ([`UavView::step`]) over the engine's records.
+/// Its outcome is `Alone` when it perceives nothing (it flies on). Collision
 /// avoidance's memory is the UAV's own (`kept`) only while it remembers a side; otherwise the
 /// thread's copy, which remembers nothing, runs.
 fn decide(
     v: &View<'_>,
     i: usize,
-    own: &State9,
+    (own, r_i): (&State9, [f64; 3]),
     s: &mut Scratch,
     tracks: Owner<'_>,
     kept: &mut Option<Box<Avoidance>>,
-) -> Option<(Outcome, [f64; 6])> {
+) -> Decision {
     let c = v.c;
     let sc = v.sc;
     let mut tracks = tracks;
@@ -367,6 +371,7 @@ fn decide(
         carry: c.carry.as_deref(),
         k: v.k,
         shift: |k0| v.shift(k0),
+        at: r_i,
         fed: 0,
     };
     let Scratch { step, obs, avoid, .. } = s;
@@ -382,6 +387,7 @@ fn decide(
         navigator: Some(sc.navigator()),
         tracks: &mut store,
         avoidance,
+        // Kept only for a vehicle that lags its setpoints, which this engine does not fly.
         trend: None,
     };
     let d = uav.step(step, f64::from(v.k) * c.dt, own, obs);
@@ -397,8 +403,5 @@ fn decide(
         }
         _ => {}
     }
-    if matches!(d.outcome, Outcome::Alone) {
-        return None;
-    }
-    Some((d.outcome, std::array::from_fn(|a| d.input[a])))
+    d
 }
