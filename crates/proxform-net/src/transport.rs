@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+use zenoh::qos::CongestionControl;
 use zenoh::Wait;
 
 use crate::access::Party;
@@ -195,10 +196,26 @@ impl Session {
         }
     }
 
-    /// A publisher of messages on `key`.
+    /// A publisher of messages that someone waits for (an update, a command, the clock): when
+    /// the link's queue is full it waits for room rather than dropping the message (Zenoh's
+    /// default drops it after 1 ms, which a loaded machine reaches: a lockstep answer lost).
     pub fn publisher(&self, key: &str) -> Result<Publisher, TransportError> {
-        let inner =
-            self.inner.declare_publisher(key.to_string()).wait().map_err(|e| TransportError::Io(e.to_string()))?;
+        self.publisher_with(key, CongestionControl::Block)
+    }
+
+    /// A publisher of telemetry (states broadcast every period): the newest value wins, so a
+    /// message the link has no room for is dropped rather than holding the sender.
+    pub fn telemetry(&self, key: &str) -> Result<Publisher, TransportError> {
+        self.publisher_with(key, CongestionControl::Drop)
+    }
+
+    fn publisher_with(&self, key: &str, congestion: CongestionControl) -> Result<Publisher, TransportError> {
+        let inner = self
+            .inner
+            .declare_publisher(key.to_string())
+            .congestion_control(congestion)
+            .wait()
+            .map_err(|e| TransportError::Io(e.to_string()))?;
         Ok(Publisher { inner, key: key.to_string(), seal: self.seal.clone() })
     }
 
@@ -208,9 +225,14 @@ impl Session {
         let _ = self.inner.put(key.to_string(), bytes).wait();
     }
 
-    /// Puts one message on `key` without declaring a publisher.
+    /// Puts one message on `key` without declaring a publisher (waiting for room on a full
+    /// link, as [`Session::publisher`]'s).
     pub fn put(&self, key: &str, m: &Message) -> Result<(), TransportError> {
-        self.inner.put(key.to_string(), self.bytes(key, m)).wait().map_err(|e| TransportError::Io(e.to_string()))
+        self.inner
+            .put(key.to_string(), self.bytes(key, m))
+            .congestion_control(CongestionControl::Block)
+            .wait()
+            .map_err(|e| TransportError::Io(e.to_string()))
     }
 
     /// Closes the session (also done on drop).

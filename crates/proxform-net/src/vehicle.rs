@@ -81,7 +81,7 @@ impl NetVehicle {
         let inbox = session.inbox(&keys)?;
         let commands = uavs
             .iter()
-            .map(|u| Ok((*u, session.publisher(&swarm.command(*u))?, session.publisher(&swarm.state(*u))?)))
+            .map(|u| Ok((*u, session.publisher(&swarm.command(*u))?, session.telemetry(&swarm.state(*u))?)))
             .collect::<Result<_, TransportError>>()?;
         let tokens = uavs.iter().map(|u| session.liveliness_token(&swarm.alive(*u))).collect::<Result<_, _>>()?;
         Ok(Self {

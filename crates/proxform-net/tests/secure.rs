@@ -153,3 +153,56 @@ fn a_flood_fills_an_inbox_to_its_bound_and_no_further() {
     let again = inbox.recv_timeout(Duration::from_secs(5));
     assert!(again.is_some(), "read, the inbox takes messages again");
 }
+
+#[test]
+fn a_burst_of_messages_someone_waits_for_arrives_whole() {
+    // A publisher of updates sends 4 000 updates of ~60 KiB (700 observations: one a batch) as fast
+    // as it can, far faster than the link drains its two queued batches: it waits for room,
+    // and every one arrives. (Zenoh's default drops a message that finds no room within 1 ms:
+    // that lost a lockstep answer on a loaded machine; a telemetry publisher keeps that and
+    // here loses about half, idle.)
+    use proxform_core::observation::{Observation, ObservationSource};
+    use proxform_core::UavId;
+    use proxform_net::wire::{Phase, SenseMsg};
+    let endpoint = proxform_net::transport::free_loopback_endpoint().expect("a port");
+    let router = Session::open(&Role::Router { listen: vec![endpoint.clone()], secured: None }).expect("router");
+    let inbox = router.inbox_bounded(&["burst/**".to_string()], 1 << 30).expect("subscribed");
+    let peer =
+        Session::open(&Role::Client { connect: vec![endpoint], wait_for_router: Duration::from_secs(10), tls: None })
+            .expect("peer");
+    std::thread::sleep(Duration::from_millis(300));
+    let heard: Vec<Observation> = (0..700)
+        .map(|i| Observation {
+            id: UavId(i),
+            state: Default::default(),
+            age_s: 0.1,
+            source: ObservationSource::Onboard,
+        })
+        .collect();
+    let update = |k: u64| {
+        Message::Sense(SenseMsg {
+            uav: 2,
+            run: 0,
+            phase: Phase::Fly,
+            k,
+            t_s: 0.1 * k as f64,
+            own: Default::default(),
+            heard: heard.clone(),
+        })
+    };
+    let count = |key: &str, p: proxform_net::transport::Publisher| {
+        let n = 4000u64;
+        for k in 0..n {
+            p.send(&update(k)).expect("sent");
+        }
+        let (start, mut got) = (Instant::now(), 0u64);
+        while start.elapsed() < Duration::from_secs(30) && inbox.recv_timeout(Duration::from_secs(1)).is_some() {
+            got += 1;
+        }
+        eprintln!("{key}: {got} of {n}");
+        got
+    };
+    let telemetry = count("telemetry", peer.telemetry("burst/telemetry").expect("publisher"));
+    let waited = count("waited", peer.publisher("burst/waited").expect("publisher"));
+    assert_eq!(waited, 4000, "a publisher of updates lost some of a burst (telemetry kept {telemetry})");
+}

@@ -812,7 +812,7 @@ impl NavigatorTelemetry {
     /// A publisher on the navigator's state key of `swarm`.
     pub fn new(session: &Session, swarm: &Swarm, scenario: &Scenario) -> Result<Self> {
         let navigator = scenario.navigator().index();
-        Ok(Self { publisher: session.publisher(&swarm.state(navigator as u32 + 1))?, navigator, clock: None })
+        Ok(Self { publisher: session.telemetry(&swarm.state(navigator as u32 + 1))?, navigator, clock: None })
     }
 
     /// Publishes each state at its time on `clock` (real time; the period `dt_s` bounds a wait).
