@@ -1,5 +1,5 @@
 //! `scenario.toml` in an output folder: the scenario as it ran, every default filled in
-//! ([`proxform_scenario::resolved::to_toml`]), headed by what made it (the proxform version and
+//! ([`proxform_scenario::resolved::write_toml`]), headed by what made it (the proxform version and
 //! commit, the command line) and the command that flies the same runs again from the file.
 
 use std::path::{Path, PathBuf};
@@ -55,8 +55,17 @@ pub fn command_line() -> String {
 }
 
 /// The text of `scenario.toml` for `scenario` flown as `batch`.
+#[cfg(test)]
 pub fn scenario_text(scenario: &Scenario, batch: Batch) -> Result<String> {
-    let body = proxform_scenario::resolved::to_toml(scenario).context("cannot write the scenario as TOML")?;
+    let mut out = Vec::new();
+    write_text(&mut out, scenario, batch)?;
+    Ok(String::from_utf8(out)?)
+}
+
+/// Writes `scenario.toml`'s text for `scenario` flown as `batch` to `w`: its header, then the
+/// scenario written a slot at a time (`resolved::write_toml`: a swarm's slots never held as
+/// text).
+fn write_text(w: &mut impl std::io::Write, scenario: &Scenario, batch: Batch) -> Result<()> {
     let mut again = format!("proxform run {SCENARIO_FILE} --seed {} --runs {}", batch.seed, batch.runs);
     if batch.first_run > 0 {
         again.push_str(&format!(" --first-run {}", batch.first_run));
@@ -64,24 +73,27 @@ pub fn scenario_text(scenario: &Scenario, batch: Batch) -> Result<String> {
     if batch.no_adjust {
         again.push_str(" --no-adjust");
     }
-    Ok(format!(
+    write!(
+        w,
         "# The scenario as {} ran it, every default filled in.\n\
          # Command: {}\n\
          # Batch: seed {}, runs {} to {}. The same runs again (in process):\n\
-         #   {again}\n\n{body}",
+         #   {again}\n\n",
         version(),
         command_line(),
         batch.seed,
         batch.first_run,
         (batch.first_run + batch.runs).saturating_sub(1),
-    ))
+    )?;
+    proxform_scenario::resolved::write_toml(scenario, w).context("cannot write the scenario as TOML")
 }
 
 /// Writes `scenario.toml` into `dir` (fresh: never through a link).
 pub fn write_scenario(dir: &Path, scenario: &Scenario, batch: Batch) -> Result<PathBuf> {
     let path = dir.join(SCENARIO_FILE);
-    let text = scenario_text(scenario, batch)?;
-    std::io::Write::write_all(&mut crate::files::create_output(&path)?, text.as_bytes())
+    let mut file = std::io::BufWriter::new(crate::files::create_output(&path)?);
+    write_text(&mut file, scenario, batch)
+        .and_then(|()| Ok(std::io::Write::flush(&mut file)?))
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
 }

@@ -368,7 +368,10 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     crate::scenarios::warn(&scenario, &source);
     let engine = crate::scenarios::engine(&scenario, &source)?;
     if args.print_scenario {
-        print!("{}", proxform_scenario::resolved::to_toml(&scenario).context("cannot write the scenario as TOML")?);
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        proxform_scenario::resolved::write_toml(&scenario, &mut out)
+            .and_then(|()| Ok(std::io::Write::flush(&mut out)?))
+            .context("cannot write the scenario as TOML")?;
         return Ok(ExitCode::SUCCESS);
     }
     let options = RunOptions { adjustment_enabled: !args.no_adjust, ..RunOptions::default() };

@@ -110,10 +110,24 @@ fn follows_flag(
 /// The scenario as a spec with every key that has a value (keys that follow others only when
 /// the file set them).
 pub fn resolved(sc: &Scenario) -> ScenarioSpec {
-    resolved_with_notes(sc).0
+    resolved_with_notes(sc, Slots::All).0
 }
 
-fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
+/// Which slots the spec holds: all of them, or one marker per list of slots (the formation's,
+/// each change's), which [`write_toml`] replaces with the slots written one at a time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Slots {
+    All,
+    Marked,
+}
+
+/// The id of list `i`'s marker (0: the formation's, then each change's): never a UAV's (ids
+/// are at most the UAVs' count, which is below 2^24 for any scenario that loads).
+fn marker(i: usize) -> u32 {
+    u32::MAX - i as u32
+}
+
+fn resolved_with_notes(sc: &Scenario, slots: Slots) -> (ScenarioSpec, Derived) {
     let mut notes = Derived::new();
     let spec = ScenarioSpec {
         name: Some(sc.name().to_string()),
@@ -123,7 +137,7 @@ fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
         safety_distance_m: Some(sc.safety_distance_m()),
         warmup_s: Some(sc.warmup_s()),
         engine: Some(sc.engine().name().into()),
-        formation: formation(sc),
+        formation: formation(sc, slots),
         path: path(sc),
         initial: initial(sc, &mut notes),
         controller: controller(sc, &mut notes),
@@ -148,24 +162,117 @@ fn resolved_with_notes(sc: &Scenario) -> (ScenarioSpec, Derived) {
     (spec, notes)
 }
 
-/// [`resolved`] as TOML text, each value that follows other keys noted as a comment in its
-/// section.
-pub fn to_toml(sc: &Scenario) -> Result<String, toml::ser::Error> {
-    let (spec, notes) = resolved_with_notes(sc);
-    let text = toml::to_string(&spec)?;
-    let mut out = String::with_capacity(text.len() + 80 * notes.len());
-    for line in text.lines() {
-        out.push_str(line);
-        out.push('\n');
-        let section = line.strip_prefix('[').and_then(|l| l.strip_suffix(']'));
-        for (_, key, value, why) in notes.iter().filter(|n| Some(n.0) == section) {
-            out.push_str(&format!("# {key} = {value}    # unset: follows {why}\n"));
-        }
-    }
-    Ok(out)
+/// A scenario that could not be written as TOML.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The spec does not serialise.
+    #[error(transparent)]
+    Toml(#[from] toml::ser::Error),
+    /// The writer failed.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
 }
 
-fn formation(sc: &Scenario) -> FormationSpec {
+/// [`resolved`] as TOML text, each value that follows other keys noted as a comment in its
+/// section ([`write_toml`] into a string).
+pub fn to_toml(sc: &Scenario) -> Result<String, WriteError> {
+    let mut out = Vec::new();
+    write_toml(sc, &mut out)?;
+    String::from_utf8(out).map_err(|e| WriteError::Io(std::io::Error::other(e)))
+}
+
+/// Writes [`resolved`] as TOML to `w`, each value that follows other keys noted as a comment
+/// in its section. The slots are written one at a time (a swarm of 10^6 UAVs is ~370 MB of
+/// them): memory does not grow with the formation, and the text is the `toml` crate's own
+/// for the whole spec, byte for byte (test `slots_are_written_as_the_toml_crate_writes_them`).
+pub fn write_toml(sc: &Scenario, w: &mut impl std::io::Write) -> Result<(), WriteError> {
+    // A follower without main references writes an empty table, which is left to the crate.
+    let plain = sc.dependencies().iter().enumerate().all(|(i, d)| i == sc.navigator().index() || !d.refs().is_empty())
+        && sc.schedule().stages().iter().all(|s| {
+            s.dependencies.iter().enumerate().all(|(i, d)| i == sc.navigator().index() || !d.refs().is_empty())
+        });
+    let slots = if plain { Slots::Marked } else { Slots::All };
+    let (spec, notes) = resolved_with_notes(sc, slots);
+    let text = toml::to_string(&spec)?;
+    let mut lines = text.lines().peekable();
+    while let Some(line) = lines.next() {
+        // A marker's table (its header and its id) stands for its list of slots.
+        if let (Slots::Marked, Some(table)) = (slots, line.strip_prefix("[[").and_then(|l| l.strip_suffix("]]"))) {
+            let list = lines.peek().and_then(|l| l.strip_prefix("id = ")).and_then(|id| id.parse::<u32>().ok());
+            if let Some(i) = list.and_then(|id| (0..=sc.schedule().stages().len()).find(|i| marker(*i) == id)) {
+                lines.next();
+                let (f, deps) = match i {
+                    0 => (sc.formation(), sc.dependencies()),
+                    _ => {
+                        let stage = &sc.schedule().stages()[i - 1];
+                        (&stage.formation, &stage.dependencies[..])
+                    }
+                };
+                write_slots(sc, table, f, deps, w)?;
+                continue;
+            }
+        }
+        writeln!(w, "{line}")?;
+        let section = line.strip_prefix('[').and_then(|l| l.strip_suffix(']'));
+        for (_, key, value, why) in notes.iter().filter(|n| Some(n.0) == section) {
+            writeln!(w, "# {key} = {value}    # unset: follows {why}")?;
+        }
+    }
+    Ok(())
+}
+
+/// The slots of `f` as `[[table]]`s, as the `toml` crate writes [`slot_specs`]'s (the blank line
+/// before the first is the marker's).
+fn write_slots(
+    sc: &Scenario,
+    table: &str,
+    f: &proxform_core::Formation,
+    deps: &[proxform_core::DependencySet],
+    w: &mut impl std::io::Write,
+) -> std::io::Result<()> {
+    let mut keys: Vec<(String, f64)> = Vec::new();
+    for (i, (s, d)) in f.slots.iter().zip(deps).enumerate() {
+        if i > 0 {
+            writeln!(w)?;
+        }
+        writeln!(w, "[[{table}]]\nid = {}", i + 1)?;
+        let o = [s.offset_m.x, s.offset_m.y, s.offset_m.z];
+        writeln!(w, "offset_m = [{}, {}, {}]", Float(o[0]), Float(o[1]), Float(o[2]))?;
+        let a = deg3(&s.attitude_offset_rad);
+        writeln!(w, "attitude_offset_deg = [{}, {}, {}]", Float(a[0]), Float(a[1]), Float(a[2]))?;
+        if i != sc.navigator().index() {
+            // As a map keyed by the number as text: in the order of the text.
+            keys.clear();
+            keys.extend(d.refs().iter().map(|(j, c)| ((j.0 + 1).to_string(), *c)));
+            keys.sort_by(|x, y| x.0.cmp(&y.0));
+            writeln!(w, "\n[{table}.depends_on]")?;
+            for (k, c) in &keys {
+                writeln!(w, "{k} = {}", Float(*c))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A float as TOML writes it: `-0.0`, `0.0`, an integral value with `.0`, else Rust's shortest
+/// decimal.
+struct Float(f64);
+
+impl std::fmt::Display for Float {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        match (x.is_sign_negative(), x.is_nan(), x == 0.0) {
+            (true, true, _) => f.write_str("-nan"),
+            (false, true, _) => f.write_str("nan"),
+            (true, false, true) => f.write_str("-0.0"),
+            (false, false, true) => f.write_str("0.0"),
+            _ if x % 1.0 == 0.0 => write!(f, "{x}.0"),
+            _ => write!(f, "{x}"),
+        }
+    }
+}
+
+fn formation(sc: &Scenario, slots: Slots) -> FormationSpec {
     let f = sc.formation();
     let frame = match f.frame {
         FormationFrame::World => "world",
@@ -176,9 +283,13 @@ fn formation(sc: &Scenario) -> FormationSpec {
         .schedule()
         .stages()
         .iter()
-        .map(|s| crate::spec::FormationChangeSpec {
+        .enumerate()
+        .map(|(i, s)| crate::spec::FormationChangeSpec {
             at_s: Some(s.at_s),
-            slot: slot_specs(sc, &s.formation, &s.dependencies),
+            slot: match slots {
+                Slots::All => slot_specs(sc, &s.formation, &s.dependencies),
+                Slots::Marked => vec![SlotSpec { id: Some(marker(i + 1)), ..SlotSpec::default() }],
+            },
             shape: None,
             dependencies: None,
         })
@@ -186,7 +297,10 @@ fn formation(sc: &Scenario) -> FormationSpec {
     FormationSpec {
         frame: Some(frame.into()),
         reassign_on_loss: Some(sc.reassign_on_loss().is_some()),
-        slot: slot_specs(sc, f, sc.dependencies()),
+        slot: match slots {
+            Slots::All => slot_specs(sc, f, sc.dependencies()),
+            Slots::Marked => vec![SlotSpec { id: Some(marker(0)), ..SlotSpec::default() }],
+        },
         shape: None,
         dependencies: None,
         change,
@@ -632,5 +746,72 @@ mod tests {
         let set = format!("{text}[radio]\nrelay_navigator = false\n");
         let printed = to_toml(&crate::load::parse(&set, "set.toml").expect("valid")).expect("serialises");
         assert!(printed.lines().any(|l| l == "relay_navigator = false"), "{printed}");
+    }
+
+    /// The text the `toml` crate writes for the whole spec with every slot in it (as
+    /// [`to_toml`] wrote it before the slots were written one at a time).
+    fn whole(sc: &Scenario) -> String {
+        let (spec, notes) = resolved_with_notes(sc, Slots::All);
+        let mut out = String::new();
+        for line in toml::to_string(&spec).expect("serialises").lines() {
+            out.push_str(line);
+            out.push('\n');
+            let section = line.strip_prefix('[').and_then(|l| l.strip_suffix(']'));
+            for (_, key, value, why) in notes.iter().filter(|n| Some(n.0) == section) {
+                out.push_str(&format!("# {key} = {value}    # unset: follows {why}\n"));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn slots_are_written_as_the_toml_crate_writes_them() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+        let mut files: Vec<(String, String)> = std::fs::read_dir(&dir)
+            .expect("the shipped scenarios")
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+            .map(|p| (p.display().to_string(), std::fs::read_to_string(&p).expect("readable")))
+            .collect();
+        assert!(files.len() >= 10, "{} shipped scenarios", files.len());
+        // Explicit slots: ids past 9 (their references sort as text), attitude offsets,
+        // negative zeros, long decimals; and two changes of formation.
+        let mut explicit = String::from("name = \"explicit\"\nnavigator = 1\n");
+        for i in 1..=12u32 {
+            let f = f64::from(i);
+            explicit.push_str(&format!(
+                "[[formation.slot]]\nid = {i}\noffset_m = [{}, {}, -0.0]\nattitude_offset_deg = [0.0, {}, 1e-7]\n",
+                -60.0 * f,
+                (f * 0.1 + 1.0 / 3.0) * if i % 2 == 0 { 1.0 } else { -1.0 },
+                f * 0.7
+            ));
+            if i > 1 {
+                explicit.push_str(&format!("[formation.slot.depends_on]\n1 = 0.3\n{} = 0.7\n", (i + 5) % 11 + 2));
+            }
+        }
+        explicit.push_str(
+            "[[formation.change]]\nat_s = 20.0\n[formation.change.shape]\nkind = \"column\"\nuavs = 12\nspacing_m = 60.0\n\
+             [[formation.change]]\nat_s = 40.0\n[formation.change.shape]\nkind = \"circle\"\nuavs = 12\nspacing_m = 150.0\n",
+        );
+        files.push(("explicit".into(), explicit));
+        // (Comparison files, of conditions, are not scenarios.)
+        let mut scenarios: Vec<(String, Scenario)> = files
+            .iter()
+            .filter(|(_, text)| !text.contains("[[condition]]"))
+            .map(|(name, text)| {
+                (name.clone(), crate::load::parse(text, name).unwrap_or_else(|e| panic!("{name}: {e}")))
+            })
+            .collect();
+        for (name, uavs) in [("swarm", Some(300)), ("paper", None)] {
+            let spec = builtin::spec_by_name(name, uavs).expect("built in");
+            scenarios.push((name.into(), Scenario::try_from(spec).expect("valid")));
+        }
+        let changes = scenarios.iter().filter(|(_, sc)| !sc.schedule().is_empty()).count();
+        assert!(changes >= 2, "{changes} scenarios change formation");
+        for (name, sc) in &scenarios {
+            let streamed = to_toml(sc).expect("written");
+            assert!(!streamed.contains(&marker(0).to_string()), "{name}: a marker left");
+            assert!(streamed == whole(sc), "{name}: the streamed text differs from the toml crate's");
+        }
     }
 }

@@ -84,16 +84,42 @@ pub enum JournalError {
     Runs(String),
 }
 
-/// FNV-1a 64.
-fn fnv1a(parts: &[&[u8]]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for p in parts {
-        for &b in *p {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0100_0000_01b3);
+/// FNV-1a 64 of the bytes written to it.
+struct Fnv1a(u64);
+
+impl Default for Fnv1a {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv1a {
+    fn update(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
         }
     }
-    h
+}
+
+impl Write for Fnv1a {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.update(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// FNV-1a 64 of `parts` one after the other.
+fn fnv1a(parts: &[&[u8]]) -> u64 {
+    let mut h = Fnv1a::default();
+    for p in parts {
+        h.update(p);
+    }
+    h.0
 }
 
 impl JournalHeader {
@@ -161,10 +187,14 @@ impl JournalHeader {
 }
 
 /// The digest of a scenario as it runs and of the options that change results.
+/// The scenario's text is hashed as it is written, never held (a swarm's slots are hundreds of
+/// megabytes of it).
 pub fn digest(scenario: &Scenario, options: RunOptions) -> Result<u64, JournalError> {
-    let text = proxform_scenario::resolved::to_toml(scenario)
+    let mut h = Fnv1a::default();
+    proxform_scenario::resolved::write_toml(scenario, &mut h)
         .map_err(|e| JournalError::Scenario(format!("cannot write the scenario: {e}")))?;
-    Ok(fnv1a(&[text.as_bytes(), &[u8::from(options.adjustment_enabled)]]))
+    h.update(&[u8::from(options.adjustment_enabled)]);
+    Ok(h.0)
 }
 
 fn frame(w: &mut impl Write, kind: u8, payload: &[u8]) -> std::io::Result<u64> {
