@@ -199,6 +199,12 @@ impl Scenario {
         self.agents.schedule().at(t_s).map_or(self.agents.formation(), |s| &s.formation)
     }
 
+    /// Every UAV's dependency table in force at `t_s` (the first ones, or a
+    /// `[[formation.change]]`'s).
+    pub fn dependencies_at(&self, t_s: f64) -> &[DependencySet] {
+        self.agents.schedule().at(t_s).map_or(self.agents.dependencies(), |s| &s.dependencies)
+    }
+
     /// The changes of formation in flight.
     pub fn schedule(&self) -> &proxform_core::FormationSchedule {
         self.agents.schedule()

@@ -102,6 +102,8 @@ pub struct FastSimulation<'s> {
     reach: Reach,
     /// Origins of the reference points of the last steps.
     ring: Vec<[f64; 3]>,
+    /// The formation change in force at the last step (None: the first formation).
+    stage: Option<usize>,
     start: [f64; 3],
     origin0: [f64; 3],
     parallel: bool,
@@ -144,6 +146,7 @@ impl<'s> FastSimulation<'s> {
             ideal: sc.radio().ideal(),
             reach: Reach::new(),
             ring: vec![[p0[X], p0[X + 1], p0[X + 2]]; ring_len],
+            stage: None,
             start,
             origin0: [p0[X], p0[X + 1], p0[X + 2]],
             parallel: n >= crate::world::engine::PARALLEL_MIN_UAVS,
@@ -220,8 +223,24 @@ impl<'s> FastSimulation<'s> {
         self.uavs.iter_mut().for_each(|u| *u = UavStep::default());
     }
 
+    /// At a change of formation every follower flies its new slot on its new table from a
+    /// fresh controller, as the reference's agents do ([`proxform_core::Agent`]): its tracks
+    /// restart from the next observations and avoidance remembers no side.
+    fn follow_schedule(&mut self, t: f64) {
+        let stage = self.sc.schedule().stages().iter().rposition(|s| t >= s.at_s - 1e-9);
+        if stage == self.stage {
+            return;
+        }
+        self.stage = stage;
+        self.tracks.fill(Track::default());
+        self.used.fill(0);
+        self.avoid.iter_mut().for_each(Vec::clear);
+    }
+
     /// Index, radio and the per-UAV phases up to the applied inputs, for step `k`.
     fn decide_all(&mut self, k: i64, draw_step: u64, warm: bool) {
+        let t = k as f64 * self.c.dt;
+        self.follow_schedule(t);
         let origin = self.origin_at(k);
         let len = self.ring.len();
         self.ring[update::ring_index(k as i32, len)] = origin;
@@ -270,6 +289,8 @@ impl<'s> FastSimulation<'s> {
             reach: &Reach::new(),
             env,
             warm,
+            formation: sc.formation_at(t),
+            dependencies: sc.dependencies_at(t),
         };
         // Radio: the broadcasters' own measurements.
         messages.clear();
@@ -410,5 +431,35 @@ impl<'s> FastSimulation<'s> {
             self.step();
             observer.on_step(sc, &self.frame());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn at_a_change_of_formation_every_track_restarts() {
+        // The shipped V that closes into a column at 60 s: before the change the followers
+        // track their neighbours (measured twice and more); at the change every controller
+        // starts afresh, so no track has more than the change's own measurement.
+        let text = include_str!("../../../../scenarios/change-v-column.toml").replacen(
+            "name = \"change-v-column\"",
+            "name = \"change-v-column\"\nengine = \"fast\"",
+            1,
+        );
+        let sc = proxform_scenario::load::parse(&text, "change-v-column.toml").expect("valid");
+        let at = sc.schedule().stages()[0].at_s;
+        let mut sim = FastSimulation::new(&sc, RunOptions::default(), 1, 0).expect("supported");
+        let change = (at / sim.c.dt).round() as u64;
+        while sim.k < change {
+            sim.step();
+        }
+        let twice = |sim: &FastSimulation<'_>| sim.tracks.iter().filter(|t| t.seen_twice()).count();
+        let fresh = |sim: &FastSimulation<'_>| sim.tracks.iter().filter(|t| t.id().is_some()).count();
+        assert!(twice(&sim) >= sc.len() - 1, "before the change: {} tracked twice", twice(&sim));
+        sim.step();
+        assert_eq!(twice(&sim), 0, "a track kept its history through the change");
+        assert!(fresh(&sim) >= sc.len() - 1, "the change's measurements start tracks: {}", fresh(&sim));
     }
 }

@@ -21,8 +21,10 @@ pub struct Unsupported(pub String);
 /// predictor, no relative sensing), and its world flies the kinematic vehicle (which follows
 /// its setpoints at once, so no UAV keeps a turn trend from step to step) with measurement
 /// noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
-/// (steady, gusts, turbulence) and the position fix's bias. Faults, formation changes, scattered starts, radio delay and relays, the own-state
-/// filter and check, the fixed wing and the multirotor stay with the reference engine.
+/// (steady, gusts, turbulence), the position fix's bias and changes of formation (every UAV at
+/// once, at the change's time). Faults, scattered starts, slot re-assignment, radio delay and
+/// relays, the own-state filter and check, the fixed wing and the multirotor stay with the
+/// reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
@@ -32,14 +34,13 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 15] = [
+    let checks: [(bool, &str); 14] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
         (sc.faults().is_empty(), "faults"),
-        (sc.schedule().is_empty(), "formation changes"),
         (sc.placement().in_slots(), "scattered starts"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (radio.delay_steps == 0, "radio delay"),
@@ -61,9 +62,10 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
 /// Most tracks a UAV keeps in the fast engine (its areas and its main references).
 pub const MAX_TRACKS: usize = 16;
 
-/// The most main references any UAV has.
+/// The most main references any UAV has, in the first formation or a later one.
 fn max_refs(sc: &Scenario) -> usize {
-    sc.dependencies().iter().map(|d| d.refs().len()).max().unwrap_or(0)
+    let stages = sc.schedule().stages().iter().map(|s| &s.dependencies[..]);
+    std::iter::once(sc.dependencies()).chain(stages).flatten().map(|d| d.refs().len()).max().unwrap_or(0)
 }
 
 /// The largest acceleration the wind may give a UAV along an axis (m/s²), which its

@@ -105,6 +105,12 @@ impl Track {
         (self.word != FREE).then_some(self.word & ID_MASK)
     }
 
+    /// Whether the track has been measured more than once since it started.
+    #[cfg(test)]
+    pub fn seen_twice(&self) -> bool {
+        self.word != FREE && self.word & SEEN_TWICE != 0
+    }
+
     /// Whether the track is `id`'s.
     #[inline]
     fn is(&self, id: u32) -> bool {

@@ -59,6 +59,10 @@ pub struct View<'a> {
     pub env: &'a [crate::world::environment::UavEnv],
     /// The warm-up: an ideal link (no dropout but the references' own, no loss).
     pub warm: bool,
+    /// The formation in force and every UAV's dependency table in it (a
+    /// `[[formation.change]]`'s from its time on).
+    pub formation: &'a std::sync::Arc<proxform_core::Formation>,
+    pub dependencies: &'a [proxform_core::DependencySet],
 }
 
 impl View<'_> {
@@ -382,8 +386,8 @@ fn decide(
     let uav = UavView {
         id: UavId(i as u32),
         setup: sc.agents().controller(),
-        formation: sc.formation(),
-        dependency: &sc.dependencies()[i],
+        formation: v.formation,
+        dependency: &v.dependencies[i],
         navigator: Some(sc.navigator()),
         tracks: &mut store,
         avoidance,
