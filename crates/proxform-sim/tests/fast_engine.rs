@@ -189,6 +189,40 @@ fn the_engines_agree_on_changes_of_formation() {
 }
 
 #[test]
+fn the_engines_agree_forming_from_scattered_starts() {
+    // Two shipped forming flights: five followers scattered over a disc of 1 km (random per
+    // run) join the navigator's slots, and a hundred UAVs take off from a row on the ground
+    // into a lattice. Both engines start from the reference's own placement (the same draws):
+    // every run forms in time on both, at the same time (medians within 10 %), with the same
+    // errors over the flight (within 5 %: the approach dominates them).
+    for (name, text, runs) in [
+        ("aggregate", include_str!("../../../scenarios/aggregate.toml"), 20),
+        ("takeoff-lattice100", include_str!("../../../scenarios/takeoff-lattice100.toml"), 4),
+    ] {
+        let line = format!("name = \"{name}\"");
+        let text = text.replacen(&line, &format!("{line}\nengine = \"fast\""), 1);
+        let sc = proxform_scenario::load::parse(&text, name).expect("valid");
+        assert!(!sc.placement().in_slots() && engine_for(&sc) == Ok(EngineKind::Fast), "{name}");
+        let r: Vec<_> = (0..runs).map(|k| reference(&sc, RunOptions::default(), k)).collect();
+        let f: Vec<_> = (0..runs).map(|k| fast(&sc, RunOptions::default(), k)).collect();
+        let median = |s: &[RunSummary]| {
+            let mut t: Vec<f64> = s.iter().map(|r| r.forming.expect("forming measured").time_to_form_s).collect();
+            t.sort_by(f64::total_cmp);
+            t[t.len() / 2]
+        };
+        let (tr, tf) = (median(&r), median(&f));
+        assert!(r.iter().chain(&f).all(|s| s.pass), "{name}: every run forms in time");
+        assert!(tr > 10.0 && (tr - tf).abs() <= 0.1 * tr, "{name}: formed at {tr} s against {tf} s");
+        let (a, b) = (figures(&r), figures(&f));
+        for k in 0..3 {
+            assert!((a.rms[k] - b.rms[k]).abs() <= 0.05 * a.rms[k], "{name}, axis {k}: {a:?} vs {b:?}");
+        }
+        // Not vacuous: the followers start far from their slots.
+        assert!(a.rms[1] > 10.0, "{name}: {a:?}");
+    }
+}
+
+#[test]
 fn the_engines_agree_under_bursty_radio_loss() {
     // Every UAV broadcasts and hears its neighbours over a Gilbert-Elliott channel (bad a
     // quarter of the time, losing 90 % there) with onboard dropout: the radio fills in for

@@ -132,7 +132,9 @@ impl<'s> FastSimulation<'s> {
             options,
             run,
             k: 0,
-            states: sc.initial().to_vec(),
+            // Where the UAVs start: their slots, or scattered as the reference engine scatters
+            // them (the same draws).
+            states: crate::world::placement::initial_states(sc, run),
             uavs: vec![UavStep::default(); n],
             applied: vec![[0.0; 6]; n],
             active: vec![true; n],

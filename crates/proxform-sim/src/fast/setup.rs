@@ -21,8 +21,9 @@ pub struct Unsupported(pub String);
 /// predictor, no relative sensing), and its world flies the kinematic vehicle (which follows
 /// its setpoints at once, so no UAV keeps a turn trend from step to step) with measurement
 /// noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
-/// (steady, gusts, turbulence), the position fix's bias and changes of formation (every UAV at
-/// once, at the change's time). Faults, scattered starts, slot re-assignment, radio delay and
+/// (steady, gusts, turbulence), the position fix's bias, changes of formation (every UAV at
+/// once, at the change's time) and scattered starts (the reference's own placement). Faults,
+/// slot re-assignment, radio delay and
 /// relays, the own-state filter and check, the fixed wing and the multirotor stay with the
 /// reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
@@ -34,14 +35,13 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 14] = [
+    let checks: [(bool, &str); 13] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
         (sc.faults().is_empty(), "faults"),
-        (sc.placement().in_slots(), "scattered starts"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (radio.delay_steps == 0, "radio delay"),
         (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
