@@ -15,8 +15,9 @@ use crate::error::ConfigError;
 use crate::formation::Formation;
 use crate::method::{FormationController, Method};
 use crate::observation::{Observation, UavId};
+use crate::own_estimate::OwnEstimate;
 use crate::schedule::FormationSchedule;
-use crate::state::{self, State9};
+use crate::state::State9;
 use crate::vehicle::{Setpoint, VehicleModel};
 
 /// What every agent of a formation shares: the method, the navigator (the baselines' leader),
@@ -107,10 +108,8 @@ pub struct Agent {
     /// The changes of formation still to come, with what the controller is rebuilt from
     /// (None when the formation never changes: agents of a swarm stay small).
     changes: Option<Box<Changes>>,
-    /// The own state this UAV expects at the next step: the model applied to its estimate and
-    /// the input it chose (None before the first step, and when neither the own-state filter
-    /// nor the own-sensor check is on; boxed so that agents without them stay small).
-    own_prediction: Option<Box<OwnPrediction>>,
+    /// Its estimate of its own state: the own-sensor check and the own-state filter.
+    own: OwnEstimate,
     /// The setpoint its autopilot flies, for a vehicle flown by setpoints (None before the
     /// first adjustment, and for the other vehicles; boxed so that their agents stay small).
     setpoint: Option<Box<Setpoint>>,
@@ -129,37 +128,6 @@ struct Changes {
     method: Method,
     navigator: UavId,
     setup: Arc<ControllerSetup>,
-}
-
-/// How long the own-sensor check's settled position takes to follow the position readings
-/// (s). A reading frozen in place (a stuck sensor) falls behind it by about the UAV's speed
-/// times this, so at 1.5 m/s and above by more than a 3 m gate; noise and a position-fix bias
-/// wandering over tens of seconds move it by far less.
-pub const OWN_SETTLE_S: f64 = 2.0;
-
-/// What the UAV expects of its own state, and for how long it has flown on that alone.
-#[derive(Debug, Clone, Copy)]
-struct OwnPrediction {
-    /// The model applied to the last estimate and the input chosen.
-    next: State9,
-    /// Where the position readings have settled (m): moved each period by the velocity
-    /// readings (trapezoid rule) and pulled toward an accepted position reading over
-    /// [`OWN_SETTLE_S`] (set to it when it is the first accepted after refusals); moved as
-    /// the prediction moves while readings are refused. Each reading
-    /// is checked against it as against `next`, so that its position must also agree with
-    /// where its velocity says the UAV went, not only with the last reading: readings frozen in
-    /// place agree with the last one (the prediction is made from it) while the UAV flies on.
-    settled: [f64; 3],
-    /// The velocity of the estimate the UAV decided on last period (m/s).
-    velocity: [f64; 3],
-    /// How far the prediction moved the UAV from that estimate (m).
-    moved: [f64; 3],
-    /// The last reading (a reading repeated bit for bit while the UAV moves is stale).
-    last: State9,
-    /// Time since a measurement of its own state was last accepted (s).
-    unaccepted_s: f64,
-    /// The instant `next` is for (s): the last step's time plus one period.
-    for_s: f64,
 }
 
 impl Changes {
@@ -190,7 +158,7 @@ impl Agent {
             deps,
         )?;
         let changes = (!setup.schedule.is_empty()).then(|| Changes::new(setup, id));
-        Ok(Self { controller, changes, own_prediction: None, setpoint: None })
+        Ok(Self { controller, changes, own: OwnEstimate::default(), setpoint: None })
     }
 
     /// Switches to the formation in force at `now_s`: the controller is set up afresh for its
@@ -257,75 +225,9 @@ impl Agent {
     /// measurement with the prediction; then the controller decides.
     pub fn step(&mut self, now_s: f64, own_measured: &State9, heard: &[Observation]) -> Decision {
         self.follow_schedule(now_s);
-        let setup = self.controller.setup();
-        let params = setup.params();
-        let (gain, gate, dt) = (params.own_filter_gain, params.own_gate_m, params.dt_s);
-        let growth = params.own_gate_growth_mps;
-        let mut suspect = false;
-        // A prediction made for another instant (an agent on its own clock that skipped
-        // periods: stopped, or without updates) says nothing of this one: the measurement is
-        // taken as it is and the prediction starts again from it.
-        if self.own_prediction.as_ref().is_some_and(|p| (p.for_s - now_s).abs() > 0.5 * dt) {
-            self.own_prediction = None;
-        }
-        let own = match self.own_prediction.as_deref_mut() {
-            Some(pred) => {
-                let at = state::position(own_measured);
-                let innovation = (at - state::position(&pred.next)).norm();
-                // No sensor with noise repeats a reading to the bit, nor a noise-free one of a
-                // UAV that moves: a repeated reading is stale.
-                let moving = pred.velocity.iter().map(|v| v * v).sum::<f64>().sqrt() * dt > 1e-6;
-                let stale = moving && own_measured == &pred.last;
-                pred.last = *own_measured;
-                let settled: [f64; 3] = std::array::from_fn(|k| {
-                    pred.settled[k] + 0.5 * dt * (pred.velocity[k] + own_measured[state::VX + k])
-                });
-                let unsettled = (at - nalgebra::Vector3::from(settled)).norm();
-                let bound = |g: f64| g + growth * pred.unaccepted_s;
-                let refused = |d: f64| d.is_nan() || gate.is_some_and(|g| d > bound(g));
-                if gate.is_some() && (stale || refused(innovation) || refused(unsettled)) {
-                    // The measurement disagrees with where the UAV knows it flew: fly on that.
-                    suspect = true;
-                    pred.unaccepted_s += dt;
-                    for k in 0..3 {
-                        pred.settled[k] += pred.moved[k];
-                    }
-                    // Dead reckoning goes on with the reading's velocity unless the reading is
-                    // frozen: a fix refused for its position (an offset, or a good one the
-                    // prediction lost while the wind moved the UAV) still tells how it moves,
-                    // so the prediction stops drifting from the UAV and the widening gate
-                    // takes the readings again.
-                    let mut own = pred.next;
-                    if !stale {
-                        for k in 0..3 {
-                            own[state::VX + k] = own_measured[state::VX + k];
-                        }
-                    }
-                    own
-                } else {
-                    // Accepted again after refusals (within the widened gate, a lasting
-                    // offset included): the readings settle where they are now.
-                    let pull = if pred.unaccepted_s > 0.0 { 1.0 } else { (dt / OWN_SETTLE_S).min(1.0) };
-                    pred.unaccepted_s = 0.0;
-                    for k in 0..3 {
-                        pred.settled[k] = settled[k] + pull * (at[k] - settled[k]);
-                    }
-                    if gain < 1.0 {
-                        // Position and velocity are filtered; attitude, measured far more finely
-                        // than its tolerances, is taken as measured (filtering it would only
-                        // add lag).
-                        let mut own = pred.next + gain * state::difference(own_measured, &pred.next);
-                        for k in state::ALPHA..=state::GAMMA {
-                            own[k] = own_measured[k];
-                        }
-                        own
-                    } else {
-                        *own_measured
-                    }
-                }
-            }
-            None => *own_measured,
-        };
+        let params = self.controller.setup().params();
+        let dt = params.dt_s;
+        let (own, suspect) = self.own.estimate(params, now_s, own_measured);
         let mut decision = self.controller.step(now_s, &own, heard);
         decision.own_suspect = suspect;
         let vehicle = self.controller.setup().vehicle();
@@ -341,26 +243,14 @@ impl Agent {
             }
             decision.setpoint = self.setpoint.as_deref().copied();
         }
-        if gain < 1.0 || gate.is_some() {
-            let setup = self.controller.setup();
+        let setup = self.controller.setup();
+        if OwnEstimate::used(setup.params()) {
             // What the vehicle flies: its setpoint where it is flown by one.
             let input = match &decision.setpoint {
                 Some(sp) => setup.vehicle().input_flying(&own, sp).unwrap_or(decision.input),
                 None => decision.input,
             };
-            let next = setup.vehicle().predict(&own, &input, setup.params().dt_s);
-            let velocity = [own[state::VX], own[state::VX + 1], own[state::VX + 2]];
-            let moved = std::array::from_fn(|k| next[state::X + k] - own[state::X + k]);
-            match &mut self.own_prediction {
-                Some(p) => (p.next, p.velocity, p.moved, p.for_s) = (next, velocity, moved, now_s + dt),
-                None => {
-                    let settled = [own[state::X], own[state::X + 1], own[state::X + 2]];
-                    let last = *own_measured;
-                    let p =
-                        OwnPrediction { next, settled, velocity, moved, last, unaccepted_s: 0.0, for_s: now_s + dt };
-                    self.own_prediction = Some(Box::new(p));
-                }
-            }
+            self.own.expect(setup, now_s, (&own, own_measured), &input);
         }
         decision
     }
@@ -386,7 +276,7 @@ impl Agent {
     /// Forgets the own-state prediction and the setpoint (after inputs that were not applied,
     /// such as a warm-up's).
     pub fn forget_own_estimate(&mut self) {
-        self.own_prediction = None;
+        self.own.forget();
         self.setpoint = None;
     }
 
@@ -410,7 +300,7 @@ impl Agent {
     /// Bytes held on the heap (shared setup and formation excluded).
     pub fn heap_bytes(&self) -> usize {
         self.controller.heap_bytes()
-            + self.own_prediction.as_ref().map_or(0, |_| std::mem::size_of::<OwnPrediction>())
+            + self.own.heap_bytes()
             + self.changes.as_ref().map_or(0, |_| std::mem::size_of::<Changes>())
             + self.setpoint.as_ref().map_or(0, |_| std::mem::size_of::<Setpoint>())
     }

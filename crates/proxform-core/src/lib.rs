@@ -21,6 +21,7 @@ pub mod grid;
 pub mod horizon;
 pub mod method;
 pub mod observation;
+pub mod own_estimate;
 pub mod plan;
 pub mod predictor;
 pub mod schedule;

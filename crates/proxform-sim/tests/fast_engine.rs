@@ -37,6 +37,8 @@ struct Figures {
     model_error: f64,
     /// Neighbours the robust fusion left out, per follower-second.
     isolated: f64,
+    /// Seconds per follower its own reading was refused by the own-sensor check.
+    own_refused: f64,
 }
 
 fn figures(runs: &[RunSummary]) -> Figures {
@@ -51,6 +53,7 @@ fn figures(runs: &[RunSummary]) -> Figures {
         min_separation: mean(&|r| r.min_separation_m),
         model_error: mean(&|r| r.model_error_rms[3]),
         isolated: mean(&|r| r.isolation.map_or(0.0, |i| i.isolated_per_uav_s)),
+        own_refused: mean(&|r| r.isolation.map_or(0.0, |i| i.own_suspect_s_per_uav)),
     }
 }
 
@@ -74,6 +77,8 @@ fn agree(sc: &Scenario, options: RunOptions, runs: u64) -> (Figures, Figures) {
     assert!((a.min_separation - b.min_separation).abs() < 1.0, "{a:?} vs {b:?}");
     // What the robust fusion left out is counted alike (within a third: a rare event).
     assert!(close(a.isolated, b.isolated, 0.34), "isolated: {a:?} vs {b:?}");
+    // And what the own-sensor check refused (within a third too).
+    assert!(close(a.own_refused, b.own_refused, 0.34), "own refused: {a:?} vs {b:?}");
     (a, b)
 }
 
@@ -286,12 +291,12 @@ type Edit = fn(&mut ScenarioSpec);
 #[test]
 fn the_engines_run_one_controller_step_whatever_its_settings() {
     // Settings the fast engine ran only on the reference engine until the two shared one
-    // controller step: the robust fusion, the turn feed-forward, a horizon of three periods, a
-    // formation in the heading frame. Each changes what the controller does (checked against the lattice's
+    // controller step: the robust fusion, the turn feed-forward, the own-state filter and check,
+    // a horizon of three periods, a formation in the heading frame. Each changes what the controller does (checked against the lattice's
     // defaults), and the engines agree on it.
     let base = swarm(300, |s| s.duration_s = Some(20.0));
     let plain = figures(&[fast(&base, RunOptions::default(), 0)]);
-    let settings: [(&str, Edit); 5] = [
+    let settings: [(&str, Edit); 6] = [
         // A gate of half the permissible errors in noise five times the default's: the fusion
         // leaves neighbours out.
         ("robust fusion", |s| {
@@ -299,6 +304,14 @@ fn the_engines_run_one_controller_step_whatever_its_settings() {
             s.noise.scale = Some(5.0);
         }),
         ("turn feed-forward", |s| s.controller.turn_feedforward = Some(true)),
+        // The own-state filter, and a check whose gate (5 cm) the noise (five times the
+        // default's: 10 cm) passes often: readings are refused and the UAV flies on its
+        // prediction.
+        ("own-state filter and check", |s| {
+            s.controller.own_filter_gain = Some(0.5);
+            s.controller.own_gate_m = Some(0.05);
+            s.noise.scale = Some(5.0);
+        }),
         ("horizon", |s| s.controller.horizon = Some(3)),
         ("heading frame", |s| s.formation.frame = Some("heading".into())),
         // Lost reports brought forward by the plan, which turns with the heading: the plan
@@ -333,6 +346,9 @@ fn the_engines_run_one_controller_step_whatever_its_settings() {
         let differs = (0..6).any(|k| (b.rms[k] - plain.rms[k]).abs() > 0.01 * plain.rms[k])
             || (b.effort - plain.effort).abs() > 0.01 * plain.effort;
         assert!(differs, "{name} changed nothing: {b:?} vs {plain:?}");
+        if name.starts_with("own") {
+            assert!(b.own_refused > 0.1, "{name}: no reading refused: {b:?}");
+        }
     }
 }
 

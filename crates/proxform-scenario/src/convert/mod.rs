@@ -313,12 +313,6 @@ impl TryFrom<ScenarioSpec> for Scenario {
             ));
         }
         params.separation_m = Some(params.separation_m.unwrap_or(defaults::SEPARATION_PER_SAFETY * safety_distance_m));
-        // Where the fast engine flies the scenario (it does not run the own check).
-        let fast = match engine {
-            crate::scenario::EngineChoice::Fast => true,
-            crate::scenario::EngineChoice::Auto => n >= crate::scenario::EngineChoice::AUTO_FAST_FROM,
-            crate::scenario::EngineChoice::Reference => false,
-        };
         // Robust fusion by default (METHOD §8), whichever engine flies: a neighbour far from its
         // own slot (its sensor failed; it joins, forms or was re-assigned) must not drag the
         // UAVs that lean on it.
@@ -338,10 +332,10 @@ impl TryFrom<ScenarioSpec> for Scenario {
         if paper && spec.controller.plan_forward.is_none() {
             params.plan_forward = false;
         }
-        // The own-sensor check by default (METHOD §8), but for the paper's method and where the
-        // fast engine flies the scenario (it does not run the check). Its gate widens at least as
-        // fast as the turbulence can move a UAV off its prediction.
-        if spec.controller.own_gate_m.is_none() && !paper && !fast {
+        // The own-sensor check by default (METHOD §8) for every method but the paper's,
+        // whichever engine flies. Its gate widens at least as fast as the turbulence can move a
+        // UAV off its prediction.
+        if spec.controller.own_gate_m.is_none() && !paper {
             params.own_gate_m = Some(defaults::OWN_GATE_M);
         }
         if spec.controller.own_gate_growth_mps.is_none() {

@@ -38,6 +38,7 @@ mod update;
 
 use proxform_core::controller::{relative_speed_bound, Avoidance};
 use proxform_core::grid::NeighbourGrid;
+use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{ALPHA, VX, X};
 use proxform_core::State9;
 use proxform_scenario::Scenario;
@@ -66,7 +67,10 @@ const WARMUP_DRAW_BASE: u64 = 1 << 62;
 /// counts, avoidance memory.
 type BlockSlices<'b> = (
     usize,
-    (((&'b mut [UavStep], &'b mut [[f32; 6]]), (&'b mut [Track], &'b mut [u8])), &'b mut Vec<(u32, Box<Avoidance>)>),
+    (
+        ((&'b mut [UavStep], &'b mut [[f32; 6]]), ((&'b mut [Track], &'b mut [u8]), &'b mut [OwnEstimate])),
+        &'b mut Vec<(u32, Box<Avoidance>)>,
+    ),
 );
 
 /// One flight on the fast engine.
@@ -86,6 +90,9 @@ pub struct FastSimulation<'s> {
     /// `capacity` tracks per UAV, then how many each uses.
     tracks: Vec<Track>,
     used: Vec<u8>,
+    /// Each UAV's estimate of its own state (what it remembers only while the own-sensor check
+    /// or filter is on: 8 bytes a UAV otherwise).
+    own: Vec<OwnEstimate>,
     /// Collision avoidance's memory of the UAVs whose rule remembers a side, per block (few
     /// UAVs of a large swarm ever have one).
     avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
@@ -140,6 +147,7 @@ impl<'s> FastSimulation<'s> {
             active: vec![true; n],
             tracks: vec![Track::default(); n * c.capacity],
             used: vec![0; n],
+            own: vec![OwnEstimate::default(); n],
             avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
@@ -223,6 +231,8 @@ impl<'s> FastSimulation<'s> {
         // Back to the start: every UAV in its slot (the only placement this engine runs).
         self.states.copy_from_slice(sc.initial());
         self.uavs.iter_mut().for_each(|u| *u = UavStep::default());
+        // The warm-up's inputs were not applied: what each UAV expected of itself is forgotten.
+        self.own.iter_mut().for_each(OwnEstimate::forget);
     }
 
     /// At a change of formation every follower flies its new slot on its new table from a
@@ -261,6 +271,7 @@ impl<'s> FastSimulation<'s> {
             applied,
             tracks,
             used,
+            own,
             avoid,
             grid,
             env,
@@ -312,7 +323,7 @@ impl<'s> FastSimulation<'s> {
         let cap = c.capacity;
         let nav = c.nav;
         let adjust = self.options.adjustment_enabled;
-        let block = |scratch: &mut Scratch, (b, (((uavs, applied), (tracks, used)), avoid)): BlockSlices<'_>| {
+        let block = |scratch: &mut Scratch, (b, (((uavs, applied), ((tracks, used), own)), avoid)): BlockSlices<'_>| {
             for o in 0..uavs.len() {
                 let i = b * BLOCK + o;
                 if i == nav {
@@ -323,7 +334,7 @@ impl<'s> FastSimulation<'s> {
                 let owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
                 let at = avoid.iter().position(|a| a.0 as usize == i);
                 let mut kept = at.map(|p| avoid.swap_remove(p).1);
-                let u = update::update(&view, i, scratch, owner, &mut kept);
+                let u = update::update(&view, i, scratch, (owner, &mut own[o]), &mut kept);
                 if let Some(k) = kept {
                     avoid.push((i as u32, k));
                 }
@@ -337,7 +348,7 @@ impl<'s> FastSimulation<'s> {
         if self.parallel {
             uavs.par_chunks_mut(BLOCK)
                 .zip(applied.par_chunks_mut(BLOCK))
-                .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)))
+                .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).zip(own.par_chunks_mut(BLOCK)))
                 .zip(avoid.par_iter_mut())
                 .enumerate()
                 .for_each_init(|| Scratch::new(c, sc), block);
@@ -345,7 +356,7 @@ impl<'s> FastSimulation<'s> {
             let mut scratch = Scratch::new(c, sc);
             uavs.chunks_mut(BLOCK)
                 .zip(applied.chunks_mut(BLOCK))
-                .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)))
+                .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).zip(own.chunks_mut(BLOCK)))
                 .zip(avoid.iter_mut())
                 .enumerate()
                 .for_each(|x| block(&mut scratch, x));

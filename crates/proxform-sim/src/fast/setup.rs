@@ -22,10 +22,10 @@ pub struct Unsupported(pub String);
 /// its setpoints at once, so no UAV keeps a turn trend from step to step) with measurement
 /// noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
 /// (steady, gusts, turbulence), the position fix's bias, changes of formation (every UAV at
-/// once, at the change's time) and scattered starts (the reference's own placement). Faults,
-/// slot re-assignment, radio delay and
-/// relays, the own-state filter and check, the fixed wing and the multirotor stay with the
-/// reference engine.
+/// once, at the change's time), scattered starts (the reference's own placement) and the
+/// own-sensor check and filter (each UAV's [`proxform_core::own_estimate::OwnEstimate`]).
+/// Faults, slot re-assignment, radio delay and relays, the fixed wing and the multirotor stay
+/// with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
@@ -35,12 +35,11 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 13] = [
+    let checks: [(bool, &str); 12] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
-        (p.own_filter_gain >= 1.0 && p.own_gate_m.is_none(), "the own-state filter or check"),
         (sc.faults().is_empty(), "faults"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (radio.delay_steps == 0, "radio delay"),
@@ -108,6 +107,9 @@ pub struct Consts {
     /// Per-step input limits (rate·Δt).
     pub scale: [f64; 6],
     pub actuation_error: f64,
+    /// The own-sensor check or the own-state filter is on: each UAV keeps its
+    /// [`proxform_core::own_estimate::OwnEstimate`].
+    pub own_estimate: bool,
     /// The UAVs that broadcast, in the order their messages are heard.
     pub broadcasters: Vec<usize>,
 }
@@ -159,6 +161,7 @@ impl Consts {
             avoid: p.avoid_m.filter(|&d| d > 0.0).map(|d| (d, setup.braking_mps2())),
             scale: std::array::from_fn(|a| scale_v[a]),
             actuation_error: sc.actuation_error(),
+            own_estimate: proxform_core::own_estimate::OwnEstimate::used(p),
             broadcasters,
         }
     }

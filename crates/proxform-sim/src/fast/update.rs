@@ -11,6 +11,7 @@
 
 use proxform_core::controller::{Avoidance, Decision, StepScratch, UavView};
 use proxform_core::grid::NeighbourGrid;
+use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{State9, ALPHA, VX, X};
 use proxform_core::{Observation, ObservationSource, Outcome, UavId};
 use proxform_scenario::radio::RadioModel;
@@ -140,10 +141,24 @@ pub struct Update {
 }
 
 /// The update of follower `i`.
-pub fn update(v: &View<'_>, i: usize, s: &mut Scratch, tracks: Owner<'_>, kept: &mut Option<Box<Avoidance>>) -> Update {
+pub fn update(
+    v: &View<'_>,
+    i: usize,
+    s: &mut Scratch,
+    (tracks, own_estimate): (Owner<'_>, &mut OwnEstimate),
+    kept: &mut Option<Box<Avoidance>>,
+) -> Update {
     let c = v.c;
     let radio_used = perceive(v, i, s);
-    let own_abs = own_measurement(v, i);
+    let measured = own_measurement(v, i);
+    // The own-sensor check and filter, as the reference's agents run them (on the absolute
+    // reading; the warm-up's inputs are not applied, so what it expected is forgotten after).
+    let setup = v.sc.agents().controller();
+    let t = f64::from(v.k) * c.dt;
+    let (own_abs, own_suspect) = match c.own_estimate {
+        true => own_estimate.estimate(setup.params(), t, &measured),
+        false => (measured, false),
+    };
     // Positions relative to the reference point R_i(k) = O(k) + A_i, A_i = p_i(0) − O(0).
     let p0 = &v.sc.initial()[i];
     let r_i = [
@@ -157,8 +172,11 @@ pub fn update(v: &View<'_>, i: usize, s: &mut Scratch, tracks: Owner<'_>, kept: 
     }
     build_observations(v, i, s, &r_i);
     let d = decide(v, i, (&own, r_i), s, tracks, kept);
+    if c.own_estimate {
+        own_estimate.expect(setup, t, (&own_abs, &measured), &d.input);
+    }
     // The robust fusion's count of the neighbours it left out, as the reference records it.
-    let mut step = UavStep { radio_used, isolated: d.isolated, ..UavStep::default() };
+    let mut step = UavStep { radio_used, isolated: d.isolated, own_suspect, ..UavStep::default() };
     let outcome = d.outcome;
     if matches!(outcome, Outcome::Alone) {
         step.outcome = Some(StepOutcome::Alone);
