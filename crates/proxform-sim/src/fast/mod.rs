@@ -46,6 +46,7 @@ use rayon::prelude::*;
 
 use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::RunKey;
+use crate::world::airwaves::Airwaves;
 use crate::world::environment::{self, EnvStep, UavEnv};
 use crate::world::measurement::Message;
 use crate::world::options::RunOptions;
@@ -100,7 +101,8 @@ pub struct FastSimulation<'s> {
     /// Each UAV's wind and position-fix bias (the reference engine's, from the same streams),
     /// empty when the scenario has neither.
     env: Vec<UavEnv>,
-    messages: Vec<Message>,
+    /// The radio's messages on their way and arriving (the reference engine's own delay line).
+    air: Airwaves,
     /// The sensor (the reference engine's own).
     sensor: ProximitySensor,
     /// The warm-up's radio, without losses.
@@ -151,7 +153,7 @@ impl<'s> FastSimulation<'s> {
             avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
-            messages: Vec::with_capacity(c.broadcasters.len()),
+            air: Airwaves::default(),
             sensor: ProximitySensor::of(sc),
             ideal: sc.radio().ideal(),
             reach: Reach::new(),
@@ -202,6 +204,9 @@ impl<'s> FastSimulation<'s> {
             + self.grid.heap_bytes()
             + self.env.len() * std::mem::size_of::<UavEnv>()
             + self.reach.heap_bytes()
+            + self.air.heap_bytes()
+            + self.own.len() * std::mem::size_of::<OwnEstimate>()
+            + self.own.iter().map(OwnEstimate::heap_bytes).sum::<usize>()
     }
 
     /// The origin of the reference points at step `k` (the navigator's path position).
@@ -231,6 +236,8 @@ impl<'s> FastSimulation<'s> {
         // Back to the start: every UAV in its slot (the only placement this engine runs).
         self.states.copy_from_slice(sc.initial());
         self.uavs.iter_mut().for_each(|u| *u = UavStep::default());
+        // The flight's radio starts afresh: nothing of the warm-up is on the air.
+        self.air.clear();
         // The warm-up's inputs were not applied: what each UAV expected of itself is forgotten.
         self.own.iter_mut().for_each(OwnEstimate::forget);
     }
@@ -275,7 +282,7 @@ impl<'s> FastSimulation<'s> {
             avoid,
             grid,
             env,
-            messages,
+            air,
             reach,
             ring,
             origin0,
@@ -306,7 +313,10 @@ impl<'s> FastSimulation<'s> {
             dependencies: sc.dependencies_at(t),
         };
         // Radio: the broadcasters' own measurements.
-        messages.clear();
+        // The messages sent `radio.delay_s` ago arrive (without delay in the warm-up, as the
+        // reference's).
+        let delay = if warm { 0 } else { c.radio_delay_steps };
+        let mut messages = air.buffer(delay);
         for &j in &c.broadcasters {
             let s = &states[j];
             messages.push(Message {
@@ -318,8 +328,9 @@ impl<'s> FastSimulation<'s> {
                 relative: false,
             });
         }
-        reach.rebuild(messages.iter().map(|m| m.at), sc.radio().range_m);
-        let view = View { messages, reach, ..view };
+        air.send(messages, delay);
+        reach.rebuild(air.arriving().iter().map(|m| m.at), sc.radio().range_m);
+        let view = View { messages: air.arriving(), reach, ..view };
         let cap = c.capacity;
         let nav = c.nav;
         let adjust = self.options.adjustment_enabled;
@@ -419,7 +430,7 @@ impl<'s> FastSimulation<'s> {
             states: &self.states,
             uavs: &self.uavs,
             active: &self.active,
-            radio_sent: self.messages.len(),
+            radio_sent: self.air.sent(),
             formation: None,
             reassigned: false,
             successor: None,

@@ -23,8 +23,9 @@ pub struct Unsupported(pub String);
 /// noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
 /// (steady, gusts, turbulence), the position fix's bias, changes of formation (every UAV at
 /// once, at the change's time), scattered starts (the reference's own placement) and the
-/// own-sensor check and filter (each UAV's [`proxform_core::own_estimate::OwnEstimate`]).
-/// Faults, slot re-assignment, radio delay and relays, the fixed wing and the multirotor stay
+/// own-sensor check and filter (each UAV's [`proxform_core::own_estimate::OwnEstimate`]), and
+/// a delayed radio (the reference's own delay line; its tracks updated at a report's
+/// measurement). Faults, slot re-assignment, relays, the fixed wing and the multirotor stay
 /// with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
@@ -35,19 +36,21 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 12] = [
+    let checks: [(bool, &str); 11] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
         (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (sc.faults().is_empty(), "faults"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
-        (radio.delay_steps == 0, "radio delay"),
         (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
         (!radio.relay_navigator, "relays of the navigator"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (tracks <= MAX_TRACKS, &too_many),
-        (p.track_timeout_s / p.dt_s <= MAX_AGE_STEPS as f64, "a track timeout over 120 update periods"),
+        (
+            p.track_timeout_s / p.dt_s + f64::from(radio.delay_steps) <= MAX_AGE_STEPS as f64,
+            "a track timeout and radio delay over 120 update periods together",
+        ),
     ];
     // Every reason, in this order: the first alone misled (a formation change's file was told
     // of a setting the change turned on by default, not of the change).
@@ -110,6 +113,8 @@ pub struct Consts {
     /// The own-sensor check or the own-state filter is on: each UAV keeps its
     /// [`proxform_core::own_estimate::OwnEstimate`].
     pub own_estimate: bool,
+    /// The radio's delay (whole update periods).
+    pub radio_delay_steps: usize,
     /// The UAVs that broadcast, in the order their messages are heard.
     pub broadcasters: Vec<usize>,
 }
@@ -162,6 +167,7 @@ impl Consts {
             scale: std::array::from_fn(|a| scale_v[a]),
             actuation_error: sc.actuation_error(),
             own_estimate: proxform_core::own_estimate::OwnEstimate::used(p),
+            radio_delay_steps: radio.delay_steps as usize,
             broadcasters,
         }
     }

@@ -1,5 +1,5 @@
 //! The neighbour tracks of every UAV in one array: `capacity` records per UAV, contiguous, each
-//! a neighbour's filtered state in 46 bytes, with the reference's α-β filter (METHOD §3,
+//! a neighbour's filtered state in 48 bytes, with the reference's α-β filter (METHOD §3,
 //! `proxform_core::predictor`) run on them in f32.
 //!
 //! A record holds position and velocity in f32, attitude as 16-bit binary angles (2π/65 536
@@ -7,13 +7,14 @@
 //! six rates in 16 bits over a span set per scenario ([`Filter::rate_span`]): wide enough for
 //! the vehicle's limits (with what the wind adds, [`super::setup::wind_acceleration`]) and for
 //! the noise of a two-point start, so the quantum lies far below
-//! the noise the filter smooths. Twelve tracks of a UAV take 552 bytes instead of 768 (a
-//! 10^6-UAV swarm: 526 MiB instead of 732).
+//! the noise the filter smooths. Twelve tracks of a UAV take 576 bytes instead of 768 (a
+//! 10^6-UAV swarm: 549 MiB instead of 732).
 //!
 //! Positions are kept relative to the owner's reference point at the track's time, `R_i(k) =
 //! O(k) + A_i` ([`super::update::View::shift`]): tens of metres, so f32 resolves them to
 //! micrometres however far the swarm flies. Times are step numbers (`t = k·Δt`), kept modulo
-//! 128 beside the id.
+//! 128 beside the id: the step of the last measurement, and how many steps later it arrived
+//! (a radio's delay), so that a delayed report is neither a missing one nor a fresh one.
 //!
 //! (Measured: a record per track and a scalar update cost fewer instructions than the same
 //! filter over lanes of all of a UAV's tracks, whose fixed width and copies outweigh the
@@ -42,10 +43,9 @@ pub const MAX_AGE_STEPS: i64 = 120;
 /// Radians per unit of a binary angle.
 const ANGLE_QUANTUM: f32 = std::f32::consts::PI / 32768.0;
 
-const _: () = assert!(std::mem::size_of::<Track>() == 46);
+const _: () = assert!(std::mem::size_of::<Track>() == 48);
 
-/// One neighbour's filtered state: 46 bytes, packed (measured: as many instructions per update
-/// as the 48-byte aligned layout).
+/// One neighbour's filtered state: 48 bytes, packed.
 #[derive(Debug, Clone, Copy)]
 #[repr(C, packed(2))]
 pub struct Track {
@@ -58,11 +58,15 @@ pub struct Track {
     att: [i16; 3],
     /// Rates of velocity (m/s²) and attitude (rad/s) in units of [`Filter::rate_quantum`].
     rate: [i16; 6],
+    /// Steps from its last measurement to when that report arrived (the radio's delay; 0 for
+    /// what is sensed onboard).
+    lag: u8,
+    _pad: u8,
 }
 
 impl Default for Track {
     fn default() -> Self {
-        Self { word: FREE, pv: [0.0; 6], att: [0; 3], rate: [0; 6] }
+        Self { word: FREE, pv: [0.0; 6], att: [0; 3], rate: [0; 6], lag: 0, _pad: 0 }
     }
 }
 
@@ -217,7 +221,7 @@ impl Owner<'_> {
     #[inline]
     pub fn sweep(&mut self, k: i32, limit: i64) {
         for t in self.tracks[..usize::from(*self.used)].iter_mut() {
-            if t.word != FREE && t.age(k) > limit {
+            if t.word != FREE && t.age(k) - i64::from(t.lag) > limit {
                 t.word = FREE;
             }
         }
@@ -264,12 +268,14 @@ impl Owner<'_> {
         &mut self,
         f: &Filter,
         (id, hint, h): (u32, usize, f32),
-        k: i32,
+        (k, lag): (i32, u8),
         z: &State9,
         shift: impl Fn(i32) -> [f64; 3],
     ) -> (usize, [f32; 9]) {
-        let s = self.slot_for(id, k, hint);
+        // (A full set frees the track measured longest ago, seen from now.)
+        let s = self.slot_for(id, k + i32::from(lag), hint);
         let tr = &mut self.tracks[s];
+        tr.lag = lag;
         let steps = tr.age(k);
         let zf = to_f32(z);
         // The record as f32 (value 0-8, rates 9-14), filtered, then stored once.
@@ -363,9 +369,9 @@ impl Owner<'_> {
 /// One UAV's tracks at one update as the controller's step reads them
 /// ([`proxform_core::controller::Tracks`]): the update is at step `k`, `t = k·Δt` on the
 /// step's clock, and states come back in f64, relative to the owner's reference point at `k`.
-/// The engine hears every report as it is measured (no radio delay), so a track's last report
-/// arrived at its last measurement; its records keep no source (the engine runs no relative
-/// sensing).
+/// A report heard over a delayed radio was measured before it arrived: the track is updated at
+/// its measurement and counts as heard when it arrived (as the reference's tracks do). Its
+/// records keep no source (the engine runs no relative sensing).
 pub struct StepTracks<'a, 'v, S: Fn(i32) -> [f64; 3]> {
     pub owner: Owner<'a>,
     pub filter: &'v Filter,
@@ -388,6 +394,12 @@ impl<S: Fn(i32) -> [f64; 3]> StepTracks<'_, '_, S> {
     fn since(&self, s: usize, t: f64) -> (f64, i32) {
         let k0 = self.owner.measured_at(s, self.k);
         (t - f64::from(k0) * self.filter.dt, k0)
+    }
+
+    /// Seconds from when slot `s`'s last report arrived to time `t`.
+    #[inline]
+    fn since_heard(&self, s: usize, t: f64) -> f64 {
+        self.since(s, t).0 - f64::from(self.owner.tracks[s].lag) * self.filter.dt
     }
 
     /// Whether a state `h` seconds after its measurement is brought forward by the plan (past
@@ -417,7 +429,32 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
         let h = horizon_s + obs.age_s;
         let hint = self.fed;
         self.fed += 1;
-        let (s, x) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), self.k, &obs.state, &self.shift);
+        // Measured `lag` steps ago (a delayed radio report): the track is updated at that step,
+        // in the reference point's frame of then, unless it knows a later measurement (then it
+        // only counts as heard now, as the reference's).
+        let lag = (obs.age_s / self.filter.dt).round().clamp(0.0, 127.0) as i32;
+        if lag > 0 {
+            let k_obs = self.k - lag;
+            if let Some(s) = self.owner.find(obs.id.0) {
+                let k0 = self.owner.measured_at(s, self.k);
+                if k0 > k_obs && self.k - k0 <= self.filter.timeout_steps as i32 {
+                    self.owner.tracks[s].lag = (self.k - k0) as u8;
+                    return self.state_after(s, k0, horizon_s + f64::from(self.k - k0) * self.filter.dt);
+                }
+            }
+            let d = (self.shift)(k_obs);
+            let mut z = obs.state;
+            for c in 0..3 {
+                z[c] -= d[c];
+            }
+            let shift = |k0: i32| {
+                let e = (self.shift)(k0);
+                [e[0] - d[0], e[1] - d[1], e[2] - d[2]]
+            };
+            let (s, _) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), (k_obs, lag as u8), &z, shift);
+            return self.state_after(s, k_obs, h);
+        }
+        let (s, x) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), (self.k, 0), &obs.state, &self.shift);
         match self.carried(h) {
             Some(carry) => {
                 let t0 = f64::from(self.k) * self.filter.dt;
@@ -438,14 +475,16 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
     }
     #[inline]
     fn coasting(&self, s: usize, now: f64, max_s: f64, max_age_s: f64) -> Option<UavId> {
-        let (missing, _) = self.since(s, now);
+        let (age, _) = self.since(s, now);
+        let missing = self.since_heard(s, now);
         let id = self.owner.tracks[s].id()?;
-        (missing >= SAME_INSTANT_S && missing <= max_s.min(max_age_s) + SAME_INSTANT_S).then_some(UavId(id))
+        (missing >= SAME_INSTANT_S && missing <= max_s + SAME_INSTANT_S && age <= max_age_s + SAME_INSTANT_S)
+            .then_some(UavId(id))
     }
 
     #[inline]
     fn missing(&self, s: usize, now: f64) -> f64 {
-        self.since(s, now).0
+        self.since_heard(s, now)
     }
 
     // A phase of `proxform bench`'s instruction table: kept a function of its own.
@@ -464,7 +503,8 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
         let s = self.owner.find(id.0)?;
         let (age, k0) = self.since(s, now);
         let timeout = self.filter.timeout_steps as f64 * self.filter.dt;
-        (age <= timeout.min(max_age_s) + SAME_INSTANT_S).then(|| (self.state_after(s, k0, 0.0), age.max(0.0)))
+        let alive = self.since_heard(s, now) <= timeout + SAME_INSTANT_S;
+        (alive && age <= max_age_s + SAME_INSTANT_S).then(|| (self.state_after(s, k0, 0.0), age.max(0.0)))
     }
 
     #[inline]
@@ -570,7 +610,7 @@ mod tests {
             let z = neighbour(k);
             let obs = Observation { id: UavId(7), state: z, age_s: 0.0, source: ObservationSource::Onboard };
             let want = reference.predict(&obs, f64::from(k) * 0.1, 0.1);
-            let (_, got) = owner.predict(&f, (7, 0, 0.1), k, &z, |_| [0.0; 3]);
+            let (_, got) = owner.predict(&f, (7, 0, 0.1), (k, 0), &z, |_| [0.0; 3]);
             for c in 0..9 {
                 let mut d = f64::from(got[c]) - want[c];
                 if c >= 6 {
@@ -603,14 +643,14 @@ mod tests {
         let mut used = 0u8;
         let mut owner = Owner { tracks: &mut records, used: &mut used };
         let z = neighbour(0);
-        owner.predict(&f, (1, 0, 0.1), 0, &z, |_| [0.0; 3]);
-        owner.predict(&f, (2, 1, 0.1), 1, &z, |_| [0.0; 3]);
-        let (s, _) = owner.predict(&f, (3, 0, 0.1), 2, &z, |_| [0.0; 3]);
+        owner.predict(&f, (1, 0, 0.1), (0, 0), &z, |_| [0.0; 3]);
+        owner.predict(&f, (2, 1, 0.1), (1, 0), &z, |_| [0.0; 3]);
+        let (s, _) = owner.predict(&f, (3, 0, 0.1), (2, 0), &z, |_| [0.0; 3]);
         assert_eq!(s, 0, "the track of UAV 1, measured longest ago, is reused");
         assert_eq!(owner.tracks[0].id(), Some(3));
         assert_eq!(owner.tracks[1].id(), Some(2));
         // A wrong hint still finds the track.
-        let (s, _) = owner.predict(&f, (2, 0, 0.1), 3, &z, |_| [0.0; 3]);
+        let (s, _) = owner.predict(&f, (2, 0, 0.1), (3, 0), &z, |_| [0.0; 3]);
         assert_eq!(s, 1);
         assert_eq!(wrap_pi(3.5), 3.5 - std::f32::consts::TAU);
     }

@@ -67,6 +67,17 @@ pub struct View<'a> {
 }
 
 impl View<'_> {
+    /// How old a radio message is on arrival (s): the radio's delay in flight, none in the
+    /// warm-up.
+    #[inline]
+    pub fn radio_delay_s(&self) -> f64 {
+        if self.warm {
+            0.0
+        } else {
+            self.c.radio_delay_steps as f64 * self.c.dt
+        }
+    }
+
     /// `O(k0) − O(k)`: how far the reference points of recent step `k0` lie from this step's.
     #[inline]
     pub fn shift(&self, k0: i32) -> [f64; 3] {
@@ -298,7 +309,7 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
         radio,
         messages: v.messages,
         reach: v.reach,
-        delay_s: 0.0,
+        delay_s: v.radio_delay_s(),
         channel_bad,
         onboard: true,
         fuse: false,
@@ -354,7 +365,9 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3]) {
         for k in 0..3 {
             st[k] -= r_i[k];
         }
-        s.obs.push(Observation { id: UavId(msg.sender), state: st, age_s: 0.0, source: ObservationSource::Radio });
+        // Measured when it was sent: as old as the radio's delay on arrival.
+        let age_s = msg.age_s + v.radio_delay_s();
+        s.obs.push(Observation { id: UavId(msg.sender), state: st, age_s, source: ObservationSource::Radio });
     }
     for o in &s.relayed {
         let mut o = *o;

@@ -17,8 +17,6 @@
 //! step ([`StreamKey`]), so a UAV's update does not depend on which thread runs its block:
 //! large swarms are stepped in parallel with identical results.
 
-use std::collections::VecDeque;
-
 use proxform_core::assignment::{self, Reassignment};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
@@ -27,9 +25,10 @@ use proxform_core::{Agent, Decision};
 use proxform_scenario::faults::{self as schedule, Fault};
 use proxform_scenario::Scenario;
 
+use super::airwaves::Airwaves;
 use super::environment::{EnvStep, UavEnv};
 use super::faults::{self, FaultStep};
-use super::measurement::{self, Message, OwnSensors};
+use super::measurement::{self, OwnSensors};
 use super::options::{NeighbourSearch, RunOptions};
 use super::phases::{for_each_block, for_each_block_in_order, Mode, StepContext};
 use super::reach::Reach;
@@ -96,14 +95,10 @@ struct World<'s> {
     grid: NeighbourGrid,
     /// Per-UAV environment (wind, position-fix bias, radio channel), empty when not needed.
     env: Vec<UavEnv>,
-    /// The radio messages arriving this step, composed once for all receivers, and their
-    /// index by sender position.
-    arriving: Vec<Message>,
+    /// The radio messages on their way and arriving this step (composed once for all
+    /// receivers), and the arriving ones' index by sender position.
+    air: Airwaves,
     reach: Reach,
-    /// Messages sent in the last `delay + 1` steps, oldest first (radio with delay only).
-    history: VecDeque<Vec<Message>>,
-    /// Messages sent this step.
-    sent_now: usize,
     active: Vec<bool>,
     faults: FaultStep,
     sensor: ProximitySensor,
@@ -194,10 +189,8 @@ impl<'s> Simulation<'s> {
             current: starts.clone(),
             env: super::environment::initial(scenario),
             grid: NeighbourGrid::new(),
-            arriving: Vec::new(),
+            air: Airwaves::default(),
             reach: Reach::new(),
-            history: VecDeque::new(),
-            sent_now: 0,
             active: initially_flying(scenario),
             faults: FaultStep { radio_up: true, ..FaultStep::default() },
             sensor: ProximitySensor::of(scenario),
@@ -267,8 +260,7 @@ impl<'s> Simulation<'s> {
         }
         std::mem::swap(&mut self.world.current, &mut self.next);
         // The flight's radio starts afresh: nothing of the warm-up is on the air.
-        self.world.history.clear();
-        self.world.arriving.clear();
+        self.world.air.clear();
         for a in self.agents.iter_mut().flatten() {
             a.forget_own_estimate();
         }
@@ -327,7 +319,7 @@ impl<'s> Simulation<'s> {
             states: &w.current,
             uavs: &self.uavs,
             active: &w.active,
-            radio_sent: w.sent_now,
+            radio_sent: w.air.sent(),
             formation: w.slots.as_ref().map(|s| &*s.flown),
             reassigned: w.slots.as_ref().is_some_and(|s| s.at_k == w.k),
             successor: w.carried().map(|p| (w.lead.leader.index(), p)),
@@ -745,24 +737,11 @@ impl<'s> World<'s> {
             env: &self.env,
             faults: flight.then_some(&self.faults),
         };
-        let mut now = if self.history.len() > delay { self.history.pop_front() } else { None }.unwrap_or_default();
+        let mut now = self.air.buffer(delay);
         measurement::compose(self.scenario, &self.current, &sensors, (self.lead, self.parallel), &mut now);
         measurement::relays(self.scenario, &self.current, &self.active, (agents, self.lead.leader), t, &mut now);
-        self.sent_now = now.len();
-        if delay == 0 {
-            std::mem::swap(&mut self.arriving, &mut now);
-            self.history.push_back(now);
-            self.history.truncate(1);
-        } else {
-            self.history.push_back(now);
-            self.arriving.clear();
-            if self.history.len() == delay + 1 {
-                if let Some(front) = self.history.front() {
-                    self.arriving.extend_from_slice(front);
-                }
-            }
-        }
-        self.reach.rebuild(self.arriving.iter().map(|m| m.at), self.scenario.radio().range_m);
+        self.air.send(now, delay);
+        self.reach.rebuild(self.air.arriving().iter().map(|m| m.at), self.scenario.radio().range_m);
     }
 
     /// The read-only view of this step that the block phases share.
@@ -782,7 +761,7 @@ impl<'s> World<'s> {
             sensor: &self.sensor,
             active: &self.active,
             faults: &self.faults,
-            messages: &self.arriving,
+            messages: self.air.arriving(),
             reach: &self.reach,
             env: &self.env,
             lead: self.leading(),
@@ -849,8 +828,8 @@ mod tests {
         let mut sim = Simulation::new(&sc, RunOptions::default(), 1, 0);
         sim.step();
         let w = &sim.world;
-        assert_eq!(w.arriving.len(), 1);
-        let m = &w.arriving[0];
+        assert_eq!(w.air.arriving().len(), 1);
+        let m = &w.air.arriving()[0];
         assert_eq!(m.sender, 0);
         // The message says what UAV1 measured (20 m off), and the range is from where it was.
         let truth = sc.path().state_at(0.0, [0.0; 3]);

@@ -1,6 +1,7 @@
 //! The simulated world: the engine and what it simulates around the agents (onboard sensing,
 //! radio, wind and turbulence, per-UAV environment, faults in force).
 
+pub mod airwaves;
 pub mod engine;
 pub mod environment;
 pub mod faults;
