@@ -69,7 +69,7 @@ const WARMUP_DRAW_BASE: u64 = 1 << 62;
 type BlockSlices<'b> = (
     usize,
     (
-        ((&'b mut [UavStep], &'b mut [[f32; 6]]), ((&'b mut [Track], &'b mut [u8]), &'b mut [OwnEstimate])),
+        ((&'b mut [UavStep], &'b mut [[f32; 6]]), ((&'b mut [Track], &'b mut [u8]), &'b mut Vec<OwnEstimate>)),
         &'b mut Vec<(u32, Box<Avoidance>)>,
     ),
 );
@@ -93,7 +93,8 @@ pub struct FastSimulation<'s> {
     used: Vec<u8>,
     /// Each UAV's estimate of its own state (what it remembers only while the own-sensor check
     /// or filter is on: 8 bytes a UAV otherwise).
-    own: Vec<OwnEstimate>,
+    /// Per block (each empty while the check and the filter are off: nothing a UAV).
+    own: Vec<Vec<OwnEstimate>>,
     /// Collision avoidance's memory of the UAVs whose rule remembers a side, per block (few
     /// UAVs of a large swarm ever have one).
     avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
@@ -149,7 +150,12 @@ impl<'s> FastSimulation<'s> {
             active: vec![true; n],
             tracks: vec![Track::default(); n * c.capacity],
             used: vec![0; n],
-            own: vec![OwnEstimate::default(); n],
+            own: (0..n.div_ceil(BLOCK))
+                .map(|b| match c.own_estimate {
+                    true => vec![OwnEstimate::default(); BLOCK.min(n - b * BLOCK)],
+                    false => Vec::new(),
+                })
+                .collect(),
             avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
@@ -205,8 +211,7 @@ impl<'s> FastSimulation<'s> {
             + self.env.len() * std::mem::size_of::<UavEnv>()
             + self.reach.heap_bytes()
             + self.air.heap_bytes()
-            + self.own.len() * std::mem::size_of::<OwnEstimate>()
-            + self.own.iter().map(OwnEstimate::heap_bytes).sum::<usize>()
+            + self.own.iter().flatten().map(|o| std::mem::size_of::<OwnEstimate>() + o.heap_bytes()).sum::<usize>()
     }
 
     /// The origin of the reference points at step `k` (the navigator's path position).
@@ -239,7 +244,7 @@ impl<'s> FastSimulation<'s> {
         // The flight's radio starts afresh: nothing of the warm-up is on the air.
         self.air.clear();
         // The warm-up's inputs were not applied: what each UAV expected of itself is forgotten.
-        self.own.iter_mut().for_each(OwnEstimate::forget);
+        self.own.iter_mut().flatten().for_each(OwnEstimate::forget);
     }
 
     /// At a change of formation every follower flies its new slot on its new table from a
@@ -345,7 +350,10 @@ impl<'s> FastSimulation<'s> {
                 let owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
                 let at = avoid.iter().position(|a| a.0 as usize == i);
                 let mut kept = at.map(|p| avoid.swap_remove(p).1);
-                let u = update::update(&view, i, scratch, (owner, &mut own[o]), &mut kept);
+                // (Nothing to remember while the check and the filter are off.)
+                let mut none = OwnEstimate::default();
+                let own_i = own.get_mut(o).unwrap_or(&mut none);
+                let u = update::update(&view, i, scratch, (owner, own_i), &mut kept);
                 if let Some(k) = kept {
                     avoid.push((i as u32, k));
                 }
@@ -359,7 +367,7 @@ impl<'s> FastSimulation<'s> {
         if self.parallel {
             uavs.par_chunks_mut(BLOCK)
                 .zip(applied.par_chunks_mut(BLOCK))
-                .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).zip(own.par_chunks_mut(BLOCK)))
+                .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).zip(own.par_iter_mut()))
                 .zip(avoid.par_iter_mut())
                 .enumerate()
                 .for_each_init(|| Scratch::new(c, sc), block);
@@ -367,7 +375,7 @@ impl<'s> FastSimulation<'s> {
             let mut scratch = Scratch::new(c, sc);
             uavs.chunks_mut(BLOCK)
                 .zip(applied.chunks_mut(BLOCK))
-                .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).zip(own.chunks_mut(BLOCK)))
+                .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).zip(own.iter_mut()))
                 .zip(avoid.iter_mut())
                 .enumerate()
                 .for_each(|x| block(&mut scratch, x));
