@@ -368,10 +368,14 @@ pub fn run(args: &RunArgs) -> Result<ExitCode> {
     crate::scenarios::warn(&scenario, &source);
     let engine = crate::scenarios::engine(&scenario, &source)?;
     if args.print_scenario {
+        use proxform_scenario::resolved::{write_toml, WriteError};
         let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-        proxform_scenario::resolved::write_toml(&scenario, &mut out)
-            .and_then(|()| Ok(std::io::Write::flush(&mut out)?))
-            .context("cannot write the scenario as TOML")?;
+        match write_toml(&scenario, &mut out).and_then(|()| Ok(std::io::Write::flush(&mut out)?)) {
+            // A reader that stopped early (`| head`) ends the output, not the program with an
+            // error (`main`).
+            Err(WriteError::Io(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => return Err(e.into()),
+            written => written.context("cannot write the scenario as TOML")?,
+        }
         return Ok(ExitCode::SUCCESS);
     }
     let options = RunOptions { adjustment_enabled: !args.no_adjust, ..RunOptions::default() };

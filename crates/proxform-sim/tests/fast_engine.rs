@@ -252,6 +252,24 @@ fn the_engines_agree_over_a_delayed_radio() {
     // Twenty-four runs: with losses the figures of one run of 200 UAVs vary by ±15 % (eight
     // runs differed by 21 % on x by chance; 24 agree within 1-3 %).
     agree(&level, RunOptions::default(), 24);
+    // A delay near the track timeout (0.8 of 1 s) with 30 % of onboard detections lost: a
+    // radio-fed track's measurement lies up to timeout + delay steps back, where the fast
+    // engine must still know its reference point (it once did not, and its x errors grew by
+    // half: the independent tester's case).
+    let text = include_str!("../../../scenarios/paper-robust-loss30.toml")
+        .replacen("name = \"paper-robust-loss30\"", "name = \"late\"\nengine = \"fast\"", 1)
+        .replacen("duration_s = 100.0", "duration_s = 40.0", 1)
+        .replacen("broadcast_all = true", "beacons = [1]", 1)
+        .replacen("loss = 0.3", "loss = 0.0\ndelay_s = 0.8", 1);
+    let late = proxform_scenario::load::parse(&text, "late.toml").expect("valid");
+    assert_eq!((late.controller().track_timeout_s, late.radio().delay_steps), (1.0, 8));
+    let runs = 60;
+    let r = figures(&(0..runs).map(|k| reference(&late, RunOptions::default(), k)).collect::<Vec<_>>());
+    let f = figures(&(0..runs).map(|k| fast(&late, RunOptions::default(), k)).collect::<Vec<_>>());
+    for k in 0..3 {
+        assert!((r.rms[k] - f.rms[k]).abs() <= 0.05 * r.rms[k], "rms axis {k}: {r:?} vs {f:?}");
+        assert!((r.max[k] - f.max[k]).abs() <= 0.10 * r.max[k], "max axis {k}: {r:?} vs {f:?}");
+    }
 }
 
 #[test]

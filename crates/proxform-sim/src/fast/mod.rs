@@ -135,7 +135,10 @@ impl<'s> FastSimulation<'s> {
         let s0 = sc.initial()[nav];
         let start = [s0[X], s0[X + 1], s0[X + 2]];
         let p0 = sc.path().state_at(0.0, start);
-        let ring_len = ((c.filter.timeout_steps.max(c.coast_steps) + 3) as usize).next_power_of_two();
+        // The origins as far back as a track's measurement may lie: its timeout (or coasting)
+        // after its last report, which a delayed radio measured that much earlier still.
+        let oldest = c.filter.timeout_steps.max(c.coast_steps) + c.radio_delay_steps as i64;
+        let ring_len = ((oldest + 3) as usize).next_power_of_two();
         let run = RunKey::new(seed, run);
         let mut sim = Self {
             sc,

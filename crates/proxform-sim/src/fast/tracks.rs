@@ -230,7 +230,7 @@ impl Owner<'_> {
     /// The slot of `id`, or the one to (re)use for it: a new one while there is room, else the
     /// one measured longest ago (freed). `hint` is where to look first (neighbours are fed in
     /// the same order step after step, so the n-th fed is usually in slot n).
-    #[inline]
+    #[inline(always)]
     fn slot_for(&mut self, id: u32, k: i32, hint: usize) -> usize {
         let n = usize::from(*self.used);
         if hint < n && self.tracks[hint].is(id) {
@@ -396,10 +396,13 @@ impl<S: Fn(i32) -> [f64; 3]> StepTracks<'_, '_, S> {
         (t - f64::from(k0) * self.filter.dt, k0)
     }
 
-    /// Seconds from when slot `s`'s last report arrived to time `t`.
+    /// Seconds from slot `s`'s last measurement to time `t`, and from when that report
+    /// arrived.
     #[inline]
-    fn since_heard(&self, s: usize, t: f64) -> f64 {
-        self.since(s, t).0 - f64::from(self.owner.tracks[s].lag) * self.filter.dt
+    fn since_heard(&self, s: usize, t: f64) -> (f64, f64) {
+        let age = self.since(s, t).0;
+        let lag = self.owner.tracks[s].lag;
+        (age, if lag == 0 { age } else { age - f64::from(lag) * self.filter.dt })
     }
 
     /// Whether a state `h` seconds after its measurement is brought forward by the plan (past
@@ -432,7 +435,10 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
         // Measured `lag` steps ago (a delayed radio report): the track is updated at that step,
         // in the reference point's frame of then, unless it knows a later measurement (then it
         // only counts as heard now, as the reference's).
-        let lag = (obs.age_s / self.filter.dt).round().clamp(0.0, 127.0) as i32;
+        let lag = match obs.age_s > 0.0 {
+            true => (obs.age_s / self.filter.dt).round().clamp(0.0, 127.0) as i32,
+            false => 0,
+        };
         if lag > 0 {
             let k_obs = self.k - lag;
             if let Some(s) = self.owner.find(obs.id.0) {
@@ -475,8 +481,7 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
     }
     #[inline]
     fn coasting(&self, s: usize, now: f64, max_s: f64, max_age_s: f64) -> Option<UavId> {
-        let (age, _) = self.since(s, now);
-        let missing = self.since_heard(s, now);
+        let (age, missing) = self.since_heard(s, now);
         let id = self.owner.tracks[s].id()?;
         (missing >= SAME_INSTANT_S && missing <= max_s + SAME_INSTANT_S && age <= max_age_s + SAME_INSTANT_S)
             .then_some(UavId(id))
@@ -484,7 +489,7 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
 
     #[inline]
     fn missing(&self, s: usize, now: f64) -> f64 {
-        self.since_heard(s, now)
+        self.since_heard(s, now).1
     }
 
     // A phase of `proxform bench`'s instruction table: kept a function of its own.
@@ -503,7 +508,7 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
         let s = self.owner.find(id.0)?;
         let (age, k0) = self.since(s, now);
         let timeout = self.filter.timeout_steps as f64 * self.filter.dt;
-        let alive = self.since_heard(s, now) <= timeout + SAME_INSTANT_S;
+        let alive = self.since_heard(s, now).1 <= timeout + SAME_INSTANT_S;
         (alive && age <= max_age_s + SAME_INSTANT_S).then(|| (self.state_after(s, k0, 0.0), age.max(0.0)))
     }
 
