@@ -808,6 +808,7 @@ impl<T: Tracks> UavView<'_, T> {
 /// ([`crate::plan`]), coasts up to `track_timeout_s` at full weight: the plan is its path, so
 /// its track carried by the plan stays where it flies (a lost navigator: where its successor
 /// will fly once the loss is known, a timeout later; METHOD §3).
+#[inline(always)]
 fn coast(
     params: &ControllerParams,
     tracks: &impl Tracks,
