@@ -443,7 +443,9 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
             let k_obs = self.k - lag;
             if let Some(s) = self.owner.find(obs.id.0) {
                 let k0 = self.owner.measured_at(s, self.k);
-                if k0 > k_obs && self.k - k0 <= self.filter.timeout_steps as i32 {
+                // (However old the track: a later measurement is never replaced by an earlier
+                // one, which the record could not even place in time, ages being modulo 128.)
+                if k0 > k_obs {
                     self.owner.tracks[s].lag = (self.k - k0) as u8;
                     return self.state_after(s, k0, horizon_s + f64::from(self.k - k0) * self.filter.dt);
                 }
