@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use crate::assignment::{relabel, Reassignment};
-use crate::controller::{ControllerSetup, Decision, Outcome};
+use crate::controller::{ControllerSetup, Decision};
 use crate::dependency::DependencySet;
 use crate::error::ConfigError;
 use crate::formation::Formation;
@@ -231,26 +231,16 @@ impl Agent {
         let mut decision = self.controller.step(now_s, &own, heard);
         decision.own_suspect = suspect;
         let vehicle = self.controller.setup().vehicle();
-        if vehicle.takes_velocity_setpoints() {
-            // An adjustment is a new setpoint, chosen at the state the UAV believes it has;
-            // otherwise the autopilot flies on the last one.
-            if matches!(decision.outcome, Outcome::Adjusted { .. }) {
-                // (The box is allocated once and reused.)
-                match (vehicle.setpoint(&own, &decision.input, dt), self.setpoint.as_deref_mut()) {
-                    (Some(sp), Some(kept)) => *kept = sp,
-                    (sp, _) => self.setpoint = sp.map(Box::new),
-                }
-            }
-            decision.setpoint = self.setpoint.as_deref().copied();
+        // The autopilot of a vehicle flown by setpoints flies the last one it was given.
+        match (decision.take_setpoint(vehicle, &own, dt, self.setpoint.as_deref()), self.setpoint.as_deref_mut()) {
+            // (The box is allocated once and reused.)
+            (Some(sp), Some(kept)) => *kept = sp,
+            (sp, _) => self.setpoint = sp.map(Box::new),
         }
         let setup = self.controller.setup();
         if OwnEstimate::used(setup.params()) {
             // What the vehicle flies: its setpoint where it is flown by one.
-            let input = match &decision.setpoint {
-                Some(sp) => setup.vehicle().input_flying(&own, sp).unwrap_or(decision.input),
-                None => decision.input,
-            };
-            self.own.expect(setup, now_s, (&own, own_measured), &input);
+            self.own.expect(setup, now_s, (&own, own_measured), &decision.flown_input(setup.vehicle(), &own));
         }
         decision
     }
@@ -263,13 +253,7 @@ impl Agent {
     pub fn predict_period(&self, own: &State9, decision: Option<&Decision>) -> State9 {
         let setup = self.controller.setup();
         let (vehicle, dt) = (setup.vehicle(), setup.params().dt_s);
-        let input = match decision {
-            Some(d) => match &d.setpoint {
-                Some(sp) => vehicle.input_flying(own, sp).unwrap_or(d.input),
-                None => d.input,
-            },
-            None => crate::Input::zeros(),
-        };
+        let input = decision.map_or_else(crate::Input::zeros, |d| d.flown_input(vehicle, own));
         vehicle.predict(own, &input, dt)
     }
 

@@ -193,6 +193,36 @@ fn the_engines_agree_on_changes_of_formation() {
     assert!(r.iter().chain(&f).all(|s| s.pass), "every run passes");
 }
 
+/// A shipped scenario set to run on the fast engine.
+fn shipped_on_fast(text: &str, file: &str) -> Scenario {
+    let name = file.trim_end_matches(".toml");
+    let text = text.replacen(&format!("name = \"{name}\""), &format!("name = \"{name}\"\nengine = \"fast\""), 1);
+    let sc = proxform_scenario::load::parse(&text, file).expect("valid");
+    assert_eq!(engine_for(&sc), Ok(EngineKind::Fast), "{file}");
+    sc
+}
+
+#[test]
+fn the_engines_agree_on_every_vehicle() {
+    // The plant is one for both engines (`world::plant`): a fixed-wing echelon in a 30 km/h
+    // crosswind (it crabs, and a steady wind drifts it), and a multirotor V flying
+    // a circuit by velocity setpoints in wind and turbulence (its autopilot flies its last
+    // setpoint between adjustments, and its controller leads the turns by its lag).
+    let wing = shipped_on_fast(
+        include_str!("../../../scenarios/fixed-wing-echelon7-crosswind.toml"),
+        "fixed-wing-echelon7-crosswind.toml",
+    );
+    assert!(matches!(wing.vehicle(), proxform_core::VehicleModel::FixedWing(_)) && !wing.wind().is_calm());
+    let (a, _) = agree(&wing, RunOptions::default(), 12);
+    // Not vacuous: the wing adjusts often enough for its plant to matter.
+    assert!(a.adjusted > 0.01, "{a:?}");
+    let rotor =
+        shipped_on_fast(include_str!("../../../scenarios/multirotor-v12-circuit.toml"), "multirotor-v12-circuit.toml");
+    assert!(rotor.vehicle().takes_velocity_setpoints() && rotor.controller().turn_feedforward);
+    let (a, _) = agree(&rotor, RunOptions::default(), 12);
+    assert!(a.adjusted > 0.2 && a.model_error > 0.0, "{a:?}");
+}
+
 #[test]
 fn the_engines_agree_forming_from_scattered_starts() {
     // Two shipped forming flights: five followers scattered over a disc of 1 km (random per

@@ -1,7 +1,7 @@
 //! What one update period decided: held, adjusted (with the input) or alone.
 
-use crate::state::Input;
-use crate::vehicle::Setpoint;
+use crate::state::{Input, State9};
+use crate::vehicle::{Setpoint, VehicleModel};
 
 /// What the controller decided in one update period.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,6 +70,35 @@ impl Decision {
         sq.is_finite()
             && self.input.iter().all(|u| u.is_finite())
             && self.setpoint.is_none_or(|s| s.yaw_rad.is_finite() && s.velocity_mps.iter().all(|v| v.is_finite()))
+    }
+
+    /// Takes the setpoint that a vehicle flown by setpoints flies after this decision: a new one
+    /// when the controller adjusted, chosen at the state `own` the UAV believes it has (over a
+    /// period `dt`); otherwise `held`, the one its autopilot flies already. Sets
+    /// [`Self::setpoint`] and returns it (None for the vehicles flown by their inputs). Every
+    /// engine and agent keeps `held` from one period to the next.
+    pub fn take_setpoint(
+        &mut self,
+        vehicle: &VehicleModel,
+        own: &State9,
+        dt: f64,
+        held: Option<&Setpoint>,
+    ) -> Option<Setpoint> {
+        if !vehicle.takes_velocity_setpoints() {
+            return None;
+        }
+        self.setpoint = match self.outcome {
+            Outcome::Adjusted { .. } => vehicle.setpoint(own, &self.input, dt),
+            _ => held.copied(),
+        };
+        self.setpoint
+    }
+
+    /// The input the vehicle flies over the coming period from state `at`: what flies the
+    /// decision's setpoint from there (a vehicle flown by setpoints, whatever state its agent
+    /// believed when it chose it), else the decision's input.
+    pub fn flown_input(&self, vehicle: &VehicleModel, at: &State9) -> Input {
+        self.setpoint.and_then(|sp| vehicle.input_flying(at, &sp)).unwrap_or(self.input)
     }
 
     /// Nothing perceived: fly on (METHOD §6 step 8, §8).

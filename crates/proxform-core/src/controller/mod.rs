@@ -272,7 +272,7 @@ impl ProximityController {
             .with_carry(setup.carry(formation.frame));
         let avoidance = p.avoid_m.filter(|&d| d > 0.0).map(|d| Box::new(Avoidance::new(d, setup.braking_mps2)));
         let scratch = StepScratch::new(p, slots);
-        let trend = (p.turn_feedforward && setup.vehicle.setpoint_lag_s() > 0.0).then(Box::default);
+        let trend = setup.keeps_turn_trend().then(Box::default);
         Ok(Self {
             id,
             setup,

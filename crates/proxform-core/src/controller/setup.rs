@@ -99,6 +99,13 @@ impl ControllerSetup {
         &self.classifier
     }
 
+    /// Whether a UAV keeps the formation's turn trend from one period to the next
+    /// ([`super::TurnTrend`]): for a vehicle that lags its setpoints, with the turn
+    /// feed-forward on.
+    pub fn keeps_turn_trend(&self) -> bool {
+        self.params.turn_feedforward && self.vehicle.setpoint_lag_s() > 0.0
+    }
+
     /// The deceleration the stopping limit and collision avoidance count on (m/s²).
     pub fn braking_mps2(&self) -> f64 {
         self.braking_mps2

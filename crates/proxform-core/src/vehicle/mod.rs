@@ -437,6 +437,49 @@ impl VehicleModel {
         }
     }
 
+    /// The fastest the vehicle flies over the ground in calm air (m/s): the kinematic vehicle's
+    /// per-axis limits together, the fixed wing's top airspeed, the multirotor's top horizontal
+    /// speed with its faster vertical one.
+    pub fn top_speed_mps(&self) -> f64 {
+        match self {
+            VehicleModel::Kinematic(m) => {
+                let l = &m.limits;
+                (l.vx_min_mps.abs().max(l.vx_max_mps).powi(2) + l.vy_max_mps.powi(2) + l.vz_max_mps.powi(2)).sqrt()
+            }
+            VehicleModel::FixedWing(m) => m.max_speed_mps,
+            VehicleModel::Multirotor(m) => m.top_speed(),
+        }
+    }
+
+    /// Bounds on how fast each velocity component (world frame, m/s², calm air) and each
+    /// attitude angle (α, β, γ; rad/s) of the vehicle can change: the kinematic vehicle's rate
+    /// limits; for the fixed wing, its top speed turned at its fastest (the coordinated turn
+    /// of its steepest bank at stall speed, the rudder and the pitch rate together) plus its
+    /// thrust and gravity, and its roll, yaw and pitch rates; for the multirotor, its thrust
+    /// with the drag at its top speed, its tilt swung across in one attitude time constant
+    /// and its yaw rate. Wider than any change the vehicle flies (a track's rates are kept
+    /// within them).
+    pub fn rate_limits(&self, dt: f64) -> [f64; 6] {
+        match self {
+            VehicleModel::Kinematic(m) => {
+                let s = m.input_scale(dt);
+                std::array::from_fn(|k| s[k] / dt)
+            }
+            VehicleModel::FixedWing(m) => {
+                let bank = m.bank_max_rad.min((1.0 / m.load_factor_max).acos());
+                let turn = G * bank.tan() / m.stall_speed_mps + m.yaw_rate_max_radps;
+                let a = m.max_speed_mps * (turn + m.pitch_rate_max_radps) + m.accel_max_mps2 + G;
+                [a, a, a, m.pitch_rate_max_radps, turn, m.roll_rate_max_radps]
+            }
+            VehicleModel::Multirotor(m) => {
+                let v = m.top_speed();
+                let a = m.thrust_to_weight * G + (m.drag_linear_per_s + m.drag_quadratic_per_m * v) * v;
+                let tilt = 2.0 * m.tilt_max_rad / m.attitude_time_constant_s;
+                [a, a, a, tilt, m.yaw_rate_max_radps, tilt]
+            }
+        }
+    }
+
     /// Largest magnitude of each input in one step, used to normalise the input penalty.
     #[inline]
     pub fn input_scale(&self, dt: f64) -> Input {
@@ -451,6 +494,65 @@ impl VehicleModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_vehicle_changes_faster_than_its_rate_limits() {
+        // From states across each vehicle's envelope, under inputs at and between its per-step
+        // bounds: every velocity and attitude changes within `rate_limits` (which the fast
+        // engine's tracks keep their rates within), and not by far less (they are bounds of
+        // what the vehicle does, not numbers from elsewhere).
+        use crate::state::{ALPHA, BETA, GAMMA, VX};
+        let dt = 0.1;
+        let vehicles = [
+            VehicleModel::Kinematic(KinematicModel::default()),
+            VehicleModel::FixedWing(FixedWingModel::default()),
+            VehicleModel::Multirotor(MultirotorModel::default()),
+        ];
+        for v in vehicles {
+            let limits = v.rate_limits(dt);
+            let (slow, fast) = v.forward_speed_range();
+            let mut most = [0.0f64; 6];
+            for a in 0..5 {
+                for b in 0..4 {
+                    let mut x = State9::zeros();
+                    let speed = slow + (fast - slow) * f64::from(a) / 4.0;
+                    let heading = f64::from(b) * 1.3 - 2.0;
+                    let tilt = 0.3 * (f64::from(b) - 1.5) / 1.5;
+                    (x[VX], x[VX + 1]) = (speed * heading.cos(), speed * heading.sin());
+                    (x[ALPHA], x[BETA], x[GAMMA]) = (0.5 * tilt, heading, tilt);
+                    match v {
+                        VehicleModel::Kinematic(_) => (x[VX], x[VX + 1]) = (speed, 0.0),
+                        // Its velocity is its airspeed along its flight path.
+                        VehicleModel::FixedWing(_) => {
+                            let (sa, ca) = x[ALPHA].sin_cos();
+                            (x[VX], x[VX + 1], x[VX + 2]) =
+                                (speed * ca * heading.cos(), speed * ca * heading.sin(), speed * sa);
+                        }
+                        VehicleModel::Multirotor(_) => {}
+                    }
+                    let (lo, hi) = v.input_bounds(&x, dt);
+                    for m in 0..16u32 {
+                        let u = Input::from_fn(|j, _| if (m >> (j % 4)) & 1 == 1 { hi[j] } else { lo[j] });
+                        let next = v.propagate(&x, &u, dt);
+                        for k in 0..6 {
+                            let change = crate::state::difference_component(VX + k, next[VX + k], x[VX + k]) / dt;
+                            assert!(
+                                change.abs() <= limits[k] * (1.0 + 1e-9),
+                                "{v:?}: rate {k} {change} beyond {}",
+                                limits[k]
+                            );
+                            most[k] = most[k].max(change.abs());
+                        }
+                    }
+                }
+            }
+            // Velocities reach a tenth of their bound at least (the bounds are not loose by
+            // orders of magnitude).
+            for k in 0..3 {
+                assert!(most[k] > 0.1 * limits[k] / 8.0, "{v:?}: rate {k} at most {} of {}", most[k], limits[k]);
+            }
+        }
+    }
 
     #[test]
     fn only_decisions_near_what_the_vehicle_can_do_are_plausible() {

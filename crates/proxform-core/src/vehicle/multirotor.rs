@@ -294,6 +294,11 @@ impl MultirotorModel {
         self.propagate_in_wind(x, u, dt, [0.0; 3], [0.0; 3])
     }
 
+    /// Its top speed over the ground in calm air (m/s): horizontal and vertical together.
+    pub fn top_speed(&self) -> f64 {
+        self.max_speed_mps.hypot(self.climb_max_mps.max(self.descent_max_mps))
+    }
+
     /// `F·X`: position advances at the present velocity; velocity and attitude are kept.
     #[inline]
     pub fn hold(x: &State9, dt: f64) -> State9 {

@@ -17,9 +17,9 @@
 //! 3. per block of [`BLOCK`] UAVs, in parallel: **perceive** (areas, references, radio,
 //!    close-range detections from the true geometry), **measure** (noise drawn in bulk, only
 //!    for what was observed), **decide** (the controller on the tracks), **actuate** (the
-//!    actuation error);
-//! 4. **propagate**: every UAV through the kinematic vehicle in the air, carried by the wind,
-//!    in place;
+//!    plant's input for the decision, with the actuation error);
+//! 4. **propagate**: every UAV through its vehicle in the wind, in place (the reference
+//!    engine's plant, [`crate::world::plant`]: the same vehicles, the same navigator);
 //! 5. **measure**: the observers see the new states.
 //!
 //! Positions inside the controller are relative to each UAV's reference point, which moves
@@ -36,10 +36,11 @@ mod setup;
 mod tracks;
 mod update;
 
+use proxform_core::controller::TurnTrend;
 use proxform_core::controller::{relative_speed_bound, Avoidance};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
-use proxform_core::state::{ALPHA, VX, X};
+use proxform_core::state::{Input, VX, X};
 use proxform_core::State9;
 use proxform_scenario::Scenario;
 use rayon::prelude::*;
@@ -50,13 +51,15 @@ use crate::world::airwaves::Airwaves;
 use crate::world::environment::{self, EnvStep, UavEnv};
 use crate::world::measurement::Message;
 use crate::world::options::RunOptions;
+use crate::world::phases::Leading;
+use crate::world::plant;
 use crate::world::reach::Reach;
 use crate::world::sensing::ProximitySensor;
 use proxform_scenario::radio::RadioModel;
 use setup::Consts;
 pub use setup::{supports, Unsupported};
 use tracks::{Owner, Track};
-use update::{Scratch, View};
+use update::{Autopilot, Scratch, View};
 
 /// UAVs per block of the per-UAV phases.
 pub const BLOCK: usize = 256;
@@ -70,7 +73,7 @@ type BlockSlices<'b> = (
     usize,
     (
         ((&'b mut [UavStep], &'b mut [[f32; 6]]), ((&'b mut [Track], &'b mut [u8]), &'b mut Vec<OwnEstimate>)),
-        &'b mut Vec<(u32, Box<Avoidance>)>,
+        (&'b mut Vec<(u32, Box<Avoidance>)>, &'b mut Vec<Autopilot>),
     ),
 );
 
@@ -95,6 +98,9 @@ pub struct FastSimulation<'s> {
     /// or filter is on: 8 bytes a UAV otherwise).
     /// Per block (each empty while the check and the filter are off: nothing a UAV).
     own: Vec<Vec<OwnEstimate>>,
+    /// What each UAV's autopilot flies (its setpoint and turn trend), per block; empty where
+    /// the vehicle keeps neither.
+    autopilot: Vec<Vec<Autopilot>>,
     /// Collision avoidance's memory of the UAVs whose rule remembers a side, per block (few
     /// UAVs of a large swarm ever have one).
     avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
@@ -159,6 +165,12 @@ impl<'s> FastSimulation<'s> {
                     false => Vec::new(),
                 })
                 .collect(),
+            autopilot: (0..n.div_ceil(BLOCK))
+                .map(|b| match c.autopilot {
+                    true => vec![Autopilot::default(); BLOCK.min(n - b * BLOCK)],
+                    false => Vec::new(),
+                })
+                .collect(),
             avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
@@ -200,6 +212,7 @@ impl<'s> FastSimulation<'s> {
             + 2
             + c.capacity * std::mem::size_of::<Track>()
             + std::mem::size_of::<UavEnv>()
+            + if c.autopilot { std::mem::size_of::<Autopilot>() } else { 0 }
             + 32)
     }
 
@@ -215,6 +228,7 @@ impl<'s> FastSimulation<'s> {
             + self.reach.heap_bytes()
             + self.air.heap_bytes()
             + self.own.iter().flatten().map(|o| std::mem::size_of::<OwnEstimate>() + o.heap_bytes()).sum::<usize>()
+            + self.autopilot.iter().map(|a| a.len() * std::mem::size_of::<Autopilot>()).sum::<usize>()
     }
 
     /// The origin of the reference points at step `k` (the navigator's path position).
@@ -246,13 +260,16 @@ impl<'s> FastSimulation<'s> {
         self.uavs.iter_mut().for_each(|u| *u = UavStep::default());
         // The flight's radio starts afresh: nothing of the warm-up is on the air.
         self.air.clear();
-        // The warm-up's inputs were not applied: what each UAV expected of itself is forgotten.
+        // The warm-up's inputs were not applied: what each UAV expected of itself is forgotten,
+        // and its autopilot was given no setpoint.
         self.own.iter_mut().flatten().for_each(OwnEstimate::forget);
+        self.autopilot.iter_mut().flatten().for_each(|a| a.setpoint = None);
     }
 
     /// At a change of formation every follower flies its new slot on its new table from a
     /// fresh controller, as the reference's agents do ([`proxform_core::Agent`]): its tracks
-    /// restart from the next observations and avoidance remembers no side.
+    /// restart from the next observations, avoidance remembers no side and the turn trend
+    /// starts afresh (its autopilot flies on its setpoint).
     fn follow_schedule(&mut self, t: f64) {
         let stage = self.sc.schedule().stages().iter().rposition(|s| t >= s.at_s - 1e-9);
         if stage == self.stage {
@@ -262,6 +279,7 @@ impl<'s> FastSimulation<'s> {
         self.tracks.fill(Track::default());
         self.used.fill(0);
         self.avoid.iter_mut().for_each(Vec::clear);
+        self.autopilot.iter_mut().flatten().for_each(|a| a.trend = TurnTrend::default());
     }
 
     /// Index, radio and the per-UAV phases up to the applied inputs, for step `k`.
@@ -288,6 +306,7 @@ impl<'s> FastSimulation<'s> {
             used,
             own,
             avoid,
+            autopilot,
             grid,
             env,
             air,
@@ -317,6 +336,7 @@ impl<'s> FastSimulation<'s> {
             reach: &Reach::new(),
             env,
             warm,
+            adjust: self.options.adjustment_enabled,
             formation: sc.formation_at(t),
             dependencies: sc.dependencies_at(t),
         };
@@ -341,37 +361,39 @@ impl<'s> FastSimulation<'s> {
         let view = View { messages: air.arriving(), reach, ..view };
         let cap = c.capacity;
         let nav = c.nav;
-        let adjust = self.options.adjustment_enabled;
-        let block = |scratch: &mut Scratch, (b, (((uavs, applied), ((tracks, used), own)), avoid)): BlockSlices<'_>| {
-            for o in 0..uavs.len() {
-                let i = b * BLOCK + o;
-                if i == nav {
-                    uavs[o] = UavStep::default();
-                    applied[o] = [0.0; 6];
-                    continue;
+        let block =
+            |scratch: &mut Scratch,
+             (b, (((uavs, applied), ((tracks, used), own)), (avoid, pilots))): BlockSlices<'_>| {
+                for o in 0..uavs.len() {
+                    let i = b * BLOCK + o;
+                    if i == nav {
+                        uavs[o] = UavStep::default();
+                        applied[o] = [0.0; 6];
+                        continue;
+                    }
+                    let at = avoid.iter().position(|a| a.0 as usize == i);
+                    let mut remembered = at.map(|p| avoid.swap_remove(p).1);
+                    // (Nothing to remember while the check and the filter are off.)
+                    let mut none = OwnEstimate::default();
+                    let kept = update::Kept {
+                        tracks: Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] },
+                        own: own.get_mut(o).unwrap_or(&mut none),
+                        autopilot: pilots.get_mut(o),
+                        avoid: &mut remembered,
+                    };
+                    let u = update::update(&view, i, scratch, kept);
+                    if let Some(k) = remembered {
+                        avoid.push((i as u32, k));
+                    }
+                    uavs[o] = u.step;
+                    applied[o] = u.applied;
                 }
-                let owner = Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] };
-                let at = avoid.iter().position(|a| a.0 as usize == i);
-                let mut kept = at.map(|p| avoid.swap_remove(p).1);
-                // (Nothing to remember while the check and the filter are off.)
-                let mut none = OwnEstimate::default();
-                let own_i = own.get_mut(o).unwrap_or(&mut none);
-                let u = update::update(&view, i, scratch, (owner, own_i), &mut kept);
-                if let Some(k) = kept {
-                    avoid.push((i as u32, k));
-                }
-                uavs[o] = u.step;
-                applied[o] = if adjust { u.applied } else { [0.0; 6] };
-                if !adjust {
-                    uavs[o].model_error = [0.0; 9];
-                }
-            }
-        };
+            };
         if self.parallel {
             uavs.par_chunks_mut(BLOCK)
                 .zip(applied.par_chunks_mut(BLOCK))
                 .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).zip(own.par_iter_mut()))
-                .zip(avoid.par_iter_mut())
+                .zip(avoid.par_iter_mut().zip(autopilot.par_iter_mut()))
                 .enumerate()
                 .for_each_init(|| Scratch::new(c, sc), block);
         } else {
@@ -379,7 +401,7 @@ impl<'s> FastSimulation<'s> {
             uavs.chunks_mut(BLOCK)
                 .zip(applied.chunks_mut(BLOCK))
                 .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).zip(own.iter_mut()))
-                .zip(avoid.iter_mut())
+                .zip(avoid.iter_mut().zip(autopilot.iter_mut()))
                 .enumerate()
                 .for_each(|x| block(&mut scratch, x));
         }
@@ -401,31 +423,26 @@ impl<'s> FastSimulation<'s> {
         self.k += 1;
     }
 
-    /// Propagate: the navigator along its path, the followers through the kinematic vehicle in
-    /// the air, carried by the wind from its value now to its value at the step's end (as the
-    /// reference engine does). A function of its own: a phase of `proxform bench`'s
-    /// instruction table.
+    /// Propagate: the navigator along its path (set on it, or flown along it by its autopilot
+    /// where the vehicle is flown so), the followers through their vehicle in the wind (the
+    /// reference engine's plant, [`crate::world::plant`]). A function of its own: a phase of
+    /// `proxform bench`'s instruction table.
     #[inline(never)]
     fn propagate(&mut self) {
-        let k = self.k;
-        let dt = self.c.dt;
+        let sc = self.sc;
+        let t = self.k as f64 * self.c.dt;
         let nav = self.c.nav;
-        let nav_next = self.sc.path().state_at((k + 1) as f64 * dt, self.start);
+        let start = self.start;
         let env = &self.env;
+        let lead =
+            Leading { uav: nav, formation: sc.formation_at(t), take_over: None, moving: None, flown_outside: false };
         let propagate = |(i, (s, u)): (usize, (&mut State9, &[f32; 6]))| {
-            if i == nav {
-                *s = nav_next;
-                return;
-            }
-            // Calm air: both winds are zero, and each sum below is the vehicle's alone.
-            let wind = |a: usize| env.get(i).map_or((0.0, 0.0), |e| (e.wind_now[a], e.wind_next[a]));
-            for a in 0..3 {
-                let (ua, ur) = (f64::from(u[a]), f64::from(u[3 + a]));
-                let (w_now, w_next) = wind(a);
-                s[X + a] += dt * (s[VX + a] - w_now + 0.5 * ua) + 0.5 * dt * (w_now + w_next);
-                s[VX + a] += ua + (w_next - w_now);
-                s[ALPHA + a] += ur;
-            }
+            let e = env.get(i).copied().unwrap_or_default();
+            *s = match i == nav {
+                true if sc.navigator_flies() => lead.next(sc, start, (t, s), &e),
+                true => plant::on_path(sc, start, (self.k + 1) as f64 * self.c.dt),
+                false => plant::next_state(sc, s, &Input::from_fn(|a, _| f64::from(u[a])), &e),
+            };
         };
         if self.parallel {
             self.states.par_iter_mut().zip(self.applied.par_iter()).enumerate().for_each(propagate);

@@ -2,7 +2,7 @@
 //! with the reference engine) and the constants every UAV's update reads.
 
 use proxform_core::state::VX;
-use proxform_core::{Method, PredictorKind, VehicleModel};
+use proxform_core::{Method, PredictorKind};
 use proxform_scenario::wind::Wind;
 use proxform_scenario::Scenario;
 
@@ -18,15 +18,14 @@ pub struct Unsupported(pub String);
 /// runs (the robust fusion, the horizon, separation keeping, the stopping limit, collision
 /// avoidance, the turn feed-forward, every formation frame) but what its records or its world
 /// cannot represent: its tracks are α-β filters that keep no report's source (no other
-/// predictor, no relative sensing), and its world flies the kinematic vehicle (which follows
-/// its setpoints at once, so no UAV keeps a turn trend from step to step) with measurement
-/// noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
+/// predictor, no relative sensing), and its world flies every vehicle (the plant written once
+/// for both engines, [`crate::world::plant`]; a UAV flown by setpoints keeps its setpoint and
+/// its turn trend from step to step) with measurement noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
 /// (steady, gusts, turbulence), the position fix's bias, changes of formation (every UAV at
 /// once, at the change's time), scattered starts (the reference's own placement) and the
 /// own-sensor check and filter (each UAV's [`proxform_core::own_estimate::OwnEstimate`]), and
 /// a delayed radio (the reference's own delay line; its tracks updated at a report's
-/// measurement). Faults, slot re-assignment, relays, the fixed wing and the multirotor stay
-/// with the reference engine.
+/// measurement). Faults, slot re-assignment and relays stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let radio = sc.radio();
@@ -36,10 +35,8 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 11] = [
+    let checks: [(bool, &str); 9] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
-        (!matches!(sc.vehicle(), VehicleModel::FixedWing(_)), "the fixed-wing vehicle (vehicle.model)"),
-        (!matches!(sc.vehicle(), VehicleModel::Multirotor(_)), "the multirotor (vehicle.model)"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (sc.faults().is_empty(), "faults"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
@@ -107,9 +104,9 @@ pub struct Consts {
     pub sigma: [f32; 9],
     /// Collision avoidance: distance (m) and deceleration (m/s²).
     pub avoid: Option<(f64, f64)>,
-    /// Per-step input limits (rate·Δt).
-    pub scale: [f64; 6],
-    pub actuation_error: f64,
+    /// Each UAV keeps what its autopilot flies ([`super::update::Autopilot`]): a vehicle
+    /// flown by setpoints, or one whose controller keeps the formation's turn trend.
+    pub autopilot: bool,
     /// The own-sensor check or the own-state filter is on: each UAV keeps its
     /// [`proxform_core::own_estimate::OwnEstimate`].
     pub own_estimate: bool,
@@ -124,7 +121,6 @@ impl Consts {
     pub fn new(sc: &Scenario) -> Self {
         let p = sc.controller();
         let setup = sc.agents().controller().clone();
-        let VehicleModel::Kinematic(kin) = sc.vehicle() else { unreachable!("checked by supports") };
         let PredictorKind::AlphaBeta { alpha, beta } = p.predictor else { unreachable!("checked by supports") };
         let dt = p.dt_s;
         let n = sc.len();
@@ -132,11 +128,10 @@ impl Consts {
         let range = p.areas.sensing_range_m;
         let steps = |s: f64| (s / dt + 1e-6).floor() as i64;
         let timeout_steps = steps(p.track_timeout_s);
-        let scale_v = kin.input_scale(dt);
-        let l = &kin.limits;
+        let vehicle = sc.vehicle();
+        let rates = vehicle.rate_limits(dt);
         let sigma = sc.noise().sigma();
-        let fastest = (l.vx_max_mps.powi(2) + l.vy_max_mps.powi(2) + l.vz_max_mps.powi(2)).sqrt();
-        let wind = wind_acceleration(sc.wind(), fastest, dt);
+        let wind = wind_acceleration(sc.wind(), vehicle.top_speed_mps(), dt);
         let radio = sc.radio();
         let beacons: Vec<usize> = sc.beacons().iter().map(|b| b.index()).filter(|&j| j < n).collect();
         let all = if radio.broadcast_all { n } else { 0 };
@@ -155,7 +150,7 @@ impl Consts {
                 p.coast_accel_s,
                 Filter::rate_span(
                     std::array::from_fn(|c| sigma[VX + c]),
-                    std::array::from_fn(|c| scale_v[c] / dt + if c < 3 { wind } else { 0.0 }),
+                    std::array::from_fn(|c| rates[c] + if c < 3 { wind } else { 0.0 }),
                     dt,
                 ),
             ),
@@ -164,8 +159,7 @@ impl Consts {
             carry: setup.carry(sc.formation().frame),
             sigma: std::array::from_fn(|k| sigma[k] as f32),
             avoid: p.avoid_m.filter(|&d| d > 0.0).map(|d| (d, setup.braking_mps2())),
-            scale: std::array::from_fn(|a| scale_v[a]),
-            actuation_error: sc.actuation_error(),
+            autopilot: vehicle.takes_velocity_setpoints() || setup.keeps_turn_trend(),
             own_estimate: proxform_core::own_estimate::OwnEstimate::used(p),
             radio_delay_steps: radio.delay_steps as usize,
             broadcasters,

@@ -9,21 +9,23 @@
 //! ([`super::tracks::StepTracks`]). Collision avoidance's memory is kept per UAV only while it
 //! remembers a side.
 
-use proxform_core::controller::{Avoidance, Decision, StepScratch, UavView};
+use proxform_core::controller::{Avoidance, Decision, StepScratch, TurnTrend, UavView};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
-use proxform_core::state::{State9, ALPHA, VX, X};
-use proxform_core::{Observation, ObservationSource, Outcome, UavId};
+use proxform_core::state::{State9, X};
+use proxform_core::vehicle::Setpoint;
+use proxform_core::{Observation, ObservationSource, UavId};
 use proxform_scenario::radio::RadioModel;
 use proxform_scenario::Scenario;
 
 use super::setup::Consts;
 use super::tracks::{Owner, StepTracks};
-use crate::measure::observer::{StepOutcome, UavStep};
+use crate::measure::observer::UavStep;
 use crate::random::bulk;
 use crate::random::{RunKey, Source};
 use crate::world::measurement::Message;
 use crate::world::options::NeighbourSearch;
+use crate::world::plant;
 use crate::world::sensing::{Link, Picks, ProximitySensor, Scene, SensorScratch};
 
 /// Counter offset of the dropout draws in a UAV's sensing stream (the noise uses the low ones).
@@ -60,6 +62,8 @@ pub struct View<'a> {
     pub env: &'a [crate::world::environment::UavEnv],
     /// The warm-up: an ideal link (no dropout but the references' own, no loss).
     pub warm: bool,
+    /// The controller's inputs are applied (`RunOptions::adjustment_enabled`).
+    pub adjust: bool,
     /// The formation in force and every UAV's dependency table in it (a
     /// `[[formation.change]]`'s from its time on).
     pub formation: &'a std::sync::Arc<proxform_core::Formation>,
@@ -151,27 +155,40 @@ pub struct Update {
     pub step: UavStep,
 }
 
+/// What a UAV's autopilot flies from one step to the next, kept per UAV only where the
+/// vehicle needs it (a vehicle flown by setpoints; [`Consts::autopilot`]): the setpoint of its
+/// last adjustment and the formation's turn trend its controller leads it by.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Autopilot {
+    pub setpoint: Option<Setpoint>,
+    pub trend: TurnTrend,
+}
+
+/// What follower `i` keeps from one step to the next: its tracks, its own estimate, its
+/// autopilot's setpoint and turn trend (None where the vehicle keeps neither).
+pub struct Kept<'k> {
+    pub tracks: Owner<'k>,
+    pub own: &'k mut OwnEstimate,
+    pub autopilot: Option<&'k mut Autopilot>,
+    pub avoid: &'k mut Option<Box<Avoidance>>,
+}
+
 /// The update of follower `i`.
-pub fn update(
-    v: &View<'_>,
-    i: usize,
-    s: &mut Scratch,
-    (tracks, own_estimate): (Owner<'_>, &mut OwnEstimate),
-    kept: &mut Option<Box<Avoidance>>,
-) -> Update {
+pub fn update(v: &View<'_>, i: usize, s: &mut Scratch, kept: Kept<'_>) -> Update {
     let c = v.c;
+    let sc = v.sc;
     let radio_used = perceive(v, i, s);
     let measured = own_measurement(v, i);
     // The own-sensor check and filter, as the reference's agents run them (on the absolute
     // reading; the warm-up's inputs are not applied, so what it expected is forgotten after).
-    let setup = v.sc.agents().controller();
+    let setup = sc.agents().controller();
     let t = f64::from(v.k) * c.dt;
     let (own_abs, own_suspect) = match c.own_estimate {
-        true => own_estimate.estimate(setup.params(), t, &measured),
+        true => kept.own.estimate(setup.params(), t, &measured),
         false => (measured, false),
     };
     // Positions relative to the reference point R_i(k) = O(k) + A_i, A_i = p_i(0) − O(0).
-    let p0 = &v.sc.initial()[i];
+    let p0 = &sc.initial()[i];
     let r_i = [
         v.origin[0] + (p0[0] - v.origin0[0]),
         v.origin[1] + (p0[1] - v.origin0[1]),
@@ -182,41 +199,42 @@ pub fn update(
         own[k] -= r_i[k];
     }
     build_observations(v, i, s, &r_i);
-    let d = decide(v, i, (&own, r_i), s, tracks, kept);
+    let mut autopilot = kept.autopilot;
+    let trend = autopilot.as_deref_mut().map(|a| &mut a.trend).filter(|_| setup.keeps_turn_trend());
+    let mut d = decide(v, i, (&own, r_i), s, (kept.tracks, trend), kept.avoid);
+    // The autopilot of a vehicle flown by setpoints flies the last one it was given.
+    if let Some(a) = autopilot {
+        a.setpoint = d.take_setpoint(sc.vehicle(), &own_abs, c.dt, a.setpoint.as_ref());
+    }
     if c.own_estimate {
-        own_estimate.expect(setup, t, (&own_abs, &measured), &d.input);
+        kept.own.expect(setup, t, (&own_abs, &measured), &d.flown_input(sc.vehicle(), &own_abs));
     }
     // The robust fusion's count of the neighbours it left out, as the reference records it.
-    let mut step = UavStep { radio_used, isolated: d.isolated, own_suspect, ..UavStep::default() };
-    let outcome = d.outcome;
-    if matches!(outcome, Outcome::Alone) {
-        step.outcome = Some(StepOutcome::Alone);
-        return Update { applied: [0.0; 6], step };
+    let mut step = UavStep {
+        radio_used,
+        isolated: d.isolated,
+        own_suspect,
+        outcome: Some(d.outcome.into()),
+        effort: plant::effort(sc, &d.input),
+        ..UavStep::default()
+    };
+    // The plant's input at the true state, with the actuation error drawn from the UAV's own
+    // stream, and the model error that caused.
+    let truth = &v.states[i];
+    let commanded = plant::commanded(sc, truth, Some(&d), v.adjust);
+    let key = bulk::key(&v.run, i as u64, Source::Actuation, v.draw_step);
+    let mut a = 0;
+    let draw = || {
+        a += 1;
+        2.0 * bulk::uniform(key, a - 1) - 1.0
+    };
+    let applied = plant::actuated(sc, commanded, Some(&d), v.adjust, draw);
+    if applied != commanded {
+        let e = v.env.get(i).copied().unwrap_or_default();
+        let next = plant::next_state(sc, truth, &applied, &e);
+        step.model_error = plant::model_error(sc, truth, (&applied, &commanded), &next, &e);
     }
-    let input: [f64; 6] = std::array::from_fn(|a| d.input[a]);
-    step.outcome = Some(outcome.into());
-    step.effort = (0..6).map(|a| (input[a] / c.scale[a]).powi(2)).sum::<f64>().sqrt() as f32;
-    let adjusted = matches!(outcome, Outcome::Adjusted { .. });
-    let mut applied = input;
-    if adjusted && c.actuation_error > 0.0 {
-        let key = bulk::key(&v.run, i as u64, Source::Actuation, v.draw_step);
-        for a in 0..6 {
-            let e = 2.0 * bulk::uniform(key, a as u64) - 1.0;
-            applied[a] = input[a] * (1.0 + c.actuation_error * e);
-        }
-        // The model error: the applied input's effect on the state minus the commanded one's.
-        for a in 0..3 {
-            let du = applied[a] - input[a];
-            step.model_error[X + a] = (0.5 * c.dt * du) as f32;
-            step.model_error[VX + a] = du as f32;
-            step.model_error[ALPHA + a] = (applied[3 + a] - input[3 + a]) as f32;
-        }
-    }
-    let mut out = [0.0f32; 6];
-    for a in 0..6 {
-        out[a] = applied[a] as f32;
-    }
-    Update { applied: out, step }
+    Update { applied: std::array::from_fn(|a| applied[a] as f32), step }
 }
 
 /// The fast engine's [`Picks`]: the sensor's picks noted for their noise to be drawn in bulk
@@ -393,7 +411,7 @@ fn decide(
     i: usize,
     (own, r_i): (&State9, [f64; 3]),
     s: &mut Scratch,
-    tracks: Owner<'_>,
+    (tracks, trend): (Owner<'_>, Option<&mut TurnTrend>),
     kept: &mut Option<Box<Avoidance>>,
 ) -> Decision {
     let c = v.c;
@@ -422,8 +440,8 @@ fn decide(
         navigator: Some(sc.navigator()),
         tracks: &mut store,
         avoidance,
-        // Kept only for a vehicle that lags its setpoints, which this engine does not fly.
-        trend: None,
+        // Kept for a vehicle that lags its setpoints.
+        trend,
     };
     let d = uav.step(step, f64::from(v.k) * c.dt, own, obs);
     // Avoidance's memory: kept while it remembers, taken from the thread's copy when it begins.

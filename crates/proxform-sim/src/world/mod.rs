@@ -9,6 +9,7 @@ pub mod measurement;
 pub mod options;
 pub mod phases;
 pub mod placement;
+pub mod plant;
 pub mod radio;
 pub mod reach;
 pub mod remote;

@@ -7,7 +7,7 @@
 use std::ops::Range;
 
 use proxform_core::state::{self, Input, State9};
-use proxform_core::{Agent, Decision, Observation, ObservationSource, Outcome};
+use proxform_core::{Agent, Decision, Observation, ObservationSource};
 use proxform_scenario::radio::RadioModel;
 use proxform_scenario::Scenario;
 use rand::RngExt;
@@ -17,6 +17,7 @@ use super::environment::UavEnv;
 use super::faults::FaultStep;
 use super::measurement::{Message, OwnSensors};
 use super::options::RunOptions;
+use super::plant;
 use super::remote::Sensed;
 use super::sensing::{Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
 use crate::measure::observer::UavStep;
@@ -118,7 +119,7 @@ impl BlockScratch {
 /// Who leads the formation this step: the navigator, or its successor flying its own slot of
 /// the formation flown (indexed by UAV) along the navigator's path, from its take-over.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Leading<'a> {
+pub(crate) struct Leading<'a> {
     pub uav: usize,
     pub formation: &'a proxform_core::Formation,
     pub take_over: Option<proxform_core::succession::TakeOver>,
@@ -131,13 +132,27 @@ pub(super) struct Leading<'a> {
 
 impl Leading<'_> {
     /// The leader's target at `t`.
-    pub(super) fn target(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
+    pub(crate) fn target(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
         let slot = self.slot(sc, start, t);
         self.take_over.map_or(slot, |k| k.target(t, &slot))
     }
 
+    /// Its next state from `me` at `t`: its autopilot flies it toward its target (the
+    /// navigator along its path; a successor to its own slot on it) through its vehicle and
+    /// the wind where it is (`e`).
+    pub(crate) fn next(&self, sc: &Scenario, start: [f64; 3], (t, me): (f64, &State9), e: &UavEnv) -> State9 {
+        let autopilot = sc.agents().controller();
+        let path = |s| self.target(sc, start, t + s);
+        let u = if self.uav == sc.navigator().index() {
+            autopilot.input_along_path(me, path)
+        } else {
+            autopilot.input_to_slot_on_path(me, path)
+        };
+        sc.vehicle().propagate_in_wind(me, &u, sc.dt_s(), e.wind_now.into(), e.wind_next.into())
+    }
+
     /// Its slot on the path at `t`, on its way there when it moves to a new one.
-    pub(super) fn slot(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
+    pub(crate) fn slot(&self, sc: &Scenario, start: [f64; 3], t: f64) -> State9 {
         let slot = slot_on_path(sc, self.formation, start, self.uav, t);
         self.moving.map_or(slot, |m| m.target(t, &slot))
     }
@@ -300,41 +315,20 @@ impl StepContext<'_> {
         }
     }
 
-    /// Actuate: the input each follower applies, its command scaled by `1 + ε` per component
-    /// (the actuation error) when it adjusted.
+    /// Actuate: the input each follower applies, its command with the actuation error
+    /// ([`plant::actuated`]) when it adjusted.
     fn actuate(&self, first: usize, blk: &mut Block<'_>) {
-        let sc = self.scenario;
         let s = &mut *blk.scratch;
+        let adjust = self.options.adjustment_enabled;
         s.applied.clear();
         for (b, d) in s.decisions.iter().enumerate() {
-            let truth = &self.scene.states[first + b];
-            let commanded = self.plant_input(truth, d.as_ref());
-            let adjusted = d.is_some_and(|d| matches!(d.outcome, Outcome::Adjusted { .. }));
-            let applied = if adjusted && sc.actuation_error() > 0.0 {
-                let mut rng = self.key.rng((first + b) as u64, Source::Actuation);
-                let mut error = || sc.actuation_error() * rng.random_range(-1.0..=1.0);
-                match d.and_then(|d| d.setpoint.map(|_| d.input)) {
-                    // The error scales the change the agent asked for, on top of its setpoint.
-                    Some(asked) if self.options.adjustment_enabled => commanded + asked.map(|u| u * error()),
-                    _ => commanded.map(|u| u * (1.0 + error())),
-                }
-            } else {
-                commanded
+            let commanded = plant::commanded(self.scenario, &self.scene.states[first + b], d.as_ref(), adjust);
+            let mut rng = None;
+            let draw = || {
+                let rng = rng.get_or_insert_with(|| self.key.rng((first + b) as u64, Source::Actuation));
+                rng.random_range(-1.0..=1.0)
             };
-            s.applied.push(applied);
-        }
-    }
-
-    /// The input the plant is given at its true state `truth` for decision `d`: none without a
-    /// decision or with adjustment off; for a vehicle flown by setpoints, what flies the
-    /// decision's setpoint from the state the UAV has (whatever its agent believed); else the
-    /// decision's input.
-    fn plant_input(&self, truth: &State9, d: Option<&Decision>) -> Input {
-        match d {
-            Some(d) if self.options.adjustment_enabled => {
-                d.setpoint.and_then(|sp| self.scenario.vehicle().input_flying(truth, &sp)).unwrap_or(d.input)
-            }
-            _ => Input::zeros(),
+            s.applied.push(plant::actuated(self.scenario, commanded, d.as_ref(), adjust, draw));
         }
     }
 
@@ -366,24 +360,12 @@ impl StepContext<'_> {
                 continue;
             }
             if i == self.lead.uav && (i != nav || sc.navigator_flies() || self.lead.flown_outside) {
-                // Its autopilot tracks the path (the successor: its own slot on it, from where
-                // it took over) through the vehicle and the wind.
-                let autopilot = sc.agents().controller();
-                let path = |s| self.lead.target(sc, self.start, self.t + s);
-                let u = if i == nav {
-                    autopilot.input_along_path(me, path)
-                } else {
-                    autopilot.input_to_slot_on_path(me, path)
-                };
-                *next = sc.vehicle().propagate_in_wind(me, &u, dt, e.wind_now.into(), e.wind_next.into());
+                *next = self.lead.next(sc, self.start, (self.t, me), &e);
                 *aux = UavStep::default();
                 continue;
             }
             let Some(decision) = s.decisions[b].filter(|_| i != nav) else {
-                *next = sc.path().state_at(self.t + dt, self.start);
-                if !sc.wind().is_calm() {
-                    *next = sc.vehicle().on_path_in_wind(next, sc.wind().common(self.t + dt).into());
-                }
+                *next = plant::on_path(sc, self.start, self.t + dt);
                 aux.outcome = None;
                 aux.model_error = [0.0; 9];
                 aux.isolated = 0;
@@ -391,37 +373,13 @@ impl StepContext<'_> {
                 continue;
             };
             let applied = s.applied[b];
-            let commanded = self.plant_input(me, Some(&decision));
-            // The model error is zero when the input was applied as commanded: the plant is
-            // then propagated once.
-            let exact = applied == commanded;
-            let vehicle = sc.vehicle();
-            let model_error = if sc.wind().is_calm() {
-                *next = vehicle.propagate(me, &applied, dt);
-                if exact {
-                    State9::zeros()
-                } else {
-                    state::difference(next, &vehicle.propagate(me, &commanded, dt))
-                }
-            } else {
-                // The vehicle moves through the air.
-                let (w_now, w_next) = (e.wind_now.into(), e.wind_next.into());
-                *next = vehicle.propagate_in_wind(me, &applied, dt, w_now, w_next);
-                if exact {
-                    State9::zeros()
-                } else {
-                    state::difference(next, &vehicle.propagate_in_wind(me, &commanded, dt, w_now, w_next))
-                }
-            };
-            aux.model_error = std::array::from_fn(|k| model_error[k] as f32);
+            let commanded = plant::commanded(sc, me, Some(&decision), self.options.adjustment_enabled);
+            *next = plant::next_state(sc, me, &applied, &e);
+            aux.model_error = plant::model_error(sc, me, (&applied, &commanded), next, &e);
             aux.outcome = Some(decision.outcome.into());
             aux.isolated = decision.isolated;
             aux.own_suspect = decision.own_suspect;
-            let scale = vehicle.input_scale(dt);
-            aux.effort = (0..vehicle.n_inputs())
-                .map(|j| if scale[j] > 0.0 { (decision.input[j] / scale[j]).powi(2) } else { 0.0 })
-                .sum::<f64>()
-                .sqrt() as f32;
+            aux.effort = plant::effort(sc, &decision.input);
         }
     }
 
