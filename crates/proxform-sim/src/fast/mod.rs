@@ -436,12 +436,13 @@ impl<'s> FastSimulation<'s> {
         let env = &self.env;
         let lead =
             Leading { uav: nav, formation: sc.formation_at(t), take_over: None, moving: None, flown_outside: false };
+        let calm = UavEnv::default();
         let propagate = |(i, (s, u)): (usize, (&mut State9, &[f32; 6]))| {
-            let e = env.get(i).copied().unwrap_or_default();
+            let e = env.get(i).unwrap_or(&calm);
             *s = match i == nav {
-                true if sc.navigator_flies() => lead.next(sc, start, (t, s), &e),
+                true if sc.navigator_flies() => lead.next(sc, start, (t, s), e),
                 true => plant::on_path(sc, start, (self.k + 1) as f64 * self.c.dt),
-                false => plant::next_state(sc, s, &Input::from_fn(|a, _| f64::from(u[a])), &e),
+                false => plant::next_state(sc, s, &Input::from_fn(|a, _| f64::from(u[a])), e),
             };
         };
         if self.parallel {
