@@ -336,15 +336,13 @@ impl ProximityController {
     /// relative, before a fix).
     pub fn navigator_report(&self, now: f64) -> Option<NavigatorReport> {
         let navigator = self.navigator?;
-        let max_age_s = relay_max_age_s(&self.setup.params, &self.tracks);
+        let (mut state, age_s) = navigator_track(&self.setup.params, &self.tracks, navigator, now)?;
         if !self.setup.params.relative_sensing {
-            let (state, age_s) = self.tracks.report(navigator, now, max_age_s)?;
             return Some(NavigatorReport { state, age_s, relative: false });
         }
         // The track at its last measurement, less the UAV's own position now (its last fix, in
         // whose frame its tracks are, carried to now at the fix's velocity).
         let fix = self.own_frame.as_deref()?;
-        let (mut state, age_s) = self.tracks.report(navigator, now, max_age_s)?;
         let h = now - fix.t;
         for k in 0..3 {
             state[X + k] -= fix.pos[k] + fix.vel[k] * h;
@@ -825,6 +823,20 @@ fn coast(
         return within(params.track_timeout_s).then_some((id, 1.0));
     }
     within(params.coast_s).then(|| (id, params.coasting_weight(missing)))
+}
+
+/// What a UAV whose tracks are `tracks` forwards of `navigator` at `now`
+/// (`radio.relay_navigator`): its track's filtered state at its last measurement (in the
+/// tracks' frame) and that measurement's age (s); None when the navigator is not tracked (heard
+/// within the track timeout, measured within [`relay_max_age_s`]). What every engine's relays
+/// carry ([`ProximityController::navigator_report`] for the reference's agents).
+pub fn navigator_track(
+    params: &ControllerParams,
+    tracks: &impl Tracks,
+    navigator: UavId,
+    now: f64,
+) -> Option<(State9, f64)> {
+    tracks.report(navigator, now, relay_max_age_s(params, tracks))
 }
 
 /// How old what a UAV forwards of the navigator may be (s): `relay_max_age_s` where the plan

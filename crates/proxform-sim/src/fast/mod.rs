@@ -13,7 +13,8 @@
 //!    wind, bias and radio channel over the step, by the reference engine's own pass
 //!    ([`crate::world::environment`]);
 //! 1. **index**: the neighbour grid over the positions;
-//! 2. **radio**: the broadcasters' messages (their own measurements), composed once;
+//! 2. **radio**: the broadcasters' messages (their own measurements), composed once, and
+//!    with `relay_navigator` each follower's relay of its track of the navigator;
 //! 3. per block of [`BLOCK`] UAVs, in parallel: **perceive** (areas, references, radio,
 //!    close-range detections from the true geometry), **measure** (noise drawn in bulk, only
 //!    for what was observed), **decide** (the controller on the tracks), **actuate** (the
@@ -142,9 +143,9 @@ impl<'s> FastSimulation<'s> {
         let start = [s0[X], s0[X + 1], s0[X + 2]];
         let p0 = sc.path().state_at(0.0, start);
         // The origins as far back as a track's measurement may lie: its timeout (or coasting)
-        // after its last report, which a delayed radio measured that much earlier still.
-        let oldest = c.filter.timeout_steps.max(c.coast_steps) + c.radio_delay_steps as i64;
-        let ring_len = ((oldest + 3) as usize).next_power_of_two();
+        // after its last report, which a delayed radio or a relay measured that much earlier
+        // still.
+        let ring_len = ((setup::oldest_steps(sc).ceil() as usize) + 3).next_power_of_two();
         let run = RunKey::new(seed, run);
         let mut sim = Self {
             sc,
@@ -355,6 +356,27 @@ impl<'s> FastSimulation<'s> {
                 at: [s[X], s[X + 1], s[X + 2]],
                 relative: false,
             });
+        }
+        // Relays: every follower forwards what its tracks know of the navigator, in the order
+        // of the UAVs (as the reference's agents).
+        if sc.radio().relay_navigator {
+            let cap = c.capacity;
+            let relays = |(b, (tracks, used)): (usize, (&mut [Track], &mut [u8]))| -> Vec<Message> {
+                (0..used.len())
+                    .filter(|&o| b * BLOCK + o != c.nav)
+                    .filter_map(|o| {
+                        let (t, u) = (&mut tracks[o * cap..(o + 1) * cap], &mut used[o]);
+                        update::relay(&view, b * BLOCK + o, Owner { tracks: t, used: u })
+                    })
+                    .collect()
+            };
+            let blocks: Vec<Vec<Message>> = match self.parallel {
+                true => {
+                    tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).enumerate().map(relays).collect()
+                }
+                false => tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).enumerate().map(relays).collect(),
+            };
+            messages.extend(blocks.into_iter().flatten());
         }
         air.send(messages, delay);
         reach.rebuild(air.arriving().iter().map(|m| m.at), sc.radio().range_m);

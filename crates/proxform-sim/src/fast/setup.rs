@@ -25,28 +25,27 @@ pub struct Unsupported(pub String);
 /// once, at the change's time), scattered starts (the reference's own placement) and the
 /// own-sensor check and filter (each UAV's [`proxform_core::own_estimate::OwnEstimate`]), and
 /// a delayed radio (the reference's own delay line; its tracks updated at a report's
-/// measurement). Faults, slot re-assignment and relays stay with the reference engine.
+/// measurement), and relays of the navigator (each follower's from its records). Faults and
+/// slot re-assignment stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
-    let radio = sc.radio();
     let tracks = p.areas.areas + max_refs(sc);
     let too_many = format!(
         "more than {MAX_TRACKS} areas and main references of a UAV ({} areas and up to {} main references)",
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 9] = [
+    let checks: [(bool, &str); 8] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
         (sc.faults().is_empty(), "faults"),
         (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
-        (!radio.relay_navigator, "relays of the navigator"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (tracks <= MAX_TRACKS, &too_many),
         (
-            p.track_timeout_s / p.dt_s + f64::from(radio.delay_steps) <= MAX_AGE_STEPS as f64,
-            "a track timeout and radio delay over 120 update periods together",
+            oldest_steps(sc) <= MAX_AGE_STEPS as f64,
+            "a track timeout, radio delay and relayed age over 120 update periods together",
         ),
     ];
     // Every reason, in this order: the first alone misled (a formation change's file was told
@@ -56,6 +55,20 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         true => Ok(()),
         false => Err(Unsupported(missing.join(", "))),
     }
+}
+
+/// How many update periods back the measurement a track still uses may lie: a report arrives
+/// as old as the radio's delay, or a relay as old as what its sender may forward besides
+/// ([`proxform_core::controller::navigator_track`]: `relay_max_age_s` where the plan brings
+/// reports forward, the track timeout otherwise); the track is used until its timeout after.
+pub fn oldest_steps(sc: &Scenario) -> f64 {
+    let p = sc.controller();
+    let relayed_s = match (sc.radio().relay_navigator, sc.agents().controller().carry(sc.formation().frame)) {
+        (false, _) => 0.0,
+        (true, Some(_)) => p.relay_max_age_s,
+        (true, None) => p.track_timeout_s,
+    };
+    (p.track_timeout_s + relayed_s) / p.dt_s + f64::from(sc.radio().delay_steps)
 }
 
 /// Most tracks a UAV keeps in the fast engine (its areas and its main references).
@@ -93,8 +106,6 @@ pub struct Consts {
     /// Track records per UAV.
     pub capacity: usize,
     pub filter: Filter,
-    /// A track coasts for at most this many steps.
-    pub coast_steps: i64,
     /// Tracks older than this (steps) are freed: the longer of the timeout and the coasting.
     pub track_limit: i64,
     /// Coasting tracks are brought forward beyond one period by the mission plan
@@ -154,7 +165,6 @@ impl Consts {
                     dt,
                 ),
             ),
-            coast_steps: steps(p.coast_s.min(p.track_timeout_s)),
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
             carry: setup.carry(sc.formation().frame),
             sigma: std::array::from_fn(|k| sigma[k] as f32),

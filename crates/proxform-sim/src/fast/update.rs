@@ -9,7 +9,7 @@
 //! ([`super::tracks::StepTracks`]). Collision avoidance's memory is kept per UAV only while it
 //! remembers a side.
 
-use proxform_core::controller::{Avoidance, Decision, StepScratch, TurnTrend, UavView};
+use proxform_core::controller::{navigator_track, Avoidance, Decision, StepScratch, TurnTrend, UavView};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{State9, X};
@@ -149,6 +149,45 @@ pub fn own_measurement(v: &View<'_>, i: usize) -> State9 {
     s
 }
 
+/// UAV `i`'s reference point R_i(k) = O(k) + A_i, A_i = p_i(0) − O(0): its tracks' positions
+/// are relative to it.
+#[inline]
+pub fn reference_point(v: &View<'_>, i: usize) -> [f64; 3] {
+    let p0 = &v.sc.initial()[i];
+    std::array::from_fn(|k| v.origin[k] + (p0[k] - v.origin0[k]))
+}
+
+/// The relay of follower `i` (`radio.relay_navigator`), from its tracks: what it knows of the
+/// navigator ([`proxform_core::controller::navigator_track`], as the reference's agents
+/// forward it), None when it does not track it.
+pub fn relay(v: &View<'_>, i: usize, tracks: Owner<'_>) -> Option<Message> {
+    let c = v.c;
+    let r_i = reference_point(v, i);
+    let store = StepTracks {
+        owner: tracks,
+        filter: &c.filter,
+        carry: c.carry.as_deref(),
+        k: v.k,
+        shift: |k0| v.shift(k0),
+        at: r_i,
+        fed: 0,
+    };
+    let t = f64::from(v.k) * c.dt;
+    let (mut state, age_s) = navigator_track(v.sc.controller(), &store, v.sc.navigator(), t)?;
+    for k in 0..3 {
+        state[X + k] += r_i[k];
+    }
+    let s = &v.states[i];
+    Some(Message {
+        sender: i as u32,
+        about: c.nav as u32,
+        state,
+        age_s,
+        at: [s[X], s[X + 1], s[X + 2]],
+        relative: false,
+    })
+}
+
 /// What UAV `i` decided and how: its input (applied) and its record.
 pub struct Update {
     pub applied: [f32; 6],
@@ -187,13 +226,7 @@ pub fn update(v: &View<'_>, i: usize, s: &mut Scratch, kept: Kept<'_>) -> Update
         true => kept.own.estimate(setup.params(), t, &measured),
         false => (measured, false),
     };
-    // Positions relative to the reference point R_i(k) = O(k) + A_i, A_i = p_i(0) − O(0).
-    let p0 = &sc.initial()[i];
-    let r_i = [
-        v.origin[0] + (p0[0] - v.origin0[0]),
-        v.origin[1] + (p0[1] - v.origin0[1]),
-        v.origin[2] + (p0[2] - v.origin0[2]),
-    ];
+    let r_i = reference_point(v, i);
     let mut own = own_abs;
     for k in 0..3 {
         own[k] -= r_i[k];
