@@ -17,18 +17,16 @@
 //! step ([`StreamKey`]), so a UAV's update does not depend on which thread runs its block:
 //! large swarms are stepped in parallel with identical results.
 
-use proxform_core::assignment::{self, Reassignment};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::state::{self, State9};
 use proxform_core::vehicle::VehicleModel;
 use proxform_core::{Agent, Decision};
-use proxform_scenario::faults::{self as schedule, Fault};
 use proxform_scenario::Scenario;
 
 use super::airwaves::Airwaves;
 use super::environment::{EnvStep, UavEnv};
-use super::faults::{self, FaultStep};
 use super::measurement::{self, OwnSensors};
+use super::membership::Membership;
 use super::options::{NeighbourSearch, RunOptions};
 use super::phases::{for_each_block, for_each_block_in_order, Mode, StepContext};
 use super::reach::Reach;
@@ -99,39 +97,11 @@ struct World<'s> {
     /// receivers), and the arriving ones' index by sender position.
     air: Airwaves,
     reach: Reach,
-    active: Vec<bool>,
-    faults: FaultStep,
+    /// Who flies and who leads (faults, succession, re-assignment).
+    members: Membership,
     sensor: ProximitySensor,
     start: [f64; 3],
     parallel: bool,
-    /// Slots re-assigned in flight (None: every UAV flies its own).
-    slots: Option<Reassigned>,
-    /// When the next re-assignment is due (s): a UAV was lost.
-    reassign_due: Option<f64>,
-    /// Who leads: the navigator, or its successor after its loss.
-    lead: assignment::Lead,
-    /// When the leader's loss becomes known and its successor takes over (s).
-    succession_due: Option<f64>,
-    /// The successor's take-over, once it leads.
-    take_over: Option<proxform_core::succession::TakeOver>,
-    /// An outside controller has flown the navigator in this flight.
-    navigator_flown_outside: bool,
-    /// The successor's move to a new slot while it leads.
-    moving: Option<proxform_core::succession::TakeOver>,
-}
-
-/// The slots of a flight after a re-assignment.
-#[derive(Debug)]
-struct Reassigned {
-    /// What the agents were handed.
-    assignment: Reassignment,
-    /// The formation flown now, indexed by UAV (the one in force relabelled), and the stage it
-    /// is of (None: the first formation).
-    flown: std::sync::Arc<proxform_core::Formation>,
-    stage: Option<usize>,
-    /// The first frame flown with its slots (made at the start of the step before; u64::MAX
-    /// when nobody has moved slot).
-    at_k: u64,
 }
 
 impl<'s> Simulation<'s> {
@@ -191,26 +161,12 @@ impl<'s> Simulation<'s> {
             grid: NeighbourGrid::new(),
             air: Airwaves::default(),
             reach: Reach::new(),
-            active: initially_flying(scenario),
-            faults: FaultStep { radio_up: true, ..FaultStep::default() },
+            members: Membership::new(scenario),
             sensor: ProximitySensor::of(scenario),
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
-            slots: None,
-            reassign_due: None,
-            lead: assignment::Lead::navigator(scenario.navigator()),
-            succession_due: None,
-            take_over: None,
-            navigator_flown_outside: false,
-            moving: None,
         };
-        let mut sim = Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] };
-        if !sim.world.active[nav] {
-            // Removed at the start: the followers, which saw it through the warm-up, learn of
-            // the loss when their tracks of it end.
-            sim.world.succession_due = Some(scenario.controller().track_timeout_s);
-        }
-        sim
+        Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] }
     }
 
     fn warmed(mut self) -> Self {
@@ -318,11 +274,11 @@ impl<'s> Simulation<'s> {
             t: w.t(),
             states: &w.current,
             uavs: &self.uavs,
-            active: &w.active,
+            active: &w.members.active,
             radio_sent: w.air.sent(),
-            formation: w.slots.as_ref().map(|s| &*s.flown),
-            reassigned: w.slots.as_ref().is_some_and(|s| s.at_k == w.k),
-            successor: w.carried().map(|p| (w.lead.leader.index(), p)),
+            formation: w.members.reassigned_formation(),
+            reassigned: w.members.reassigned_at(w.k),
+            successor: w.carried().map(|p| (w.members.lead.leader.index(), p)),
         }
     }
 
@@ -364,7 +320,7 @@ impl<'s> Simulation<'s> {
             }
         }
         if let Some(out) = &self.outside {
-            self.world.navigator_flown_outside |= out.by_uav[out.navigator].is_some();
+            self.world.members.navigator_flown_outside |= out.by_uav[out.navigator].is_some();
         }
         std::mem::swap(&mut self.world.current, &mut self.next);
         self.world.k += 1;
@@ -385,94 +341,20 @@ impl<'s> Simulation<'s> {
             return;
         }
         let w = &mut self.world;
-        let sc = w.scenario;
-        let t = w.t();
-        let stage = sc.schedule().stages().iter().rposition(|s| t >= s.at_s - 1e-9);
-        let (formation, tables) = match stage {
-            Some(k) => {
-                let s = &sc.schedule().stages()[k];
-                (&*s.formation, &s.dependencies[..])
-            }
-            None => (&**sc.formation(), sc.dependencies()),
-        };
-        let known = |due: Option<f64>| due.is_some_and(|due| t >= due - 1e-9);
-        let by = sc.reassign_on_loss();
-        let restage = w.slots.as_ref().is_some_and(|s| s.stage != stage);
-        let reassign = by.is_some() && known(w.reassign_due);
-        let succession = known(w.succession_due);
-        if !(reassign || succession || restage) {
-            return;
-        }
-        if reassign {
-            w.reassign_due = None;
-        }
-        let n = sc.len();
-        let slot_of: Vec<usize> = w.slots.as_ref().map_or_else(|| (0..n).collect(), |s| s.assignment.slot_of.to_vec());
-        let flown = w.slots.as_ref().map_or(formation, |s| &*s.flown);
-        let mut lead = w.lead;
-        if succession {
-            w.succession_due = None;
-            let flown_tables = w.slots.as_ref().map_or(tables, |s| &s.assignment.tables[..]);
-            if let Some(next) = proxform_core::succession::successor(flown, flown_tables, lead.leader, &w.active) {
-                lead.leader = next;
-                self.agents[next.index()] = None;
-                let i = next.index();
-                let slot = super::phases::slot_on_path(sc, flown, w.start, i, t);
-                w.take_over =
-                    Some(proxform_core::succession::TakeOver::for_controller(t, &w.current[i], &slot, sc.controller()));
-            }
-        }
-        let new = match by {
-            Some(by) if reassign || restage => {
-                let reference =
-                    crate::measure::observer::navigator_reference(sc, flown, &w.current, &w.active, w.carried());
-                let nav_slot = &formation.slots[slot_of[sc.navigator().index()]];
-                let at = |s: &State9| [s[state::X], s[state::Y], s[state::Z]];
-                let slot_at: Vec<[f64; 3]> = formation
-                    .slots
-                    .iter()
-                    .map(|slot| at(&(reference + formation.w(slot, nav_slot, &reference))))
-                    .collect();
-                let uav_at: Vec<[f64; 3]> = w.current.iter().map(at).collect();
-                assignment::after_loss(
-                    formation,
-                    tables,
-                    sc.navigator(),
-                    (&slot_of, &w.active),
-                    (&uav_at, &slot_at),
-                    by,
-                )
-            }
-            _ => slot_of.clone(),
-        };
-        // The measures judge a re-assignment as a change of formation; a succession alone
-        // moves nobody.
-        let moved = (by.is_some() && (reassign || restage)) || new != slot_of;
-        let at_k = if moved { w.k + 1 } else { w.slots.as_ref().map_or(u64::MAX, |s| s.at_k) };
-        let r = Reassignment::new(formation, tables, new, w.active.clone(), lead).moving(moved || restage);
-        // A successor whose slot changes moves to it from where its old one had it.
-        let l = lead.leader.index();
-        let before = (lead.leader != lead.navigator).then(|| match lead.leader == w.lead.leader {
-            true => w.leading().slot(sc, w.start, t),
-            // A successor named now: from its slot in the formation it took over.
-            false => super::phases::slot_on_path(sc, flown, w.start, l, t),
-        });
-        if let Some(before) = before {
-            let after = super::phases::slot_on_path(sc, &r.formation, w.start, l, t);
-            if (state::position(&after) - state::position(&before)).norm() > 1e-9 {
-                w.moving =
-                    Some(proxform_core::succession::TakeOver::for_controller(t, &before, &after, sc.controller()));
-            }
+        let (sc, t) = (w.scenario, w.t());
+        let leader = w.members.lead.leader;
+        let Some(r) = w.members.reassign(sc, (t, w.k), (w.start, &w.current)) else { return };
+        // A successor flies by its autopilot from now on.
+        if r.lead.leader != leader {
+            self.agents[r.lead.leader.index()] = None;
         }
         for (i, a) in self.agents.iter_mut().enumerate() {
-            if let (Some(a), true) = (a, w.active[i]) {
+            if let (Some(a), true) = (a, w.members.active[i]) {
                 // The relabelled tables name UAVs of the formation, other than the owner.
                 a.reassign(sc.agents(), proxform_core::UavId(i as u32), &r)
                     .expect("a relabelled formation is valid for every UAV");
             }
         }
-        w.lead = lead;
-        w.slots = Some(Reassigned { flown: r.formation.clone(), assignment: r, stage, at_k });
     }
 
     /// Runs the whole flight, showing every step (and the initial state) to `observer`.
@@ -496,18 +378,6 @@ impl<'s> Simulation<'s> {
     }
 }
 
-/// Which UAVs fly at t = 0: all but those removed at 0 or joining later (one pass over the
-/// schedule).
-fn initially_flying(sc: &Scenario) -> Vec<bool> {
-    let mut active = vec![true; sc.len()];
-    for f in sc.faults() {
-        if let Some(u) = f.uav().filter(|_| matches!(f, Fault::Remove { .. } | Fault::Join { .. })) {
-            active[u.index()] &= schedule::allows(f, 0.0);
-        }
-    }
-    active
-}
-
 /// What the sensor reports for the followers' collision avoidance (none for the baselines).
 pub(crate) fn close_watch(sc: &Scenario) -> proxform_core::controller::CloseWatch {
     let p = sc.controller();
@@ -522,11 +392,6 @@ pub(crate) fn close_watch(sc: &Scenario) -> proxform_core::controller::CloseWatc
     }
 }
 
-/// UAV `i`'s slot in formation `f` (indexed by UAV) around the navigator's state `nav`.
-fn slot_state(sc: &Scenario, f: &proxform_core::Formation, i: usize, nav: &State9) -> State9 {
-    nav + f.w(&f.slots[i], &f.slots[sc.navigator().index()], nav)
-}
-
 /// The engine's per-UAV buffers, as the block phases take them.
 type Buffers<'b> = (&'b mut Vec<Option<Agent>>, &'b mut Vec<State9>, &'b mut Vec<UavStep>);
 
@@ -537,7 +402,7 @@ impl Outside<'_> {
     fn apply_membership(&mut self, w: &World<'_>) {
         let nav = w.scenario.navigator().index();
         for i in (0..w.scenario.len()).filter(|i| *i != nav) {
-            self.absent[i] = w.active[i] && !self.agents.present(proxform_core::UavId(i as u32));
+            self.absent[i] = w.members.active[i] && !self.agents.present(proxform_core::UavId(i as u32));
             self.failsafe[i] = self.absent[i] && self.agents.failsafe(proxform_core::UavId(i as u32));
         }
     }
@@ -594,106 +459,31 @@ impl<'s> World<'s> {
         self.k as f64 * self.scenario.dt_s()
     }
 
-    /// Where the successor, once it leads, carries the navigator's slot: the planned path's
-    /// position moved by the successor's own distance from its target.
+    /// Where the successor, once it leads, carries the navigator's slot
+    /// ([`Membership::carried`]).
     fn carried(&self) -> Option<[f64; 3]> {
-        let l = self.lead.leader.index();
-        if self.lead.leader == self.lead.navigator || !self.active[l] {
-            return None;
-        }
-        let leading = self.leading();
-        let (sc, t) = (self.scenario, self.t());
-        // Its take-over's gap is the formation's own drift; a move to a new slot is planned.
-        let (target, on_path) = (leading.slot(sc, self.start, t), sc.path().state_at(t, self.start));
-        let at = &self.current[l];
-        Some(std::array::from_fn(|k| on_path[state::X + k] + at[state::X + k] - target[state::X + k]))
+        self.members.carried(self.scenario, self.t(), (self.start, &self.current))
     }
 
     /// Who leads, as the block phases fly it.
     fn leading(&self) -> super::phases::Leading<'_> {
-        super::phases::Leading {
-            uav: self.lead.leader.index(),
-            formation: self.flown(),
-            take_over: self.take_over,
-            moving: self.moving,
-            flown_outside: self.navigator_flown_outside,
-        }
+        self.members.leading(self.scenario, self.t())
     }
 
-    /// The formation flown now, indexed by UAV.
-    fn flown(&self) -> &proxform_core::Formation {
-        match &self.slots {
-            Some(s) => &s.flown,
-            None => self.scenario.formation_at(self.t()),
-        }
-    }
-
-    /// Phase 1, schedule: removals, joins, and the sensor and radio faults in force now.
+    /// Phase 1, schedule: removals, joins, and the sensor and radio faults in force now
+    /// ([`Membership::apply_schedule`]); a sensor that sticks freezes at the UAV's own
+    /// measurement now.
     fn apply_schedule(&mut self) {
         let sc = self.scenario;
-        if sc.faults().is_empty() {
-            return;
-        }
-        let t = self.t();
-        // Whether each UAV with a removal or a join flies now: every one of its faults must
-        // allow it (one pass over the schedule, not one per fault).
-        let mut flies = std::collections::BTreeMap::new();
-        for f in sc.faults() {
-            if let Fault::Remove { uav, .. } | Fault::Join { uav, .. } = *f {
-                let now = schedule::allows(f, t);
-                flies.entry(uav.index()).and_modify(|a: &mut bool| *a &= now).or_insert(now);
-            }
-        }
-        for f in sc.faults() {
-            match *f {
-                Fault::Remove { uav, .. } => {
-                    let now = flies[&uav.index()];
-                    // The others learn of a loss when their tracks of it end.
-                    let due = t + sc.controller().track_timeout_s;
-                    if self.active[uav.index()] && !now && sc.reassign_on_loss().is_some() {
-                        self.reassign_due = Some(self.reassign_due.map_or(due, |d| d.min(due)));
-                    }
-                    if self.active[uav.index()] && !now && uav == self.lead.leader {
-                        self.succession_due = Some(due);
-                    }
-                    self.active[uav.index()] = now;
-                }
-                Fault::Join { uav, offset_m, .. } => {
-                    let i = uav.index();
-                    let now = flies[&i];
-                    if now && !self.active[i] {
-                        // Appears in its slot relative to the navigator (or to the formation's
-                        // estimate of it), shifted by the offset.
-                        let f = self.flown();
-                        let reference = crate::measure::observer::navigator_reference(
-                            sc,
-                            f,
-                            &self.current,
-                            &self.active,
-                            self.carried(),
-                        );
-                        let mut s = slot_state(sc, f, i, &reference);
-                        s[state::X] += offset_m.x;
-                        s[state::Y] += offset_m.y;
-                        s[state::Z] += offset_m.z;
-                        self.current[i] = s;
-                    }
-                    self.active[i] = now;
-                }
-                _ => {}
-            }
-        }
         let key = self.run.at(self.k);
         let sigma = sc.noise().sigma();
-        let current = &self.current;
-        self.faults = faults::gather(sc.faults(), t, &self.faults, |i| {
-            noisy(&current[i], &sigma, &mut key.rng(i as u64, Source::OwnState))
-        });
+        let own = |current: &[State9], i: usize| noisy(&current[i], &sigma, &mut key.rng(i as u64, Source::OwnState));
+        self.members.apply_schedule(sc, self.t(), (self.start, &mut self.current), own);
     }
 
     /// Phase 2, index: the neighbour grid over the active UAVs.
     fn index_positions(&mut self) {
-        let active = &self.active;
+        let active = &self.members.active;
         let range = self.scenario.controller().areas.sensing_range_m;
         self.grid.rebuild_ids(
             self.current.iter().enumerate().filter(|(i, _)| active[*i]).map(|(i, s)| (i as u32, [s[0], s[1], s[2]])),
@@ -704,7 +494,7 @@ impl<'s> World<'s> {
     /// With phase 2: how fast the active UAVs move relative to each other at most, for the
     /// sensor's close-range watch ([`proxform_core::controller::CloseWatch::for_speeds`]).
     fn note_speeds(&mut self) {
-        let active = &self.active;
+        let active = &self.members.active;
         let spread = proxform_core::controller::relative_speed_bound(
             self.current.iter().enumerate().filter(|(i, _)| active[*i]).map(|(_, s)| [s[3], s[4], s[5]]),
         );
@@ -718,7 +508,7 @@ impl<'s> World<'s> {
             return;
         }
         let step = EnvStep::new(self.scenario, &self.run, self.k, self.t());
-        let (current, active) = (&self.current, &self.active);
+        let (current, active) = (&self.current, &self.members.active);
         crate::parallel::for_each_mut(&mut self.env, self.parallel, |i, e| {
             if active[i] {
                 step.advance(i, &current[i], e);
@@ -735,11 +525,18 @@ impl<'s> World<'s> {
             sigma: self.scenario.noise().sigma(),
             key,
             env: &self.env,
-            faults: flight.then_some(&self.faults),
+            faults: flight.then_some(&self.members.faults),
         };
         let mut now = self.air.buffer(delay);
-        measurement::compose(self.scenario, &self.current, &sensors, (self.lead, self.parallel), &mut now);
-        measurement::relays(self.scenario, &self.current, &self.active, (agents, self.lead.leader), t, &mut now);
+        measurement::compose(self.scenario, &self.current, &sensors, (self.members.lead, self.parallel), &mut now);
+        measurement::relays(
+            self.scenario,
+            &self.current,
+            &self.members.active,
+            (agents, self.members.lead.leader),
+            t,
+            &mut now,
+        );
         self.air.send(now, delay);
         self.reach.rebuild(self.air.arriving().iter().map(|m| m.at), self.scenario.radio().range_m);
     }
@@ -759,8 +556,8 @@ impl<'s> World<'s> {
                 dependencies: self.scenario.dependencies(),
             },
             sensor: &self.sensor,
-            active: &self.active,
-            faults: &self.faults,
+            active: &self.members.active,
+            faults: &self.members.faults,
             messages: self.air.arriving(),
             reach: &self.reach,
             env: &self.env,

@@ -6,6 +6,7 @@ pub mod engine;
 pub mod environment;
 pub mod faults;
 pub mod measurement;
+pub mod membership;
 pub mod options;
 pub mod phases;
 pub mod placement;

@@ -163,7 +163,7 @@ impl Leading<'_> {
 /// the slot's own velocity (a slot off the navigator moves faster or slower in a turn of the
 /// formation: the velocity is the slot's position differenced over [`PLANNED_DIFF_S`]
 /// either side).
-pub(super) fn slot_on_path(sc: &Scenario, f: &proxform_core::Formation, start: [f64; 3], i: usize, t: f64) -> State9 {
+pub(crate) fn slot_on_path(sc: &Scenario, f: &proxform_core::Formation, start: [f64; 3], i: usize, t: f64) -> State9 {
     let nav = sc.navigator().index();
     let (Some(mine), Some(its)) = (f.slots.get(i), f.slots.get(nav)) else {
         return sc.path().state_at(t, start);
