@@ -66,7 +66,7 @@ def test_with_values_changes_a_value_and_checks_it():
         ({"formation": {1: 2}}, "formation", ""),
         ({"controller": {"lambda": object()}}, "controller.lambda", "not object"),
         ({"engine": "warp"}, "engine", "unknown engine"),
-        ({"engine": "fast", "fault": [{"kind": "remove", "uav": 2, "at_s": 10}]}, "engine", "does not run faults"),
+        ({"engine": "fast", "controller": {"method": "consensus"}}, "engine", "does not run a baseline method"),
     ],
 )
 def test_a_bad_dict_names_its_key(changes, key, words):

@@ -241,6 +241,38 @@ fn the_engines_agree_relaying_the_navigator() {
 }
 
 #[test]
+fn the_engines_agree_through_faults() {
+    // Who flies and who leads is one for both engines (`world::membership`). The shipped V of
+    // nine that loses UAV2 and closes the gap by re-assigning its slots: every run passes on
+    // both, with the same errors and the same change of slots.
+    let closing = shipped_on_fast(include_str!("../../../scenarios/reassign-v-loss.toml"), "reassign-v-loss.toml");
+    assert!(closing.reassign_on_loss().is_some());
+    let (a, b) = agree(&closing, RunOptions::default(), 10);
+    assert!(a.rms[0] > 1.0 && b.rms[0] > 1.0, "the slots move: {a:?} vs {b:?}");
+    let moved = |sc: &Scenario, run: fn(&Scenario, RunOptions, u64) -> RunSummary| {
+        run(sc, RunOptions::default(), 0).transitions.expect("a re-assignment is measured as a change").transition_s
+    };
+    let (tr, tf) = (moved(&closing, reference), moved(&closing, fast));
+    assert!(tr.is_finite() && (tr - tf).abs() < 0.25 * tr, "re-assigned in {tr} s and {tf} s");
+    // The V of twenty loses its navigator at 40 s (a successor leads its slot's path from
+    // then on), and UAV12 at 30 s; a radio blackout of 5 s at 70 s.
+    let faults = "\n[[fault]]\nkind = \"remove\"\nuav = 1\nat_s = 40.0\n\n[[fault]]\nkind = \"remove\"\nuav = 12\n\
+                  at_s = 30.0\n\n[[fault]]\nkind = \"radio_blackout\"\nat_s = 70.0\nduration_s = 5.0\n";
+    let text = include_str!("../../../scenarios/depth-v20.toml").to_owned() + faults;
+    let lost = shipped_on_fast(&text, "depth-v20.toml");
+    let (a, _) = agree(&lost, RunOptions::default(), 10);
+    let r = fast(&lost, RunOptions::default(), 0);
+    assert!(r.pass && r.succession.is_some_and(|s| s.0 > 40.0), "{:?}", r.succession);
+    assert!(a.max[1] < 5.0, "{a:?}");
+    // A UAV that joins 30 m behind and 10 m beside its slot at 50 s, during the flight.
+    let join = "\n[[fault]]\nkind = \"join\"\nuav = 9\nat_s = 50.0\noffset_m = [30.0, 10.0, 0.0]\n";
+    let joined =
+        shipped_on_fast(&(include_str!("../../../scenarios/depth-v20.toml").to_owned() + join), "depth-v20.toml");
+    let (a, b) = agree(&joined, RunOptions::default(), 10);
+    assert!(a.max[0] > 20.0 && b.max[0] > 20.0, "it joins off its slot: {a:?} vs {b:?}");
+}
+
+#[test]
 fn the_engines_agree_forming_from_scattered_starts() {
     // Two shipped forming flights: five followers scattered over a disc of 1 km (random per
     // run) join the navigator's slots, and a hundred UAVs take off from a row on the ground
@@ -481,15 +513,15 @@ fn the_engine_is_chosen_by_the_scenario() {
     });
     assert_eq!(engine_for(&kept), Ok(EngineKind::Reference));
     // What the fast engine does not run: refused when asked for, the reference under auto.
-    let replaced = |engine: &str| {
+    let consensus = |engine: &str| {
         swarm(100, |s| {
             s.engine = Some(engine.into());
-            s.fault.push(proxform_scenario::spec::FaultSpec::remove(5, 1.0));
+            s.controller.method = Some("consensus".into());
         })
     };
-    let e = engine_for(&replaced("fast")).expect_err("faults are not supported");
-    assert!(e.to_string().contains("faults"), "{e}");
-    assert_eq!(engine_for(&replaced("auto")), Ok(EngineKind::Reference));
+    let e = engine_for(&consensus("fast")).expect_err("the baselines are not supported");
+    assert!(e.to_string().contains("a baseline method"), "{e}");
+    assert_eq!(engine_for(&consensus("auto")), Ok(EngineKind::Reference));
     let windy = swarm(100, |s| {
         s.engine = Some("fast".into());
         s.wind.steady_kmh = Some([20.0, 0.0, 0.0]);

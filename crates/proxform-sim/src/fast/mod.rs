@@ -9,7 +9,9 @@
 //! ([`crate::world::sensing::ProximitySensor::pick`]); the noise of what it picks is drawn in
 //! bulk (`update`).
 //! A step is:
-//! 0. **environment** (with wind, a position-fix bias or bursty radio losses): every UAV's
+//! 0. **membership**: the faults in force, the navigator's succession and slot re-assignment
+//!    (the reference engine's own [`crate::world::membership::Membership`]);
+//!    **environment** (with wind, a position-fix bias or bursty radio losses): every UAV's
 //!    wind, bias and radio channel over the step, by the reference engine's own pass
 //!    ([`crate::world::environment`]);
 //! 1. **index**: the neighbour grid over the positions;
@@ -50,9 +52,9 @@ use crate::measure::observer::{Observer, StepFrame, UavStep};
 use crate::random::RunKey;
 use crate::world::airwaves::Airwaves;
 use crate::world::environment::{self, EnvStep, UavEnv};
-use crate::world::measurement::Message;
+use crate::world::measurement::{self, Message};
+use crate::world::membership::Membership;
 use crate::world::options::RunOptions;
-use crate::world::phases::Leading;
 use crate::world::plant;
 use crate::world::reach::Reach;
 use crate::world::sensing::ProximitySensor;
@@ -91,7 +93,9 @@ pub struct FastSimulation<'s> {
     uavs: Vec<UavStep>,
     /// Each UAV's input as applied this step.
     applied: Vec<[f32; 6]>,
-    active: Vec<bool>,
+    /// Who flies and who leads (the reference engine's own: faults, succession,
+    /// re-assignment).
+    members: Membership,
     /// `capacity` tracks per UAV, then how many each uses.
     tracks: Vec<Track>,
     used: Vec<u8>,
@@ -157,7 +161,7 @@ impl<'s> FastSimulation<'s> {
             states: crate::world::placement::initial_states(sc, run),
             uavs: vec![UavStep::default(); n],
             applied: vec![[0.0; 6]; n],
-            active: vec![true; n],
+            members: Membership::new(sc),
             tracks: vec![Track::default(); n * c.capacity],
             used: vec![0; n],
             own: (0..n.div_ceil(BLOCK))
@@ -267,6 +271,32 @@ impl<'s> FastSimulation<'s> {
         self.autopilot.iter_mut().flatten().for_each(|a| a.setpoint = None);
     }
 
+    /// The schedule at `t` (removals, joins, sensor faults, radio blackouts), then the
+    /// navigator's succession and slot re-assignment when a loss becomes known: the reference
+    /// engine's own [`Membership`]. Where slots moved, every follower flies its new one from a
+    /// fresh controller (as at a change of formation); a succession alone keeps every track
+    /// (the tables name the successor from now on, and the successor flies by its autopilot).
+    fn follow_membership(&mut self, t: f64) {
+        let (sc, c, run, k) = (self.sc, &self.c, self.run, self.k);
+        let own = |states: &[State9], i: usize| update::noisy_own(c, &run, k, &states[i], i);
+        self.members.apply_schedule(sc, t, (self.start, &mut self.states), own);
+        if let Some(r) = self.members.reassign(sc, (t, k), (self.start, &self.states)) {
+            if r.moved {
+                self.restart_controllers();
+            }
+        }
+    }
+
+    /// Every follower's controller starts afresh: its tracks restart from the next
+    /// observations, avoidance remembers no side and the turn trend starts again (its
+    /// autopilot flies on its setpoint).
+    fn restart_controllers(&mut self) {
+        self.tracks.fill(Track::default());
+        self.used.fill(0);
+        self.avoid.iter_mut().for_each(Vec::clear);
+        self.autopilot.iter_mut().flatten().for_each(|a| a.trend = TurnTrend::default());
+    }
+
     /// At a change of formation every follower flies its new slot on its new table from a
     /// fresh controller, as the reference's agents do ([`proxform_core::Agent`]): its tracks
     /// restart from the next observations, avoidance remembers no side and the turn trend
@@ -277,10 +307,7 @@ impl<'s> FastSimulation<'s> {
             return;
         }
         self.stage = stage;
-        self.tracks.fill(Track::default());
-        self.used.fill(0);
-        self.avoid.iter_mut().for_each(Vec::clear);
-        self.autopilot.iter_mut().flatten().for_each(|a| a.trend = TurnTrend::default());
+        self.restart_controllers();
     }
 
     /// Index, radio and the per-UAV phases up to the applied inputs, for step `k`.
@@ -290,11 +317,10 @@ impl<'s> FastSimulation<'s> {
         let origin = self.origin_at(k);
         let len = self.ring.len();
         self.ring[update::ring_index(k as i32, len)] = origin;
-        self.grid.rebuild_ids(
-            self.states.iter().enumerate().map(|(i, s)| (i as u32, [s[X], s[X + 1], s[X + 2]])),
-            self.c.range,
-        );
-        let spread = relative_speed_bound(self.states.iter().map(|s| [s[VX], s[VX + 1], s[VX + 2]]));
+        let active = &self.members.active;
+        let flying = || self.states.iter().enumerate().filter(|(i, _)| active[*i]);
+        self.grid.rebuild_ids(flying().map(|(i, s)| (i as u32, [s[X], s[X + 1], s[X + 2]])), self.c.range);
+        let spread = relative_speed_bound(flying().map(|(_, s)| [s[VX], s[VX + 1], s[VX + 2]]));
         self.sensor.set_speeds(spread);
         let Self {
             sc,
@@ -316,7 +342,7 @@ impl<'s> FastSimulation<'s> {
             origin0,
             sensor,
             ideal,
-            active,
+            members,
             ..
         } = self;
         let view = View {
@@ -325,7 +351,9 @@ impl<'s> FastSimulation<'s> {
             states,
             grid,
             sensor,
-            active,
+            active: &members.active,
+            faults: &members.faults,
+            leader: members.lead.leader,
             ideal,
             run: *run,
             draw_step,
@@ -338,15 +366,15 @@ impl<'s> FastSimulation<'s> {
             env,
             warm,
             adjust: self.options.adjustment_enabled,
-            formation: sc.formation_at(t),
-            dependencies: sc.dependencies_at(t),
+            formation: members.flown(sc, t),
+            dependencies: members.tables(sc, t),
         };
         // Radio: the broadcasters' own measurements.
         // The messages sent `radio.delay_s` ago arrive (without delay in the warm-up, as the
         // reference's).
         let delay = if warm { 0 } else { c.radio_delay_steps };
         let mut messages = air.buffer(delay);
-        for &j in &c.broadcasters {
+        for j in measurement::senders(sc, members.lead, states.len()) {
             let s = &states[j];
             messages.push(Message {
                 sender: j as u32,
@@ -357,13 +385,14 @@ impl<'s> FastSimulation<'s> {
                 relative: false,
             });
         }
-        // Relays: every follower forwards what its tracks know of the navigator, in the order
-        // of the UAVs (as the reference's agents).
+        // Relays: every flying follower forwards what its tracks know of the leader, in the
+        // order of the UAVs (as the reference's agents).
+        let controlled = |i: usize| members.active[i] && i != c.nav && i != members.lead.leader.index();
         if sc.radio().relay_navigator {
             let cap = c.capacity;
             let relays = |(b, (tracks, used)): (usize, (&mut [Track], &mut [u8]))| -> Vec<Message> {
                 (0..used.len())
-                    .filter(|&o| b * BLOCK + o != c.nav)
+                    .filter(|&o| controlled(b * BLOCK + o))
                     .filter_map(|o| {
                         let (t, u) = (&mut tracks[o * cap..(o + 1) * cap], &mut used[o]);
                         update::relay(&view, b * BLOCK + o, Owner { tracks: t, used: u })
@@ -382,13 +411,13 @@ impl<'s> FastSimulation<'s> {
         reach.rebuild(air.arriving().iter().map(|m| m.at), sc.radio().range_m);
         let view = View { messages: air.arriving(), reach, ..view };
         let cap = c.capacity;
-        let nav = c.nav;
         let block =
             |scratch: &mut Scratch,
              (b, (((uavs, applied), ((tracks, used), own)), (avoid, pilots))): BlockSlices<'_>| {
                 for o in 0..uavs.len() {
                     let i = b * BLOCK + o;
-                    if i == nav {
+                    // The navigator, its successor and the UAVs not flying have no controller.
+                    if !controlled(i) {
                         uavs[o] = UavStep::default();
                         applied[o] = [0.0; 6];
                         continue;
@@ -433,12 +462,18 @@ impl<'s> FastSimulation<'s> {
     pub fn step(&mut self) {
         let k = self.k;
         let dt = self.c.dt;
-        // Environment: every UAV's wind and position-fix bias over the step (the reference
-        // engine's own pass, from the same streams).
+        let t = k as f64 * dt;
+        self.follow_membership(t);
+        // Environment: every flying UAV's wind and position-fix bias over the step (the
+        // reference engine's own pass, from the same streams).
         if !self.env.is_empty() {
-            let step = EnvStep::new(self.sc, &self.run, k, k as f64 * dt);
-            let states = &self.states;
-            crate::parallel::for_each_mut(&mut self.env, self.parallel, |i, e| step.advance(i, &states[i], e));
+            let step = EnvStep::new(self.sc, &self.run, k, t);
+            let (states, active) = (&self.states, &self.members.active);
+            crate::parallel::for_each_mut(&mut self.env, self.parallel, |i, e| {
+                if active[i] {
+                    step.advance(i, &states[i], e);
+                }
+            });
         }
         self.decide_all(k as i64, k, false);
         self.propagate();
@@ -456,15 +491,21 @@ impl<'s> FastSimulation<'s> {
         let nav = self.c.nav;
         let start = self.start;
         let env = &self.env;
-        let lead =
-            Leading { uav: nav, formation: sc.formation_at(t), take_over: None, moving: None, flown_outside: false };
+        let members = &self.members;
+        let lead = members.leading(sc, t);
         let calm = UavEnv::default();
         let propagate = |(i, (s, u)): (usize, (&mut State9, &[f32; 6]))| {
             let e = env.get(i).unwrap_or(&calm);
-            *s = match i == nav {
-                true if sc.navigator_flies() => lead.next(sc, start, (t, s), e),
-                true => plant::on_path(sc, start, (self.k + 1) as f64 * self.c.dt),
-                false => plant::next_state(sc, s, &Input::from_fn(|a, _| f64::from(u[a])), e),
+            if !members.active[i] {
+                return;
+            }
+            *s = if i == lead.uav && (i != nav || sc.navigator_flies()) {
+                // Its autopilot flies it along the path (a successor: to its own slot on it).
+                lead.next(sc, start, (t, s), e)
+            } else if i == nav {
+                plant::on_path(sc, start, (self.k + 1) as f64 * self.c.dt)
+            } else {
+                plant::next_state(sc, s, &Input::from_fn(|a, _| f64::from(u[a])), e)
             };
         };
         if self.parallel {
@@ -480,11 +521,14 @@ impl<'s> FastSimulation<'s> {
             t: self.k as f64 * self.c.dt,
             states: &self.states,
             uavs: &self.uavs,
-            active: &self.active,
+            active: &self.members.active,
             radio_sent: self.air.sent(),
-            formation: None,
-            reassigned: false,
-            successor: None,
+            formation: self.members.reassigned_formation(),
+            reassigned: self.members.reassigned_at(self.k),
+            successor: self
+                .members
+                .carried(self.sc, self.k as f64 * self.c.dt, (self.start, &self.states))
+                .map(|p| (self.members.lead.leader.index(), p)),
         }
     }
 

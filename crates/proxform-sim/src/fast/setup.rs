@@ -25,8 +25,10 @@ pub struct Unsupported(pub String);
 /// once, at the change's time), scattered starts (the reference's own placement) and the
 /// own-sensor check and filter (each UAV's [`proxform_core::own_estimate::OwnEstimate`]), and
 /// a delayed radio (the reference's own delay line; its tracks updated at a report's
-/// measurement), and relays of the navigator (each follower's from its records). Faults and
-/// slot re-assignment stay with the reference engine.
+/// measurement), relays of the navigator (each follower's from its records), and faults, the
+/// navigator's succession and slot re-assignment (the reference's own
+/// [`crate::world::membership::Membership`]). The baselines, another predictor and relative
+/// sensing stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let tracks = p.areas.areas + max_refs(sc);
@@ -35,11 +37,9 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 8] = [
+    let checks: [(bool, &str); 6] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
-        (sc.faults().is_empty(), "faults"),
-        (sc.reassign_on_loss().is_none(), "slot re-assignment"),
         (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (tracks <= MAX_TRACKS, &too_many),
@@ -123,8 +123,6 @@ pub struct Consts {
     pub own_estimate: bool,
     /// The radio's delay (whole update periods).
     pub radio_delay_steps: usize,
-    /// The UAVs that broadcast, in the order their messages are heard.
-    pub broadcasters: Vec<usize>,
 }
 
 impl Consts {
@@ -134,7 +132,6 @@ impl Consts {
         let setup = sc.agents().controller().clone();
         let PredictorKind::AlphaBeta { alpha, beta } = p.predictor else { unreachable!("checked by supports") };
         let dt = p.dt_s;
-        let n = sc.len();
         let nav = sc.navigator().index();
         let range = p.areas.sensing_range_m;
         let steps = |s: f64| (s / dt + 1e-6).floor() as i64;
@@ -144,9 +141,6 @@ impl Consts {
         let sigma = sc.noise().sigma();
         let wind = wind_acceleration(sc.wind(), vehicle.top_speed_mps(), dt);
         let radio = sc.radio();
-        let beacons: Vec<usize> = sc.beacons().iter().map(|b| b.index()).filter(|&j| j < n).collect();
-        let all = if radio.broadcast_all { n } else { 0 };
-        let broadcasters = beacons.iter().copied().chain((0..all).filter(|j| !beacons.contains(j))).collect();
         Self {
             nav,
             dt,
@@ -172,7 +166,6 @@ impl Consts {
             autopilot: vehicle.takes_velocity_setpoints() || setup.keeps_turn_trend(),
             own_estimate: proxform_core::own_estimate::OwnEstimate::used(p),
             radio_delay_steps: radio.delay_steps as usize,
-            broadcasters,
         }
     }
 }

@@ -41,8 +41,12 @@ pub struct View<'a> {
     pub grid: &'a NeighbourGrid,
     /// The sensor (the reference engine's), its watch set for the step's speeds.
     pub sensor: &'a ProximitySensor,
-    /// Which UAVs fly (all of them: the engine runs no faults or joins).
+    /// Which UAVs fly.
     pub active: &'a [bool],
+    /// The sensor faults and the radio's state in force.
+    pub faults: &'a crate::world::faults::FaultStep,
+    /// Who leads (the navigator, or its successor after its loss).
+    pub leader: UavId,
     /// The radio of the warm-up: without losses.
     pub ideal: &'a RadioModel,
     pub run: RunKey,
@@ -130,21 +134,32 @@ impl Scratch {
     }
 }
 
-/// UAV `i`'s own measurement at this step (absolute): the truth plus noise from its own-state
-/// stream, and in flight its position fix's bias. Its broadcasts carry the same measurement.
+/// UAV `i`'s own reading of its true state `truth` at step `draw_step`: the truth plus noise
+/// from its own-state stream (what a sensor that sticks freezes at).
+#[inline]
+pub fn noisy_own(c: &Consts, run: &RunKey, draw_step: u64, truth: &State9, i: usize) -> State9 {
+    let mut z = [0.0f32; 9];
+    bulk::normals(bulk::key(run, i as u64, Source::OwnState, draw_step), 0, &mut z);
+    let mut s = *truth;
+    for k in 0..9 {
+        s[k] += f64::from(c.sigma[k] * z[k]);
+    }
+    s
+}
+
+/// UAV `i`'s own measurement at this step (absolute): its noisy reading, and in flight its
+/// position fix's bias and its sensor faults. Its broadcasts carry the same measurement.
 // A phase of `proxform bench`'s instruction table: kept a function of its own.
 #[inline(never)]
 pub fn own_measurement(v: &View<'_>, i: usize) -> State9 {
-    let mut z = [0.0f32; 9];
-    bulk::normals(bulk::key(&v.run, i as u64, Source::OwnState, v.draw_step), 0, &mut z);
-    let mut s = v.states[i];
-    for k in 0..9 {
-        s[k] += f64::from(v.c.sigma[k] * z[k]);
-    }
-    if let Some(e) = v.env.get(i).filter(|_| !v.warm) {
-        for k in 0..3 {
-            s[X + k] += e.gnss_bias[k];
+    let mut s = noisy_own(v.c, &v.run, v.draw_step, &v.states[i], i);
+    if !v.warm {
+        if let Some(e) = v.env.get(i) {
+            for k in 0..3 {
+                s[X + k] += e.gnss_bias[k];
+            }
         }
+        v.faults.corrupt(i, &mut s);
     }
     s
 }
@@ -173,19 +188,12 @@ pub fn relay(v: &View<'_>, i: usize, tracks: Owner<'_>) -> Option<Message> {
         fed: 0,
     };
     let t = f64::from(v.k) * c.dt;
-    let (mut state, age_s) = navigator_track(v.sc.controller(), &store, v.sc.navigator(), t)?;
+    let (mut state, age_s) = navigator_track(v.sc.controller(), &store, v.leader, t)?;
     for k in 0..3 {
         state[X + k] += r_i[k];
     }
     let s = &v.states[i];
-    Some(Message {
-        sender: i as u32,
-        about: c.nav as u32,
-        state,
-        age_s,
-        at: [s[X], s[X + 1], s[X + 2]],
-        relative: false,
-    })
+    Some(Message { sender: i as u32, about: v.leader.0, state, age_s, at: [s[X], s[X + 1], s[X + 2]], relative: false })
 }
 
 /// What UAV `i` decided and how: its input (applied) and its record.
@@ -356,7 +364,7 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
         active: v.active,
         dropout,
         reference_dropout,
-        radio_up: true,
+        radio_up: v.warm || v.faults.radio_up,
         radio,
         messages: v.messages,
         reach: v.reach,
@@ -470,7 +478,7 @@ fn decide(
         setup: sc.agents().controller(),
         formation: v.formation,
         dependency: &v.dependencies[i],
-        navigator: Some(sc.navigator()),
+        navigator: Some(v.leader),
         tracks: &mut store,
         avoidance,
         // Kept for a vehicle that lags its setpoints.

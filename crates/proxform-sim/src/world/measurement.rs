@@ -72,6 +72,20 @@ impl Message {
     }
 }
 
+/// The UAVs (of `n`) that send their own measurement now, in the order their messages are
+/// heard: the beacons first (a lost navigator's beacon passes to its successor, the leader of
+/// `lead`), then, when every UAV broadcasts, the others by id.
+pub fn senders(sc: &Scenario, lead: Lead, n: usize) -> impl Iterator<Item = usize> + '_ {
+    let (radio, beacons) = (sc.radio(), sc.beacons());
+    let all = if radio.broadcast_all { n } else { 0 };
+    let beacon = move |b: &UavId| if *b == lead.navigator { lead.leader.index() } else { b.index() };
+    beacons
+        .iter()
+        .map(beacon)
+        .chain((0..all).filter(move |j| !beacons.iter().any(|b| beacon(b) == *j)))
+        .filter(move |&j| j < n)
+}
+
 /// Fills `out` with the messages sent now from the true states `states`: the beacons first
 /// (a lost navigator's beacon passes to its successor, the leader of `lead`), then, when
 /// every UAV broadcasts, the others by id; each carries its sender's own measurement.
@@ -83,26 +97,15 @@ pub fn compose(
     (lead, parallel): (Lead, bool),
     out: &mut Vec<Message>,
 ) {
-    let (radio, beacons) = (sc.radio(), sc.beacons());
-    let n = states.len();
-    let all = if radio.broadcast_all { n } else { 0 };
-    let beacon = |b: &UavId| if *b == lead.navigator { lead.leader.index() } else { b.index() };
     out.clear();
-    out.extend(
-        beacons
-            .iter()
-            .map(beacon)
-            .chain((0..all).filter(|j| !beacons.iter().any(|b| beacon(b) == *j)))
-            .filter(|&j| j < n)
-            .map(|j| Message {
-                sender: j as u32,
-                about: j as u32,
-                state: State9::zeros(),
-                age_s: 0.0,
-                at: [0.0; 3],
-                relative: false,
-            }),
-    );
+    out.extend(senders(sc, lead, states.len()).map(|j| Message {
+        sender: j as u32,
+        about: j as u32,
+        state: State9::zeros(),
+        age_s: 0.0,
+        at: [0.0; 3],
+        relative: false,
+    }));
     crate::parallel::for_each_mut(out, parallel, |_, m| {
         let j = m.sender as usize;
         let s = &states[j];

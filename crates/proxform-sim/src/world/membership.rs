@@ -83,7 +83,7 @@ impl Membership {
     }
 
     /// The formation flown at `t`, indexed by UAV.
-    pub fn flown<'a>(&'a self, sc: &'a Scenario, t: f64) -> &'a Formation {
+    pub fn flown<'a>(&'a self, sc: &'a Scenario, t: f64) -> &'a Arc<Formation> {
         match &self.slots {
             Some(s) => &s.flown,
             None => sc.formation_at(t),
