@@ -273,6 +273,40 @@ fn the_engines_agree_through_faults() {
 }
 
 #[test]
+fn the_engines_agree_with_relative_sensing() {
+    // Each UAV's position fix has a 3 m σ bias of its own; its sensors measure neighbours
+    // relative to it (its tracks follow its own fix). The V of twenty at its defaults: the
+    // navigator reaches the rear ranks in relays placed by each receiver's own view of the
+    // relay's sender; every run passes on both engines, with the same errors.
+    let v20 = include_str!("../../../scenarios/depth-v20.toml")
+        .lines()
+        .filter(|l| !["navigator_degree", "isolation_gate", "own_gate_m"].iter().any(|k| l.starts_with(k)))
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n[noise]\ngnss_bias_m = 3.0\n[sensing]\nrelative = true\n";
+    let biased = shipped_on_fast(&v20, "depth-v20.toml");
+    assert!(biased.relative_sensing() && biased.radio().relay_navigator);
+    let (a, _) = agree(&biased, RunOptions::default(), 8);
+    assert!(a.max[1] < 5.0, "{a:?}");
+    // A V of twelve without relays: the navigator's broadcast is its own biased fix, which a
+    // UAV that hears a neighbour onboard leaves out (`radio_fallback`, from its tracks' record
+    // of what they heard onboard); without the fallback every run fails.
+    let v12 = |fallback: bool| {
+        let text = format!(
+            "name = \"v12-bias\"\nengine = \"fast\"\nduration_s = 90.0\n[formation.shape]\nkind = \"v\"\nuavs = 12\n\
+             spacing_m = 70.0\n[path]\nkind = \"waypoints\"\nspeed_kmh = 220.0\nturn_radius_m = 2500.0\n\
+             transition_s = 15.0\npoints_m = [[2000.0, 0.0, 0.0], [4000.0, -400.0, 20.0], [7000.0, -400.0, 20.0]]\n\
+             [noise]\ngnss_bias_m = 3.0\n[sensing]\nrelative = true\ndropout = 0.2\n[controller]\n\
+             radio_fallback = {fallback}\n[radio]\nrelay_navigator = false\n"
+        );
+        proxform_scenario::load::parse(&text, "v12.toml").expect("valid")
+    };
+    let (kept, mixed) = (fast(&v12(true), RunOptions::default(), 1), fast(&v12(false), RunOptions::default(), 1));
+    assert!(kept.pass && kept.max_abs_error[1] < 1.0, "{:?}", kept.max_abs_error);
+    assert!(!mixed.pass && mixed.max_abs_error[..3].iter().any(|&e| e > 5.0), "{:?}", mixed.max_abs_error);
+}
+
+#[test]
 fn the_engines_agree_forming_from_scattered_starts() {
     // Two shipped forming flights: five followers scattered over a disc of 1 km (random per
     // run) join the navigator's slots, and a hundred UAVs take off from a row on the ground
@@ -528,12 +562,12 @@ fn the_engine_is_chosen_by_the_scenario() {
         s.noise.gnss_bias_m = Some(0.5);
     });
     assert_eq!(engine_for(&windy), Ok(EngineKind::Fast), "wind and a position-fix bias are run");
-    let relative = swarm(100, |s| {
+    let singer = swarm(100, |s| {
         s.engine = Some("fast".into());
-        s.sensing.relative = Some(true);
+        s.controller.predictor = Some("singer".into());
     });
-    let e = engine_for(&relative).expect_err("relative sensing is not supported");
-    assert!(e.to_string().contains("sensing.relative"), "{e}");
+    let e = engine_for(&singer).expect_err("the Singer predictor is not supported");
+    assert!(e.to_string().contains("a predictor other than α-β"), "{e}");
     let paper = proxform_scenario::builtin::paper();
     assert_eq!(engine_for(&paper), Ok(EngineKind::Reference));
 }

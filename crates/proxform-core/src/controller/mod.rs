@@ -142,12 +142,43 @@ impl Counted<'_> {
     }
 }
 
-/// A UAV's own measured position and velocity at a time (relative sensing).
-#[derive(Debug, Clone, Copy)]
-struct OwnFix {
+/// A UAV's own measured position and velocity at a time: with relative sensing, the frame its
+/// tracks are in (every onboard observation is its own measured position plus the
+/// neighbour's relative one). Kept by [`ProximityController`] and per UAV by an engine that
+/// keeps its tracks itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OwnFix {
     t: f64,
     pos: [f64; 3],
     vel: [f64; 3],
+}
+
+impl OwnFix {
+    /// The fix of the UAV's own state estimate `own` at `now_s`.
+    pub fn new(now_s: f64, own: &State9) -> Self {
+        Self { t: now_s, pos: [own[X], own[X + 1], own[X + 2]], vel: [own[VX], own[VX + 1], own[VX + 2]] }
+    }
+
+    /// Follows the fix to `next`: how far the UAV's tracks move with it (what the own measured
+    /// position moved beyond its measured velocity since this fix, trapezoid rule), so that a
+    /// track coasting from then and the UAV's own state keep the same error; None when the
+    /// fixes lie more than `max_s` apart (or not in order) or the move is not finite.
+    pub fn follow(&mut self, next: OwnFix, max_s: f64) -> Option<[f64; 3]> {
+        let h = next.t - self.t;
+        let d: [f64; 3] = std::array::from_fn(|k| next.pos[k] - self.pos[k] - 0.5 * h * (self.vel[k] + next.vel[k]));
+        *self = next;
+        (h > 0.0 && h <= max_s && d.iter().all(|x| x.is_finite())).then_some(d)
+    }
+
+    /// `state` (in the UAV's tracks' frame) relative to the UAV's own position at `now`: its
+    /// fix carried there at the fix's velocity.
+    pub fn relative(&self, now: f64, mut state: State9) -> State9 {
+        let h = now - self.t;
+        for k in 0..3 {
+            state[X + k] -= self.pos[k] + self.vel[k] * h;
+        }
+        state
+    }
 }
 
 /// The formation's turn rate as one UAV sees it (the mean of its neighbours' turn rates) and
@@ -336,18 +367,14 @@ impl ProximityController {
     /// relative, before a fix).
     pub fn navigator_report(&self, now: f64) -> Option<NavigatorReport> {
         let navigator = self.navigator?;
-        let (mut state, age_s) = navigator_track(&self.setup.params, &self.tracks, navigator, now)?;
+        let (state, age_s) = navigator_track(&self.setup.params, &self.tracks, navigator, now)?;
         if !self.setup.params.relative_sensing {
             return Some(NavigatorReport { state, age_s, relative: false });
         }
         // The track at its last measurement, less the UAV's own position now (its last fix, in
         // whose frame its tracks are, carried to now at the fix's velocity).
         let fix = self.own_frame.as_deref()?;
-        let h = now - fix.t;
-        for k in 0..3 {
-            state[X + k] -= fix.pos[k] + fix.vel[k] * h;
-        }
-        Some(NavigatorReport { state, age_s, relative: true })
+        Some(NavigatorReport { state: fix.relative(now, state), age_s, relative: true })
     }
 
     /// A controller with its own [`ControllerSetup`] (convenient for a single UAV).
@@ -416,20 +443,14 @@ impl ProximityController {
     /// position moved beyond its measured velocity since the last period (trapezoid rule), so
     /// that a track coasting from then and the UAV's own state keep the same error.
     fn follow_own_frame(&mut self, now_s: f64, own: &State9) {
-        let pos = [own[X], own[X + 1], own[X + 2]];
-        let vel = [own[VX], own[VX + 1], own[VX + 2]];
-        let now = OwnFix { t: now_s, pos, vel };
-        if let Some(last) = self.own_frame.as_deref_mut() {
-            let h = now_s - last.t;
-            if h > 0.0 && h <= self.setup.params.track_timeout_s {
-                let d: [f64; 3] = std::array::from_fn(|k| pos[k] - last.pos[k] - 0.5 * h * (last.vel[k] + vel[k]));
-                if d.iter().all(|x| x.is_finite()) {
+        let now = OwnFix::new(now_s, own);
+        match self.own_frame.as_deref_mut() {
+            Some(last) => {
+                if let Some(d) = last.follow(now, self.setup.params.track_timeout_s) {
                     self.tracks.shift(d);
                 }
             }
-            *last = now;
-        } else {
-            self.own_frame = Some(Box::new(now));
+            None => self.own_frame = Some(Box::new(now)),
         }
     }
 }

@@ -41,8 +41,7 @@ pub trait Tracks {
     fn report(&self, id: UavId, now: f64, max_age_s: f64) -> Option<(State9, f64)>;
 
     /// Whether `id`'s last report came from the owner's own sensors within `max_s` of `now`
-    /// (relative sensing only: a store that does not keep the source answers false, and its
-    /// engine does not run relative sensing).
+    /// (used with relative sensing only).
     fn heard_onboard(&self, id: UavId, now: f64, max_s: f64) -> bool;
 
     /// Whether any neighbour's last report came from the owner's own sensors within `max_s`.

@@ -39,8 +39,8 @@ mod setup;
 mod tracks;
 mod update;
 
-use proxform_core::controller::TurnTrend;
 use proxform_core::controller::{relative_speed_bound, Avoidance};
+use proxform_core::controller::{OwnFix, TurnTrend};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{Input, VX, X};
@@ -76,7 +76,7 @@ type BlockSlices<'b> = (
     usize,
     (
         ((&'b mut [UavStep], &'b mut [[f32; 6]]), ((&'b mut [Track], &'b mut [u8]), &'b mut Vec<OwnEstimate>)),
-        (&'b mut Vec<(u32, Box<Avoidance>)>, &'b mut Vec<Autopilot>),
+        (&'b mut Vec<(u32, Box<Avoidance>)>, (&'b mut Vec<Autopilot>, &'b mut Vec<Option<OwnFix>>)),
     ),
 );
 
@@ -106,6 +106,9 @@ pub struct FastSimulation<'s> {
     /// What each UAV's autopilot flies (its setpoint and turn trend), per block; empty where
     /// the vehicle keeps neither.
     autopilot: Vec<Vec<Autopilot>>,
+    /// Each UAV's last own position fix, per block (relative sensing: the frame of its tracks;
+    /// empty without).
+    frames: Vec<Vec<Option<OwnFix>>>,
     /// Collision avoidance's memory of the UAVs whose rule remembers a side, per block (few
     /// UAVs of a large swarm ever have one).
     avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
@@ -176,6 +179,12 @@ impl<'s> FastSimulation<'s> {
                     false => Vec::new(),
                 })
                 .collect(),
+            frames: (0..n.div_ceil(BLOCK))
+                .map(|b| match sc.relative_sensing() {
+                    true => vec![None; BLOCK.min(n - b * BLOCK)],
+                    false => Vec::new(),
+                })
+                .collect(),
             avoid: vec![Vec::new(); n.div_ceil(BLOCK)],
             grid: NeighbourGrid::new(),
             env: environment::initial(sc),
@@ -234,6 +243,7 @@ impl<'s> FastSimulation<'s> {
             + self.air.heap_bytes()
             + self.own.iter().flatten().map(|o| std::mem::size_of::<OwnEstimate>() + o.heap_bytes()).sum::<usize>()
             + self.autopilot.iter().map(|a| a.len() * std::mem::size_of::<Autopilot>()).sum::<usize>()
+            + self.frames.iter().map(|f| f.len() * std::mem::size_of::<Option<OwnFix>>()).sum::<usize>()
     }
 
     /// The origin of the reference points at step `k` (the navigator's path position).
@@ -295,6 +305,7 @@ impl<'s> FastSimulation<'s> {
         self.used.fill(0);
         self.avoid.iter_mut().for_each(Vec::clear);
         self.autopilot.iter_mut().flatten().for_each(|a| a.trend = TurnTrend::default());
+        self.frames.iter_mut().flatten().for_each(|f| *f = None);
     }
 
     /// At a change of formation every follower flies its new slot on its new table from a
@@ -334,6 +345,7 @@ impl<'s> FastSimulation<'s> {
             own,
             avoid,
             autopilot,
+            frames,
             grid,
             env,
             air,
@@ -390,20 +402,29 @@ impl<'s> FastSimulation<'s> {
         let controlled = |i: usize| members.active[i] && i != c.nav && i != members.lead.leader.index();
         if sc.radio().relay_navigator {
             let cap = c.capacity;
-            let relays = |(b, (tracks, used)): (usize, (&mut [Track], &mut [u8]))| -> Vec<Message> {
+            type Records<'r> = (&'r mut [Track], (&'r mut [u8], &'r Vec<Option<OwnFix>>));
+            let relays = |(b, (tracks, (used, frames))): (usize, Records<'_>)| -> Vec<Message> {
                 (0..used.len())
                     .filter(|&o| controlled(b * BLOCK + o))
                     .filter_map(|o| {
                         let (t, u) = (&mut tracks[o * cap..(o + 1) * cap], &mut used[o]);
-                        update::relay(&view, b * BLOCK + o, Owner { tracks: t, used: u })
+                        update::relay(&view, b * BLOCK + o, Owner { tracks: t, used: u }, frames.get(o))
                     })
                     .collect()
             };
             let blocks: Vec<Vec<Message>> = match self.parallel {
-                true => {
-                    tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).enumerate().map(relays).collect()
-                }
-                false => tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).enumerate().map(relays).collect(),
+                true => tracks
+                    .par_chunks_mut(BLOCK * cap)
+                    .zip(used.par_chunks_mut(BLOCK).zip(frames.par_iter()))
+                    .enumerate()
+                    .map(relays)
+                    .collect(),
+                false => tracks
+                    .chunks_mut(BLOCK * cap)
+                    .zip(used.chunks_mut(BLOCK).zip(frames.iter()))
+                    .enumerate()
+                    .map(relays)
+                    .collect(),
             };
             messages.extend(blocks.into_iter().flatten());
         }
@@ -413,7 +434,7 @@ impl<'s> FastSimulation<'s> {
         let cap = c.capacity;
         let block =
             |scratch: &mut Scratch,
-             (b, (((uavs, applied), ((tracks, used), own)), (avoid, pilots))): BlockSlices<'_>| {
+             (b, (((uavs, applied), ((tracks, used), own)), (avoid, (pilots, fixes)))): BlockSlices<'_>| {
                 for o in 0..uavs.len() {
                     let i = b * BLOCK + o;
                     // The navigator, its successor and the UAVs not flying have no controller.
@@ -430,6 +451,7 @@ impl<'s> FastSimulation<'s> {
                         tracks: Owner { tracks: &mut tracks[o * cap..(o + 1) * cap], used: &mut used[o] },
                         own: own.get_mut(o).unwrap_or(&mut none),
                         autopilot: pilots.get_mut(o),
+                        frame: fixes.get_mut(o),
                         avoid: &mut remembered,
                     };
                     let u = update::update(&view, i, scratch, kept);
@@ -444,7 +466,7 @@ impl<'s> FastSimulation<'s> {
             uavs.par_chunks_mut(BLOCK)
                 .zip(applied.par_chunks_mut(BLOCK))
                 .zip(tracks.par_chunks_mut(BLOCK * cap).zip(used.par_chunks_mut(BLOCK)).zip(own.par_iter_mut()))
-                .zip(avoid.par_iter_mut().zip(autopilot.par_iter_mut()))
+                .zip(avoid.par_iter_mut().zip(autopilot.par_iter_mut().zip(frames.par_iter_mut())))
                 .enumerate()
                 .for_each_init(|| Scratch::new(c, sc), block);
         } else {
@@ -452,7 +474,7 @@ impl<'s> FastSimulation<'s> {
             uavs.chunks_mut(BLOCK)
                 .zip(applied.chunks_mut(BLOCK))
                 .zip(tracks.chunks_mut(BLOCK * cap).zip(used.chunks_mut(BLOCK)).zip(own.iter_mut()))
-                .zip(avoid.iter_mut().zip(autopilot.iter_mut()))
+                .zip(avoid.iter_mut().zip(autopilot.iter_mut().zip(frames.iter_mut())))
                 .enumerate()
                 .for_each(|x| block(&mut scratch, x));
         }

@@ -17,8 +17,7 @@ pub struct Unsupported(pub String);
 /// reference's own ([`proxform_core::controller::UavView::step`]), so every controller setting
 /// runs (the robust fusion, the horizon, separation keeping, the stopping limit, collision
 /// avoidance, the turn feed-forward, every formation frame) but what its records or its world
-/// cannot represent: its tracks are α-β filters that keep no report's source (no other
-/// predictor, no relative sensing), and its world flies every vehicle (the plant written once
+/// cannot represent: its tracks are α-β filters (no other predictor), and its world flies every vehicle (the plant written once
 /// for both engines, [`crate::world::plant`]; a UAV flown by setpoints keeps its setpoint and
 /// its turn trend from step to step) with measurement noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
 /// (steady, gusts, turbulence), the position fix's bias, changes of formation (every UAV at
@@ -27,8 +26,9 @@ pub struct Unsupported(pub String);
 /// a delayed radio (the reference's own delay line; its tracks updated at a report's
 /// measurement), relays of the navigator (each follower's from its records), and faults, the
 /// navigator's succession and slot re-assignment (the reference's own
-/// [`crate::world::membership::Membership`]). The baselines, another predictor and relative
-/// sensing stay with the reference engine.
+/// [`crate::world::membership::Membership`]), and relative sensing (each UAV's last own fix,
+/// [`proxform_core::controller::OwnFix`], and a flag a track for a report of its own sensors).
+/// The baselines and another predictor stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let tracks = p.areas.areas + max_refs(sc);
@@ -37,10 +37,9 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
         p.areas.areas,
         max_refs(sc)
     );
-    let checks: [(bool, &str); 6] = [
+    let checks: [(bool, &str); 5] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
         (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
-        (!sc.relative_sensing(), "relative sensing (sensing.relative)"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (tracks <= MAX_TRACKS, &too_many),
         (

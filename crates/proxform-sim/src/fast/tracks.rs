@@ -24,7 +24,7 @@ use proxform_core::controller::Tracks;
 use proxform_core::plan::Carry;
 use proxform_core::predictor::SAME_INSTANT_S;
 use proxform_core::state::{State9, VX};
-use proxform_core::{Observation, UavId};
+use proxform_core::{Observation, ObservationSource, UavId};
 
 /// Marks a free track.
 pub const FREE: u32 = u32::MAX;
@@ -61,12 +61,16 @@ pub struct Track {
     /// Steps from its last measurement to when that report arrived (the radio's delay; 0 for
     /// what is sensed onboard).
     lag: u8,
-    _pad: u8,
+    /// [`ONBOARD`] when its last report came from the owner's own sensors.
+    flags: u8,
 }
+
+/// [`Track::flags`]: the last report came from the owner's own sensors (not the radio).
+const ONBOARD: u8 = 1;
 
 impl Default for Track {
     fn default() -> Self {
-        Self { word: FREE, pv: [0.0; 6], att: [0; 3], rate: [0; 6], lag: 0, _pad: 0 }
+        Self { word: FREE, pv: [0.0; 6], att: [0; 3], rate: [0; 6], lag: 0, flags: 0 }
     }
 }
 
@@ -254,6 +258,18 @@ impl Owner<'_> {
         oldest
     }
 
+    /// Moves every track's position by `d` (m): the frame its observations are given in moved
+    /// (relative sensing: the owner's own position fix).
+    pub fn shift(&mut self, d: [f64; 3]) {
+        for t in self.tracks[..usize::from(*self.used)].iter_mut() {
+            let mut pv = t.pv;
+            for c in 0..3 {
+                pv[c] += d[c] as f32;
+            }
+            t.pv = pv;
+        }
+    }
+
     /// The slot of `id`'s track, if it has one.
     #[inline]
     pub fn find(&self, id: u32) -> Option<usize> {
@@ -405,6 +421,17 @@ impl<S: Fn(i32) -> [f64; 3]> StepTracks<'_, '_, S> {
         (age, if lag == 0 { age } else { age - f64::from(lag) * self.filter.dt })
     }
 
+    /// Whether slot `s`'s last report came from the owner's own sensors no longer than `max_s`
+    /// before `now`, its measurement within the timeout (as the reference's tracks).
+    #[inline]
+    fn heard_onboard_in(&self, s: usize, now: f64, max_s: f64) -> bool {
+        let (age, missing) = self.since_heard(s, now);
+        let timeout = self.filter.timeout_steps as f64 * self.filter.dt;
+        self.owner.tracks[s].flags & ONBOARD != 0
+            && missing <= max_s + SAME_INSTANT_S
+            && age <= timeout + SAME_INSTANT_S
+    }
+
     /// Whether a state `h` seconds after its measurement is brought forward by the plan (past
     /// the track's own rates' span: a period, at most `coast_accel_s`).
     #[inline]
@@ -447,6 +474,7 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
                 // one, which the record could not even place in time, ages being modulo 128.)
                 if k0 > k_obs {
                     self.owner.tracks[s].lag = (self.k - k0) as u8;
+                    self.owner.tracks[s].flags = onboard_flag(obs);
                     return self.state_after(s, k0, horizon_s + f64::from(self.k - k0) * self.filter.dt);
                 }
             }
@@ -460,9 +488,11 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
                 [e[0] - d[0], e[1] - d[1], e[2] - d[2]]
             };
             let (s, _) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), (k_obs, lag as u8), &z, shift);
+            self.owner.tracks[s].flags = onboard_flag(obs);
             return self.state_after(s, k_obs, h);
         }
         let (s, x) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), (self.k, 0), &obs.state, &self.shift);
+        self.owner.tracks[s].flags = onboard_flag(obs);
         match self.carried(h) {
             Some(carry) => {
                 let t0 = f64::from(self.k) * self.filter.dt;
@@ -515,13 +545,23 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
     }
 
     #[inline]
-    fn heard_onboard(&self, _id: UavId, _now: f64, _max_s: f64) -> bool {
-        false
+    fn heard_onboard(&self, id: UavId, now: f64, max_s: f64) -> bool {
+        self.owner.find(id.0).is_some_and(|s| self.heard_onboard_in(s, now, max_s))
     }
 
     #[inline]
-    fn any_heard_onboard(&self, _now: f64, _max_s: f64) -> bool {
-        false
+    fn any_heard_onboard(&self, now: f64, max_s: f64) -> bool {
+        (0..self.owner.used()).any(|s| self.owner.tracks[s].word != FREE && self.heard_onboard_in(s, now, max_s))
+    }
+}
+
+/// [`ONBOARD`] for a report of the owner's own sensors (onboard, a close-range detection, a
+/// relay placed from its own view of the sender), nothing for the radio's.
+#[inline]
+fn onboard_flag(obs: &Observation) -> u8 {
+    match obs.source {
+        ObservationSource::Radio => 0,
+        _ => ONBOARD,
     }
 }
 

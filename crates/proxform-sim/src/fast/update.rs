@@ -9,7 +9,7 @@
 //! ([`super::tracks::StepTracks`]). Collision avoidance's memory is kept per UAV only while it
 //! remembers a side.
 
-use proxform_core::controller::{navigator_track, Avoidance, Decision, StepScratch, TurnTrend, UavView};
+use proxform_core::controller::{navigator_track, Avoidance, Decision, OwnFix, StepScratch, TurnTrend, UavView};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{State9, X};
@@ -175,7 +175,7 @@ pub fn reference_point(v: &View<'_>, i: usize) -> [f64; 3] {
 /// The relay of follower `i` (`radio.relay_navigator`), from its tracks: what it knows of the
 /// navigator ([`proxform_core::controller::navigator_track`], as the reference's agents
 /// forward it), None when it does not track it.
-pub fn relay(v: &View<'_>, i: usize, tracks: Owner<'_>) -> Option<Message> {
+pub fn relay(v: &View<'_>, i: usize, tracks: Owner<'_>, frame: Option<&Option<OwnFix>>) -> Option<Message> {
     let c = v.c;
     let r_i = reference_point(v, i);
     let store = StepTracks {
@@ -192,8 +192,14 @@ pub fn relay(v: &View<'_>, i: usize, tracks: Owner<'_>) -> Option<Message> {
     for k in 0..3 {
         state[X + k] += r_i[k];
     }
+    // Relative sensing: its tracks are in the frame of its own fix; the report is relative to
+    // its own position now (none before a fix).
+    let (state, relative) = match frame {
+        Some(fix) => ((*fix)?.relative(t, state), true),
+        None => (state, false),
+    };
     let s = &v.states[i];
-    Some(Message { sender: i as u32, about: v.leader.0, state, age_s, at: [s[X], s[X + 1], s[X + 2]], relative: false })
+    Some(Message { sender: i as u32, about: v.leader.0, state, age_s, at: [s[X], s[X + 1], s[X + 2]], relative })
 }
 
 /// What UAV `i` decided and how: its input (applied) and its record.
@@ -212,10 +218,12 @@ pub struct Autopilot {
 }
 
 /// What follower `i` keeps from one step to the next: its tracks, its own estimate, its
-/// autopilot's setpoint and turn trend (None where the vehicle keeps neither).
+/// autopilot's setpoint and turn trend (None where the vehicle keeps neither), its last own
+/// position fix (relative sensing: the frame of its tracks; None without).
 pub struct Kept<'k> {
     pub tracks: Owner<'k>,
     pub own: &'k mut OwnEstimate,
+    pub frame: Option<&'k mut Option<OwnFix>>,
     pub autopilot: Option<&'k mut Autopilot>,
     pub avoid: &'k mut Option<Box<Avoidance>>,
 }
@@ -239,10 +247,25 @@ pub fn update(v: &View<'_>, i: usize, s: &mut Scratch, kept: Kept<'_>) -> Update
     for k in 0..3 {
         own[k] -= r_i[k];
     }
-    build_observations(v, i, s, &r_i);
+    // Relative sensing: what it observes onboard carries its own measurement's error, and its
+    // tracks follow its own position fix (as the reference's controller).
+    let mut tracks = kept.tracks;
+    let error = kept.frame.map(|frame| {
+        let fix = OwnFix::new(t, &own_abs);
+        match frame {
+            Some(last) => {
+                if let Some(d) = last.follow(fix, setup.params().track_timeout_s) {
+                    tracks.shift(d);
+                }
+            }
+            None => *frame = Some(fix),
+        }
+        proxform_core::state::difference(&measured, &v.states[i])
+    });
+    build_observations(v, i, s, &r_i, error.as_ref());
     let mut autopilot = kept.autopilot;
     let trend = autopilot.as_deref_mut().map(|a| &mut a.trend).filter(|_| setup.keeps_turn_trend());
-    let mut d = decide(v, i, (&own, r_i), s, (kept.tracks, trend), kept.avoid);
+    let mut d = decide(v, i, (&own, r_i), s, (tracks, trend), kept.avoid);
     // The autopilot of a vehicle flown by setpoints flies the last one it was given.
     if let Some(a) = autopilot {
         a.setpoint = d.take_setpoint(sc.vehicle(), &own_abs, c.dt, a.setpoint.as_ref());
@@ -290,6 +313,9 @@ struct Noted<'a> {
     radio_key: u64,
     /// Dropout draws so far.
     draws: u64,
+    /// The true states and the noise σ (where a relative relay's sender is placed).
+    states: &'a [State9],
+    sigma: &'a [f32; 9],
 }
 
 impl Picks for Noted<'_> {
@@ -337,11 +363,12 @@ impl Picks for Noted<'_> {
         self.picked.push(j);
     }
 
-    /// None: the noise of what was seen is drawn afterwards (relative relays, which need it,
-    /// come with relative sensing, which this engine does not run).
+    /// The noisy observation of `j` that [`build_observations`] draws afterwards (the same
+    /// deviates of the UAV's sensing stream, drawn here for the one asked).
     #[inline]
-    fn seen_onboard(&self, _j: u32) -> Option<State9> {
-        None
+    fn seen_onboard(&self, j: u32) -> Option<State9> {
+        let n = self.picked[..*self.onboard].iter().position(|&p| p == j)?;
+        Some(observed(&self.states[j as usize], self.sigma, self.drop_key, n))
     }
 }
 
@@ -385,6 +412,8 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
         drop_key: bulk::key(&v.run, i as u64, Source::Sensing, v.draw_step),
         radio_key: bulk::key(&v.run, i as u64, Source::Radio, v.draw_step),
         draws: 0,
+        states: v.states,
+        sigma: &v.c.sigma,
     };
     v.sensor.pick(i, &scene, &link, &mut noted, &mut s.sensor);
     let radio_reports = s.heard.len() + s.relayed.iter().filter(|o| o.source == ObservationSource::Radio).count();
@@ -395,9 +424,28 @@ fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
     }
 }
 
+/// The `n`-th noisy observation of a UAV's perception, of true state `truth`: deviates
+/// `9n … 9n + 8` of its sensing stream `key`, as [`build_observations`] draws them in bulk.
+fn observed(truth: &State9, sigma: &[f32; 9], key: u64, n: usize) -> State9 {
+    let first = 9 * n;
+    let mut z = [0.0f32; 10];
+    bulk::normals(key, (first / 2) as u64, &mut z);
+    let z = &z[first % 2..first % 2 + 9];
+    let mut st = *truth;
+    for k in 0..9 {
+        st[k] += f64::from(sigma[k] * z[k]);
+    }
+    st
+}
+
 // A phase of `proxform bench`'s instruction table: kept a function of its own.
 #[inline(never)]
-fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3]) {
+///
+/// With relative sensing (`error`: the UAV's own measurement less its true state) what it
+/// observes onboard is placed with its own measured state: the error moves every onboard and
+/// close-range observation, and the position of a relay placed from its own view of the
+/// sender (as the reference's sensing does).
+fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3], error: Option<&State9>) {
     let c = v.c;
     let onboard = s.onboard;
     let noisy = s.picked.len();
@@ -412,6 +460,9 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3]) {
         }
         for k in 0..3 {
             st[k] -= r_i[k];
+        }
+        if let Some(e) = error {
+            st += e;
         }
         Observation { id: UavId(j), state: st, age_s: 0.0, source }
     };
@@ -432,6 +483,11 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3]) {
         let mut o = *o;
         for k in 0..3 {
             o.state[k] -= r_i[k];
+        }
+        if let Some(e) = error.filter(|_| o.source == ObservationSource::Relayed) {
+            for k in 0..3 {
+                o.state[k] += e[k];
+            }
         }
         s.obs.push(o);
     }
