@@ -199,10 +199,16 @@ fn a_steady_wind_on_the_kinematic_vehicle_is_named_in_a_warning() {
 }
 
 #[test]
-fn the_fast_engine_refuses_the_multirotor_naming_the_key() {
+fn the_fast_engine_flies_the_multirotor_circuit() {
+    // Its plant is the reference's (`world::plant`), its navigator flown along the path by its
+    // autopilot, each UAV holding its setpoint between adjustments.
     let s = circuit(|_| {});
-    let e = proxform_sim::fast::supports(&s).expect_err("refused");
-    assert!(e.to_string().contains("vehicle.model"), "{e}");
+    proxform_sim::fast::supports(&s).expect("every vehicle runs on the fast engine");
+    let mut m = proxform_sim::RunMetrics::new(&s);
+    let sim = proxform_sim::fast::FastSimulation::new(&s, RunOptions::default(), 1, 0).expect("supported");
+    sim.run(&mut m);
+    let r = m.finish(0, s.duration_s());
+    assert!(r.pass && r.max_abs_error[..3].iter().all(|&e| e < 1.0), "{:?}", r.max_abs_error);
 }
 
 #[test]
