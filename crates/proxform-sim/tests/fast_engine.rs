@@ -450,11 +450,12 @@ type Edit = fn(&mut ScenarioSpec);
 fn the_engines_run_one_controller_step_whatever_its_settings() {
     // Settings the fast engine ran only on the reference engine until the two shared one
     // controller step: the robust fusion, the turn feed-forward, the own-state filter and check,
-    // a horizon of three periods, a formation in the heading frame. Each changes what the controller does (checked against the lattice's
+    // a horizon of three periods, the constant-velocity predictor, a formation in the heading
+    // frame. Each changes what the controller does (checked against the lattice's
     // defaults), and the engines agree on it.
     let base = swarm(300, |s| s.duration_s = Some(20.0));
     let plain = figures(&[fast(&base, RunOptions::default(), 0)]);
-    let settings: [(&str, Edit); 6] = [
+    let settings: [(&str, Edit); 7] = [
         // A gate of half the permissible errors in noise five times the default's: the fusion
         // leaves neighbours out.
         ("robust fusion", |s| {
@@ -471,6 +472,8 @@ fn the_engines_run_one_controller_step_whatever_its_settings() {
             s.noise.scale = Some(5.0);
         }),
         ("horizon", |s| s.controller.horizon = Some(3)),
+        // The plain transition on each observation: no tracks, nothing coasts.
+        ("constant-velocity predictor", |s| s.controller.predictor = Some("constant_velocity".into())),
         ("heading frame", |s| s.formation.frame = Some("heading".into())),
         // Lost reports brought forward by the plan, which turns with the heading: the plan
         // turns a report about the planned navigator, so a relative one must be placed first.
@@ -567,7 +570,7 @@ fn the_engine_is_chosen_by_the_scenario() {
         s.controller.predictor = Some("singer".into());
     });
     let e = engine_for(&singer).expect_err("the Singer predictor is not supported");
-    assert!(e.to_string().contains("a predictor other than α-β"), "{e}");
+    assert!(e.to_string().contains("the Singer predictor"), "{e}");
     let paper = proxform_scenario::builtin::paper();
     assert_eq!(engine_for(&paper), Ok(EngineKind::Reference));
 }

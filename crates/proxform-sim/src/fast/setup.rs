@@ -17,7 +17,7 @@ pub struct Unsupported(pub String);
 /// reference's own ([`proxform_core::controller::UavView::step`]), so every controller setting
 /// runs (the robust fusion, the horizon, separation keeping, the stopping limit, collision
 /// avoidance, the turn feed-forward, every formation frame) but what its records or its world
-/// cannot represent: its tracks are α-β filters (no other predictor), and its world flies every vehicle (the plant written once
+/// cannot represent: its tracks are α-β filters or none (the constant-velocity predictor; no Singer filter), and its world flies every vehicle (the plant written once
 /// for both engines, [`crate::world::plant`]; a UAV flown by setpoints keeps its setpoint and
 /// its turn trend from step to step) with measurement noise, actuation error, onboard dropout, beacons and radio loss (i.i.d. and bursty), wind
 /// (steady, gusts, turbulence), the position fix's bias, changes of formation (every UAV at
@@ -28,7 +28,7 @@ pub struct Unsupported(pub String);
 /// navigator's succession and slot re-assignment (the reference's own
 /// [`crate::world::membership::Membership`]), and relative sensing (each UAV's last own fix,
 /// [`proxform_core::controller::OwnFix`], and a flag a track for a report of its own sensors).
-/// The baselines and another predictor stay with the reference engine.
+/// The baselines and the Singer predictor stay with the reference engine.
 pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     let p = sc.controller();
     let tracks = p.areas.areas + max_refs(sc);
@@ -39,7 +39,7 @@ pub fn supports(sc: &Scenario) -> Result<(), Unsupported> {
     );
     let checks: [(bool, &str); 5] = [
         (matches!(sc.method(), Method::Proximity), "a baseline method"),
-        (matches!(p.predictor, PredictorKind::AlphaBeta { .. }), "a predictor other than α-β"),
+        (!matches!(p.predictor, PredictorKind::Singer { .. }), "the Singer predictor (controller.predictor)"),
         (sc.len() <= MAX_ID as usize, "more than 16 777 214 UAVs"),
         (tracks <= MAX_TRACKS, &too_many),
         (
@@ -129,7 +129,12 @@ impl Consts {
     pub fn new(sc: &Scenario) -> Self {
         let p = sc.controller();
         let setup = sc.agents().controller().clone();
-        let PredictorKind::AlphaBeta { alpha, beta } = p.predictor else { unreachable!("checked by supports") };
+        // The constant-velocity predictor keeps no tracks (the filter's gains are unused).
+        let (plain, (alpha, beta)) = match p.predictor {
+            PredictorKind::AlphaBeta { alpha, beta } => (false, (alpha, beta)),
+            PredictorKind::ConstantVelocity => (true, (1.0, 0.0)),
+            PredictorKind::Singer { .. } => unreachable!("checked by supports"),
+        };
         let dt = p.dt_s;
         let nav = sc.navigator().index();
         let range = p.areas.sensing_range_m;
@@ -157,7 +162,8 @@ impl Consts {
                     std::array::from_fn(|c| rates[c] + if c < 3 { wind } else { 0.0 }),
                     dt,
                 ),
-            ),
+            )
+            .plain(plain),
             track_limit: timeout_steps.max(steps(p.coast_s.min(p.track_timeout_s))),
             carry: setup.carry(sc.formation().frame),
             sigma: std::array::from_fn(|k| sigma[k] as f32),

@@ -144,6 +144,9 @@ impl Track {
 /// The α-β filter's constants.
 #[derive(Debug, Clone, Copy)]
 pub struct Filter {
+    /// No tracks (the constant-velocity predictor): each observation is predicted by the
+    /// plain transition F, and nothing is kept.
+    pub plain: bool,
     pub alpha: f64,
     pub beta: f64,
     /// Update period (s).
@@ -166,6 +169,7 @@ impl Filter {
     pub fn new(alpha: f64, beta: f64, dt: f64, timeout_steps: i64, coast_accel_s: f64, span: [f64; 6]) -> Self {
         let quantum = span.map(|s| (s.max(1e-6) / f64::from(i16::MAX)) as f32);
         Self {
+            plain: false,
             alpha,
             beta,
             dt,
@@ -175,6 +179,11 @@ impl Filter {
             rate_units: quantum.map(|q| 1.0 / q),
             rate_quantum: quantum,
         }
+    }
+
+    /// Keeps no tracks when `plain` (the constant-velocity predictor).
+    pub fn plain(self, plain: bool) -> Self {
+        Self { plain, ..self }
     }
 
     /// The span each rate is kept over: eight standard deviations of the rate a two-point start
@@ -455,7 +464,17 @@ impl<S: Fn(i32) -> [f64; 3]> StepTracks<'_, '_, S> {
 impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
     // A phase of `proxform bench`'s instruction table: kept a function of its own.
     #[inline(never)]
-    fn predict(&mut self, obs: &Observation, _now: f64, horizon_s: f64) -> State9 {
+    fn predict(&mut self, obs: &Observation, now: f64, horizon_s: f64) -> State9 {
+        if self.filter.plain {
+            // The constant-velocity predictor: the plain F on the observation, as the
+            // reference's tracks give it (they keep none either).
+            let h = now + horizon_s - (now - obs.age_s);
+            let mut s = obs.state;
+            for k in 0..3 {
+                s[k] += h * obs.state[VX + k];
+            }
+            return s;
+        }
         let h = horizon_s + obs.age_s;
         let hint = self.fed;
         self.fed += 1;
