@@ -172,21 +172,31 @@ pub fn reference_point(v: &View<'_>, i: usize) -> [f64; 3] {
     std::array::from_fn(|k| v.origin[k] + (p0[k] - v.origin0[k]))
 }
 
+/// A UAV's tracks (its records, its reference point at `r_i`) as the controller's store at
+/// this step.
+fn step_tracks<'a, 'v>(
+    v: &'v View<'_>,
+    tracks: Owner<'a>,
+    r_i: [f64; 3],
+) -> StepTracks<'a, 'v, impl Fn(i32) -> [f64; 3] + 'v> {
+    StepTracks {
+        owner: tracks,
+        filter: &v.c.filter,
+        carry: v.c.carry.as_deref(),
+        k: v.k,
+        shift: move |k0| v.shift(k0),
+        at: r_i,
+        fed: 0,
+    }
+}
+
 /// The relay of follower `i` (`radio.relay_navigator`), from its tracks: what it knows of the
 /// navigator ([`proxform_core::controller::navigator_track`], as the reference's agents
 /// forward it), None when it does not track it.
 pub fn relay(v: &View<'_>, i: usize, tracks: Owner<'_>, frame: Option<&Option<OwnFix>>) -> Option<Message> {
     let c = v.c;
     let r_i = reference_point(v, i);
-    let store = StepTracks {
-        owner: tracks,
-        filter: &c.filter,
-        carry: c.carry.as_deref(),
-        k: v.k,
-        shift: |k0| v.shift(k0),
-        at: r_i,
-        fed: 0,
-    };
+    let store = step_tracks(v, tracks, r_i);
     let t = f64::from(v.k) * c.dt;
     let (mut state, age_s) = navigator_track(v.sc.controller(), &store, v.leader, t)?;
     for k in 0..3 {
@@ -515,15 +525,7 @@ fn decide(
     let sc = v.sc;
     let mut tracks = tracks;
     tracks.sweep(v.k, c.track_limit);
-    let mut store = StepTracks {
-        owner: tracks,
-        filter: &c.filter,
-        carry: c.carry.as_deref(),
-        k: v.k,
-        shift: |k0| v.shift(k0),
-        at: r_i,
-        fed: 0,
-    };
+    let mut store = step_tracks(v, tracks, r_i);
     let Scratch { step, obs, avoid, .. } = s;
     let avoidance = match kept {
         Some(av) => Some(&mut **av),
