@@ -471,9 +471,6 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3], e
         for k in 0..3 {
             st[k] -= r_i[k];
         }
-        if let Some(e) = error {
-            st += e;
-        }
         Observation { id: UavId(j), state: st, age_s: 0.0, source }
     };
     for (n, &j) in s.picked[..onboard].iter().enumerate() {
@@ -494,16 +491,26 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3], e
         for k in 0..3 {
             o.state[k] -= r_i[k];
         }
-        if let Some(e) = error.filter(|_| o.source == ObservationSource::Relayed) {
-            for k in 0..3 {
-                o.state[k] += e[k];
-            }
-        }
         s.obs.push(o);
     }
     for n in onboard..noisy {
         let j = s.picked[n];
         s.obs.push(observe(j, &s.normals[9 * n..9 * n + 9], ObservationSource::Close));
+    }
+    if let Some(e) = error {
+        for o in s.obs.iter_mut() {
+            match o.source {
+                ObservationSource::Onboard | ObservationSource::Close => o.state += e,
+                // Placed from an onboard observation: its position (velocity and attitude are
+                // the relay's).
+                ObservationSource::Relayed => {
+                    for k in 0..3 {
+                        o.state[k] += e[k];
+                    }
+                }
+                ObservationSource::Radio => {}
+            }
+        }
     }
 }
 
