@@ -216,7 +216,8 @@ impl<'s> FastSimulation<'s> {
 
     /// Bytes a flight of `sc` will hold in the engine's arrays (as [`Self::heap_bytes`]),
     /// estimated before it is built: its per-UAV arrays, its track records, the neighbour grid
-    /// (about 32 bytes a UAV) and each UAV's environment.
+    /// (about 32 bytes a UAV), each UAV's environment, own estimate, autopilot and own fix where
+    /// it keeps them.
     pub fn bytes_estimate(sc: &Scenario) -> usize {
         let c = Consts::new(sc);
         let n = sc.len();
@@ -227,6 +228,8 @@ impl<'s> FastSimulation<'s> {
             + c.capacity * std::mem::size_of::<Track>()
             + std::mem::size_of::<UavEnv>()
             + if c.autopilot { std::mem::size_of::<Autopilot>() } else { 0 }
+            + if sc.relative_sensing() { std::mem::size_of::<Option<OwnFix>>() } else { 0 }
+            + if c.own_estimate { std::mem::size_of::<OwnEstimate>() } else { 0 }
             + 32)
     }
 
