@@ -176,3 +176,71 @@ fn after_a_loss_a_later_formation_leaves_its_own_edge_empty() {
     let c = r.transitions.expect("a loss and a change");
     assert_eq!((c.completed_fraction, r.pass_fraction), (1.0, 1.0), "{c:?}");
 }
+
+/// Agents that step as the in-process ones and count, from a second after the first change of
+/// formation on, each follower's main references of the new tables within its sensing range
+/// (`checked`) that its sensors did not report onboard (`missed`).
+struct Watching<'c> {
+    inner: proxform_sim::world::remote::LocalAgents,
+    tables: Vec<proxform_core::DependencySet>,
+    from_s: f64,
+    range_m: f64,
+    counts: &'c std::cell::Cell<(usize, usize)>,
+}
+
+impl proxform_sim::world::remote::Agents for Watching<'_> {
+    fn decide(
+        &mut self,
+        request: &proxform_sim::world::remote::StepRequest<'_>,
+        out: &mut Vec<proxform_core::Decision>,
+    ) {
+        self.inner.decide(request, out);
+        if request.phase != proxform_sim::world::remote::Phase::Fly || request.t_s < self.from_s {
+            return;
+        }
+        let (mut checked, mut missed) = self.counts.get();
+        let s = request.sensed;
+        for (j, u) in s.uavs.iter().enumerate() {
+            let heard = &s.heard[s.spans[j].clone()];
+            let me = &request.truth[u.index()];
+            for &(r, _) in self.tables[u.index()].refs() {
+                let q = &request.truth[r.index()];
+                let d2: f64 = (0..3).map(|k| (q[k] - me[k]).powi(2)).sum();
+                if r == *u || d2 > self.range_m * self.range_m {
+                    continue;
+                }
+                checked += 1;
+                let onboard = heard.iter().any(|o| o.id == r && o.source == proxform_core::ObservationSource::Onboard);
+                missed += usize::from(!onboard);
+            }
+        }
+        self.counts.set((checked, missed));
+    }
+}
+
+#[test]
+fn after_a_change_of_formation_the_sensors_report_the_new_main_references() {
+    // The shipped V that closes into a column at 60 s, without dropout: every main reference
+    // of a follower's new table within its sensing range is reported onboard (the sensor reads
+    // the tables flown now, as the controller does; it read the first formation's before).
+    let sc = file("change-v-column.toml", |s| {
+        s.sensing.dropout = Some(0.0);
+        s.sensing.reference_dropout = Some(0.0);
+        s.duration_s = Some(90.0);
+    });
+    let stage = &sc.schedule().stages()[0];
+    let counts = std::cell::Cell::new((0, 0));
+    let agents = Watching {
+        inner: proxform_sim::world::remote::LocalAgents::new(&sc),
+        tables: stage.dependencies.to_vec(),
+        from_s: stage.at_s + 1.0,
+        range_m: sc.controller().areas.sensing_range_m,
+        counts: &counts,
+    };
+    let sim = proxform_sim::Simulation::with_agents(&sc, RunOptions::default(), (1, 0), Box::new(agents));
+    let mut m = proxform_sim::RunMetrics::new(&sc);
+    sim.run(&mut m);
+    let (checked, missed) = counts.get();
+    assert!(checked > 1000, "main references in range after the change: {checked}");
+    assert_eq!(missed, 0, "of {checked} main references in range, {missed} not reported onboard");
+}

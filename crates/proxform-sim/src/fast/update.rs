@@ -389,8 +389,7 @@ impl Picks for Noted<'_> {
 #[inline(never)]
 fn perceive(v: &View<'_>, i: usize, s: &mut Scratch) -> u16 {
     let sc = v.sc;
-    let scene =
-        Scene { states: v.states, grid: v.grid, search: NeighbourSearch::Grid, dependencies: sc.dependencies() };
+    let scene = Scene { states: v.states, grid: v.grid, search: NeighbourSearch::Grid, dependencies: v.dependencies };
     let channel_bad = !v.warm && v.env.get(i).is_some_and(|e| e.channel_bad);
     // The warm-up's ideal link, as the reference engine's.
     let (radio, dropout, reference_dropout) = match v.warm {

@@ -553,7 +553,9 @@ impl<'s> World<'s> {
                 states: &self.current,
                 grid: &self.grid,
                 search: self.options.neighbour_search,
-                dependencies: self.scenario.dependencies(),
+                // The tables flown now (a change of formation's, re-assigned ones), as the
+                // agents fly them.
+                dependencies: self.members.tables(self.scenario, t),
             },
             sensor: &self.sensor,
             active: &self.members.active,
