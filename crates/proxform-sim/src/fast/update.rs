@@ -26,7 +26,7 @@ use crate::random::{RunKey, Source};
 use crate::world::measurement::Message;
 use crate::world::options::NeighbourSearch;
 use crate::world::plant;
-use crate::world::sensing::{Link, Picks, ProximitySensor, Scene, SensorScratch};
+use crate::world::sensing::{place_in_own_frame, Link, Picks, ProximitySensor, Scene, SensorScratch};
 
 /// Counter offset of the dropout draws in a UAV's sensing stream (the noise uses the low ones).
 const DROPOUT_DRAWS: u64 = 1 << 40;
@@ -140,9 +140,15 @@ impl Scratch {
 pub fn noisy_own(c: &Consts, run: &RunKey, draw_step: u64, truth: &State9, i: usize) -> State9 {
     let mut z = [0.0f32; 9];
     bulk::normals(bulk::key(run, i as u64, Source::OwnState, draw_step), 0, &mut z);
+    perturbed(truth, &c.sigma, &z)
+}
+
+/// `truth` plus the deviates `z` scaled by the noise `sigma`, per parameter.
+#[inline(always)]
+fn perturbed(truth: &State9, sigma: &[f32; 9], z: &[f32]) -> State9 {
     let mut s = *truth;
     for k in 0..9 {
-        s[k] += f64::from(c.sigma[k] * z[k]);
+        s[k] += f64::from(sigma[k] * z[k]);
     }
     s
 }
@@ -439,12 +445,7 @@ fn observed(truth: &State9, sigma: &[f32; 9], key: u64, n: usize) -> State9 {
     let first = 9 * n;
     let mut z = [0.0f32; 10];
     bulk::normals(key, (first / 2) as u64, &mut z);
-    let z = &z[first % 2..first % 2 + 9];
-    let mut st = *truth;
-    for k in 0..9 {
-        st[k] += f64::from(sigma[k] * z[k]);
-    }
-    st
+    perturbed(truth, sigma, &z[first % 2..first % 2 + 9])
 }
 
 // A phase of `proxform bench`'s instruction table: kept a function of its own.
@@ -463,10 +464,7 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3], e
     bulk::normals(bulk::key(&v.run, i as u64, Source::Sensing, v.draw_step), 0, &mut s.normals);
     s.obs.clear();
     let observe = |j: u32, z: &[f32], source| {
-        let mut st = v.states[j as usize];
-        for k in 0..9 {
-            st[k] += f64::from(c.sigma[k] * z[k]);
-        }
+        let mut st = perturbed(&v.states[j as usize], &c.sigma, z);
         for k in 0..3 {
             st[k] -= r_i[k];
         }
@@ -497,19 +495,7 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3], e
         s.obs.push(observe(j, &s.normals[9 * n..9 * n + 9], ObservationSource::Close));
     }
     if let Some(e) = error {
-        for o in s.obs.iter_mut() {
-            match o.source {
-                ObservationSource::Onboard | ObservationSource::Close => o.state += e,
-                // Placed from an onboard observation: its position (velocity and attitude are
-                // the relay's).
-                ObservationSource::Relayed => {
-                    for k in 0..3 {
-                        o.state[k] += e[k];
-                    }
-                }
-                ObservationSource::Radio => {}
-            }
-        }
+        s.obs.iter_mut().for_each(|o| place_in_own_frame(o, e));
     }
 }
 

@@ -277,6 +277,7 @@ impl Membership {
             }
         }
         self.lead = lead;
+        // (Its tables, slots and formation are shared, not copied.)
         self.slots = Some(Reassigned { flown: r.formation.clone(), assignment: r.clone(), stage, at_k });
         Some(r)
     }

@@ -19,7 +19,7 @@ use super::measurement::{Message, OwnSensors};
 use super::options::RunOptions;
 use super::plant;
 use super::remote::Sensed;
-use super::sensing::{Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
+use super::sensing::{place_in_own_frame, Link, PerceptionDraws, ProximitySensor, Scene, SensorScratch};
 use crate::measure::observer::UavStep;
 use crate::random::{Source, StreamKey};
 
@@ -285,17 +285,7 @@ impl StepContext<'_> {
             if relative && i != nav {
                 let error = state::difference(&own, truth);
                 for o in s.heard[s.spans[b].clone()].iter_mut() {
-                    match o.source {
-                        ObservationSource::Onboard | ObservationSource::Close => o.state += error,
-                        // Placed from an onboard observation: its position (velocity and
-                        // attitude are the relay's).
-                        ObservationSource::Relayed => {
-                            for k in state::X..state::X + 3 {
-                                o.state[k] += error[k];
-                            }
-                        }
-                        ObservationSource::Radio => {}
-                    }
+                    place_in_own_frame(o, &error);
                 }
             }
             s.own.push(own);

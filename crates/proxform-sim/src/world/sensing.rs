@@ -494,6 +494,24 @@ fn kept(p: f64, rng: &mut StepRng) -> bool {
     p <= 0.0 || ((rng.next_u64() >> 11) as f64) / ((1u64 << 53) as f64) >= p
 }
 
+/// Relative sensing: what a UAV observed is placed in the world with its own measured state,
+/// so its own measurement's `error` (measured less true state) moves every onboard and
+/// close-range observation, and the position of a relay placed from its own view of the
+/// relay's sender (its velocity and attitude are the relay's); radio reports are their
+/// senders' own. Both engines' perception.
+#[inline]
+pub fn place_in_own_frame(o: &mut Observation, error: &State9) {
+    match o.source {
+        ObservationSource::Onboard | ObservationSource::Close => o.state += error,
+        ObservationSource::Relayed => {
+            for k in state::X..state::X + 3 {
+                o.state[k] += error[k];
+            }
+        }
+        ObservationSource::Radio => {}
+    }
+}
+
 /// `x` plus white Gaussian noise of standard deviation `sigma` per parameter (a function of its
 /// own: the noise is a phase of `proxform bench`'s instruction table).
 #[inline(never)]
