@@ -270,6 +270,12 @@ fn the_engines_agree_through_faults() {
         shipped_on_fast(&(include_str!("../../../scenarios/depth-v20.toml").to_owned() + join), "depth-v20.toml");
     let (a, b) = agree(&joined, RunOptions::default(), 10);
     assert!(a.max[0] > 20.0 && b.max[0] > 20.0, "it joins off its slot: {a:?} vs {b:?}");
+    // The same UAV joins after the navigator's loss is known: it flies the tables in force
+    // (naming the successor) on both engines, not those it was built with (naming the lost
+    // navigator, whose track it never had: it would lean on nobody there).
+    let late = shipped_on_fast(&(text + join), "depth-v20.toml");
+    let (a, b) = agree(&late, RunOptions::default(), 10);
+    assert!(a.max[0] > 20.0 && b.max[0] > 20.0, "it joins off its slot: {a:?} vs {b:?}");
 }
 
 #[test]

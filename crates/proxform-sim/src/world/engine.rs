@@ -332,8 +332,8 @@ impl<'s> Simulation<'s> {
     /// then on, and every table that named the navigator names it. With re-assignment, from
     /// the positions of the UAVs and of the slots now, every UAV still flying gets its slot by
     /// [`assignment::after_loss`]. The agents fly the result from this step on (so a later
-    /// formation's vacated slot is at its own edge); the formation flown is kept relabelled
-    /// for the measures.
+    /// formation's vacated slot is at its own edge), those that join later too; the formation
+    /// flown is kept relabelled for the measures.
     fn reassign_slots(&mut self) {
         // Agents outside the engine do not receive new slots (the command line refuses such a
         // scenario with them): nothing is re-assigned.
@@ -348,8 +348,10 @@ impl<'s> Simulation<'s> {
         if r.lead.leader != leader {
             self.agents[r.lead.leader.index()] = None;
         }
+        // Every agent, flying or not: one that joins later flies the tables in force then (the
+        // membership's, as the fast engine's controllers read them).
         for (i, a) in self.agents.iter_mut().enumerate() {
-            if let (Some(a), true) = (a, w.members.active[i]) {
+            if let Some(a) = a {
                 // The relabelled tables name UAVs of the formation, other than the owner.
                 a.reassign(sc.agents(), proxform_core::UavId(i as u32), &r)
                     .expect("a relabelled formation is valid for every UAV");
