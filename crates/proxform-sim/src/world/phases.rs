@@ -355,11 +355,15 @@ impl StepContext<'_> {
                 continue;
             }
             let Some(decision) = s.decisions[b].filter(|_| i != nav) else {
+                // The navigator on its path: nothing decided on what it perceived, so it used
+                // no radio message (as a successor flown by its autopilot, and as on the fast
+                // engine).
                 *next = plant::on_path(sc, self.start, self.t + dt);
                 aux.outcome = None;
                 aux.model_error = [0.0; 9];
                 aux.isolated = 0;
                 aux.own_suspect = false;
+                aux.radio_used = 0;
                 continue;
             };
             let applied = s.applied[b];
