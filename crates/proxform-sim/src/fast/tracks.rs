@@ -119,10 +119,10 @@ impl Track {
         self.word != FREE && self.word & SEEN_TWICE != 0
     }
 
-    /// Whether the track is `id`'s.
+    /// Whether the track is `id`'s (an id is at most [`MAX_ID`], so never a free track's).
     #[inline]
     fn is(&self, id: u32) -> bool {
-        self.word != FREE && self.word & ID_MASK == id
+        self.word & ID_MASK == id
     }
 
     /// Steps since its last measurement at step `k` (a free track: older than any).
@@ -511,6 +511,7 @@ impl<S: Fn(i32) -> [f64; 3]> Tracks for StepTracks<'_, '_, S> {
             return self.state_after(s, k_obs, h);
         }
         let (s, x) = self.owner.predict(self.filter, (obs.id.0, hint, h as f32), (self.k, 0), &obs.state, &self.shift);
+        self.fed = s + 1;
         self.owner.tracks[s].flags = onboard_flag(obs);
         match self.carried(h) {
             Some(carry) => {
