@@ -122,12 +122,12 @@ impl NeighbourGrid {
         for y in cy.saturating_sub(REACH)..=(cy + REACH).min(self.ny - 1) {
             let a = self.start[y * self.nx + x0] as usize;
             let b = self.start[y * self.nx + x1 + 1] as usize;
-            for k in a..b {
-                let q = &self.pos[k];
+            // (Zipped runs: no bounds check per candidate.)
+            for (q, &id) in self.pos[a..b].iter().zip(&self.ids[a..b]) {
                 let (dx, dy, dz) = (q[0] - p[0], q[1] - p[1], q[2] - p[2]);
                 let d2 = dx * dx + dy * dy + dz * dz;
                 if d2 <= r2 {
-                    f(self.ids[k], q, d2);
+                    f(id, q, d2);
                 }
             }
         }
@@ -145,13 +145,13 @@ impl NeighbourGrid {
         let r2 = radius * radius;
         let (nx, ny) = (self.nx, self.ny);
         let mut scan = |k: usize, run: std::ops::Range<usize>| {
-            let p = self.pos[k];
-            for m in run {
-                let q = &self.pos[m];
+            let (p, id) = (self.pos[k], self.ids[k]);
+            // (Zipped runs: no bounds check per candidate.)
+            for (q, &other) in self.pos[run.clone()].iter().zip(&self.ids[run]) {
                 let (dx, dy, dz) = (q[0] - p[0], q[1] - p[1], q[2] - p[2]);
                 let d2 = dx * dx + dy * dy + dz * dz;
                 if d2 <= r2 {
-                    f(self.ids[k], self.ids[m], d2);
+                    f(id, other, d2);
                 }
             }
         };
