@@ -184,6 +184,25 @@ pub struct Avoidance {
     bound_now: Vec<UavId>,
 }
 
+/// What collision avoidance remembers of one UAV from one update to the next: the sides it
+/// passes its neighbours on ([`Avoidance::exchange_memory`]), 48 bytes a side.
+#[derive(Debug, Clone, Default)]
+pub struct AvoidanceMemory {
+    sides: Vec<Side>,
+}
+
+impl AvoidanceMemory {
+    /// Whether it remembers a side.
+    pub fn remembers(&self) -> bool {
+        !self.sides.is_empty()
+    }
+
+    /// Bytes held (the struct and its list).
+    pub fn heap_bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.sides.capacity() * std::mem::size_of::<Side>()
+    }
+}
+
 /// When a neighbour's limit first binds, a UAV already sliding past it at this share of the
 /// closing speed taken out (and faster than [`SLIDE_NOISE_MPS`]) passes it on that side;
 /// slower than that, on the right.
@@ -210,6 +229,14 @@ impl Avoidance {
             sides: Vec::new(),
             bound_now: Vec::new(),
         }
+    }
+
+    /// Exchanges what the rule remembers from one update to the next (the sides it passes its
+    /// neighbours on) with `memory`; its working lists are rebuilt every update. An engine that
+    /// keeps the memory of many UAVs keeps an [`AvoidanceMemory`] per UAV that remembers, and
+    /// lends it to one working rule for the UAV's update.
+    pub fn exchange_memory(&mut self, memory: &mut AvoidanceMemory) {
+        std::mem::swap(&mut self.sides, &mut memory.sides);
     }
 
     /// Bytes held (the struct and its lists).
@@ -620,6 +647,36 @@ mod tests {
         };
         assert_eq!(av.sides[0].t_hat, first);
         assert!(o_i[VX] < 0.0, "{:?}", o_i.as_slice());
+    }
+
+    #[test]
+    fn a_memory_lent_to_another_rule_keeps_its_side() {
+        // The side chosen by one rule, kept as an AvoidanceMemory, lent to a fresh rule (as an
+        // engine keeping many UAVs' memories lends each to its thread's rule): the fresh rule
+        // stays on that side where one without the memory would take the other.
+        let vehicle = VehicleModel::Kinematic(KinematicModel::default());
+        let (mut av, x_hold, mut o_i) = blocked();
+        let g = goal(&o_i);
+        av.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g);
+        let first = av.sides[0].t_hat;
+        let mut memory = AvoidanceMemory::default();
+        av.exchange_memory(&mut memory);
+        assert!(memory.remembers() && !av.remembers());
+        // A few sides, none of the rule's working lists.
+        let few = std::mem::size_of::<AvoidanceMemory>() + 4 * std::mem::size_of::<Side>();
+        assert!(memory.heap_bytes() <= few, "{} > {few}", memory.heap_bytes());
+        let next = |lend: Option<&mut AvoidanceMemory>| {
+            let (mut fresh, x_hold, mut o_i) = blocked();
+            o_i[VX] = 3.0;
+            if let Some(m) = lend {
+                fresh.exchange_memory(m);
+            }
+            let g = goal(&o_i);
+            fresh.limit(&vehicle, &x_hold, 0.1, &mut o_i, &g);
+            fresh.sides[0].t_hat
+        };
+        assert_eq!(next(Some(&mut memory)), first);
+        assert_ne!(next(None), first);
     }
 
     #[test]

@@ -24,7 +24,7 @@ mod tracks;
 
 use std::sync::Arc;
 
-pub use avoid::{relative_speed_bound, Avoidance, CloseWatch};
+pub use avoid::{relative_speed_bound, Avoidance, AvoidanceMemory, CloseWatch};
 pub use decision::{Decision, Outcome};
 pub use params::{ControllerParams, AVOID_BRAKING_SHARE, AVOID_WATCH, MAX_HORIZON, SEPARATION_SLOT_FRACTION};
 pub use setup::ControllerSetup;

@@ -39,7 +39,7 @@ mod setup;
 mod tracks;
 mod update;
 
-use proxform_core::controller::{relative_speed_bound, Avoidance};
+use proxform_core::controller::{relative_speed_bound, AvoidanceMemory};
 use proxform_core::controller::{OwnFix, TurnTrend};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
@@ -76,7 +76,7 @@ type BlockSlices<'b> = (
     usize,
     (
         ((&'b mut [UavStep], &'b mut [[f32; 6]]), ((&'b mut [Track], &'b mut [u8]), &'b mut Vec<OwnEstimate>)),
-        (&'b mut Vec<(u32, Box<Avoidance>)>, (&'b mut Vec<Autopilot>, &'b mut Vec<Option<OwnFix>>)),
+        (&'b mut Vec<(u32, AvoidanceMemory)>, (&'b mut Vec<Autopilot>, &'b mut Vec<Option<OwnFix>>)),
     ),
 );
 
@@ -109,9 +109,10 @@ pub struct FastSimulation<'s> {
     /// Each UAV's last own position fix, per block (relative sensing: the frame of its tracks;
     /// empty without).
     frames: Vec<Vec<Option<OwnFix>>>,
-    /// Collision avoidance's memory of the UAVs whose rule remembers a side, per block (few
-    /// UAVs of a large swarm ever have one).
-    avoid: Vec<Vec<(u32, Box<Avoidance>)>>,
+    /// Collision avoidance's memory (its sides alone) of the UAVs whose rule remembers a side,
+    /// per block (few UAVs of a large swarm ever have one; each is lent to the thread's rule
+    /// for the UAV's update).
+    avoid: Vec<Vec<(u32, AvoidanceMemory)>>,
     grid: NeighbourGrid,
     /// Each UAV's wind and position-fix bias (the reference engine's, from the same streams),
     /// empty when the scenario has neither.
@@ -239,7 +240,7 @@ impl<'s> FastSimulation<'s> {
         n * (std::mem::size_of::<State9>() + std::mem::size_of::<UavStep>() + std::mem::size_of::<[f32; 6]>() + 2)
             + self.tracks.len() * std::mem::size_of::<Track>()
             + self.avoid.iter().flatten().map(|a| a.1.heap_bytes()).sum::<usize>()
-            + self.avoid.len() * std::mem::size_of::<Vec<(u32, Box<Avoidance>)>>()
+            + self.avoid.len() * std::mem::size_of::<Vec<(u32, AvoidanceMemory)>>()
             + self.grid.heap_bytes()
             + self.env.len() * std::mem::size_of::<UavEnv>()
             + self.reach.heap_bytes()

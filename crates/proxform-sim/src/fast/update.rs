@@ -9,7 +9,9 @@
 //! ([`super::tracks::StepTracks`]). Collision avoidance's memory is kept per UAV only while it
 //! remembers a side.
 
-use proxform_core::controller::{navigator_track, Avoidance, Decision, OwnFix, StepScratch, TurnTrend, UavView};
+use proxform_core::controller::{
+    navigator_track, Avoidance, AvoidanceMemory, Decision, OwnFix, StepScratch, TurnTrend, UavView,
+};
 use proxform_core::grid::NeighbourGrid;
 use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{State9, X};
@@ -241,7 +243,7 @@ pub struct Kept<'k> {
     pub own: &'k mut OwnEstimate,
     pub frame: Option<&'k mut Option<OwnFix>>,
     pub autopilot: Option<&'k mut Autopilot>,
-    pub avoid: &'k mut Option<Box<Avoidance>>,
+    pub avoid: &'k mut Option<AvoidanceMemory>,
 }
 
 /// The update of follower `i`.
@@ -502,16 +504,16 @@ fn build_observations(v: &View<'_>, i: usize, s: &mut Scratch, r_i: &[f64; 3], e
 /// The controller's step (METHOD §6) for UAV `i` at its own estimate `own` (relative to its
 /// reference point, which lies at `r_i`), on its tracks: the reference controller's own step
 /// ([`UavView::step`]) over the engine's records.
-/// Its outcome is `Alone` when it perceives nothing (it flies on). Collision
-/// avoidance's memory is the UAV's own (`kept`) only while it remembers a side; otherwise the
-/// thread's copy, which remembers nothing, runs.
+/// Its outcome is `Alone` when it perceives nothing (it flies on). Collision avoidance runs on
+/// the thread's rule, with the UAV's memory (`kept`, only while it remembers a side) lent to
+/// it.
 fn decide(
     v: &View<'_>,
     i: usize,
     (own, r_i): (&State9, [f64; 3]),
     s: &mut Scratch,
     (tracks, trend): (Owner<'_>, Option<&mut TurnTrend>),
-    kept: &mut Option<Box<Avoidance>>,
+    kept: &mut Option<AvoidanceMemory>,
 ) -> Decision {
     let c = v.c;
     let sc = v.sc;
@@ -519,10 +521,12 @@ fn decide(
     tracks.sweep(v.k, c.track_limit);
     let mut store = step_tracks(v, tracks, r_i);
     let Scratch { step, obs, avoid, .. } = s;
-    let avoidance = match kept {
-        Some(av) => Some(&mut **av),
-        None => avoid.as_mut(),
-    };
+    // The thread's rule runs, with what this UAV remembers lent to it (it remembers nothing
+    // between UAVs).
+    if let (Some(av), Some(memory)) = (avoid.as_mut(), kept.as_mut()) {
+        av.exchange_memory(memory);
+    }
+    let avoidance = avoid.as_mut();
     let uav = UavView {
         id: UavId(i as u32),
         setup: sc.agents().controller(),
@@ -535,17 +539,12 @@ fn decide(
         trend,
     };
     let d = uav.step(step, f64::from(v.k) * c.dt, own, obs);
-    // Avoidance's memory: kept while it remembers, taken from the thread's copy when it begins.
-    match kept {
-        Some(av) if !av.remembers() => *kept = None,
-        None => {
-            if let (Some(av), Some((dist, acc))) = (avoid.as_mut(), c.avoid) {
-                if av.remembers() {
-                    *kept = Some(Box::new(std::mem::replace(av, Avoidance::new(dist, acc))));
-                }
-            }
-        }
-        _ => {}
+    // What it remembers now goes back to the UAV, kept while there is any (the rule is left
+    // with the empty memory it lent, or none).
+    if let Some(av) = avoid.as_mut() {
+        let mut memory = kept.take().unwrap_or_default();
+        av.exchange_memory(&mut memory);
+        *kept = memory.remembers().then_some(memory);
     }
     d
 }
