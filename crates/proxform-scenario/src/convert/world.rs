@@ -95,6 +95,28 @@ pub fn allowable(a: &AllowableSpec, vehicle: &proxform_core::VehicleModel) -> Re
 /// The fault schedule.
 pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
     let faults: Vec<Fault> = specs.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect::<Result<_, _>>()?;
+    // A UAV joins once and is removed once: a second of either would be a silent no-op, or
+    // move the first (whichever comes later wins).
+    for (k, f) in faults.iter().enumerate() {
+        let (uav, kind) = match *f {
+            Fault::Join { uav, .. } => (uav, "joins"),
+            Fault::Remove { uav, .. } => (uav, "is removed"),
+            _ => continue,
+        };
+        let same = |g: &Fault| std::mem::discriminant(g) == std::mem::discriminant(f) && g.uav() == Some(uav);
+        if let Some(first) = faults[..k].iter().position(same) {
+            return Err(err(
+                format!("fault[{}].uav", k + 1),
+                format!(
+                    "UAV {} {kind} twice (fault[{}] and fault[{}]): a UAV joins at most once and is removed at \
+                     most once",
+                    uav.0 + 1,
+                    first + 1,
+                    k + 1
+                ),
+            ));
+        }
+    }
     // A UAV flies from its join (if it has one) to its removal (if it has one): a removal at or
     // before its join would leave it never flying, silently.
     for (k, f) in faults.iter().enumerate() {
