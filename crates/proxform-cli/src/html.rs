@@ -425,12 +425,17 @@ pub fn conditions(sc: &Scenario) -> Vec<String> {
         out.push("relative sensing (neighbours in the UAV's own frame)".into());
     }
     let radio = sc.radio();
-    if radio.loss > 0.0 || radio.burst.is_some() {
-        out.push(format!(
-            "radio loss {:.1} %{}",
-            100.0 * radio.loss,
-            if radio.burst.is_some() { " (bursty)" } else { "" }
-        ));
+    match radio.burst {
+        // The long-run share lost, then how it comes.
+        Some(b) => out.push(format!(
+            "radio loss {:.1} % in the long run (bursty: {:.0} % lost in the bad state, {:.1} % of the time{})",
+            100.0 * radio.mean_loss(),
+            100.0 * b.loss_bad,
+            100.0 * b.bad_fraction(),
+            if radio.loss > 0.0 { format!("; {:.1} % besides", 100.0 * radio.loss) } else { String::new() }
+        )),
+        None if radio.loss > 0.0 => out.push(format!("radio loss {:.1} %", 100.0 * radio.loss)),
+        None => {}
     }
     if radio.delay_steps > 0 {
         out.push(format!("radio delay {} step(s)", radio.delay_steps));

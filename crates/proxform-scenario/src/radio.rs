@@ -52,9 +52,45 @@ impl Default for RadioModel {
     }
 }
 
+impl GilbertElliott {
+    /// The share of periods the channel spends in its bad state, in the long run.
+    pub fn bad_fraction(&self) -> f64 {
+        let moves = self.p_good_to_bad + self.p_bad_to_good;
+        if moves > 0.0 {
+            self.p_good_to_bad / moves
+        } else {
+            0.0
+        }
+    }
+}
+
 impl RadioModel {
     /// The same broadcasters and range with no delay and no loss.
     pub fn ideal(&self) -> Self {
         Self { delay_steps: 0, loss: 0.0, burst: None, ..*self }
+    }
+
+    /// The share of messages lost in the long run: the i.i.d. loss and, with bursts, the bad
+    /// state's loss for the share of periods spent in it.
+    pub fn mean_loss(&self) -> f64 {
+        let bad = self.burst.map_or(0.0, |b| b.bad_fraction() * b.loss_bad);
+        1.0 - (1.0 - self.loss) * (1.0 - bad)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_mean_loss_counts_the_bad_state_for_its_share_of_the_time() {
+        let iid = RadioModel { loss: 0.1, ..RadioModel::default() };
+        assert!((iid.mean_loss() - 0.1).abs() < 1e-12);
+        // Bad a fifth of the time (0.05 in, 0.2 out), losing half there: 10 %; with 10 % i.i.d.
+        // besides, 1 − 0.9 · 0.9 = 19 %.
+        let burst = GilbertElliott { p_good_to_bad: 0.05, p_bad_to_good: 0.2, loss_bad: 0.5 };
+        let bursty = RadioModel { burst: Some(burst), ..RadioModel::default() };
+        assert!((bursty.mean_loss() - 0.1).abs() < 1e-12, "{}", bursty.mean_loss());
+        assert!((RadioModel { loss: 0.1, ..bursty }.mean_loss() - 0.19).abs() < 1e-12);
     }
 }
