@@ -93,6 +93,27 @@ pub fn waypoint_segments_at(
             Turn { theta, arc_s, blend_s: transition_s, reach_m: 0.0, speed_mps: v }
         })
         .collect();
+    // A waypoint that sends the course straight back has no corner for a turn to cut.
+    if let Some(k) = turns.iter().position(|t| t.theta.abs() > std::f64::consts::PI - 1e-9) {
+        // Two turns of 90° at the leg's speed, the leg between them as long as their curves.
+        let v = turns[k].speed_mps;
+        let quarter = std::f64::consts::FRAC_PI_2;
+        let corner =
+            Turn { theta: quarter, arc_s: quarter / (v / r), blend_s: transition_s, reach_m: 0.0, speed_mps: v };
+        let side_m = (2.0 * corner.reach(v)).ceil();
+        return Err(WaypointError {
+            point: Some(k + 1),
+            message: format!(
+                "waypoint {} reverses the course (leg {} goes straight back along leg {}): a turn of radius {r} m \
+                 rounds a corner, and a reversal has none; add a waypoint at least {} m to one side, so that it \
+                 turns around in two corners",
+                k + 1,
+                k + 2,
+                k + 1,
+                side_m
+            ),
+        });
+    }
     for t in turns.iter_mut() {
         t.reach_m = t.reach(t.speed_mps);
     }
