@@ -117,6 +117,26 @@ pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
             ));
         }
     }
+    // Somebody must be left to fly: a schedule that removes every UAV would be judged on
+    // nothing (the removals are one per UAV, checked above).
+    let removals: Vec<(usize, f64)> = faults
+        .iter()
+        .enumerate()
+        .filter_map(|(k, f)| match *f {
+            Fault::Remove { at_s, .. } => Some((k, at_s)),
+            _ => None,
+        })
+        .collect();
+    if n > 0 && removals.len() >= n {
+        let (k, at_s) = removals.iter().copied().fold((0, f64::NEG_INFINITY), |a, b| if b.1 >= a.1 { b } else { a });
+        return Err(err(
+            format!("fault[{}].uav", k + 1),
+            format!(
+                "every one of the {n} UAVs is removed (the last at {at_s} s): nothing would be left to fly or to \
+                 judge"
+            ),
+        ));
+    }
     // A UAV flies from its join (if it has one) to its removal (if it has one): a removal at or
     // before its join would leave it never flying, silently.
     for (k, f) in faults.iter().enumerate() {
