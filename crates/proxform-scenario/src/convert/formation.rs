@@ -31,8 +31,9 @@ pub struct Slots {
     pub explicit: Vec<Option<ExplicitRefs>>,
 }
 
-/// The formation's slots, its frame, and each slot's explicit `depends_on` table.
-pub fn slots(f: &FormationSpec) -> Result<Slots, SpecError> {
+/// The formation's slots, its frame, and each slot's explicit `depends_on` table; a shape's
+/// defaults keep its UAVs `safety_distance_m` apart (a lattice's levels).
+pub fn slots(f: &FormationSpec, safety_distance_m: f64) -> Result<Slots, SpecError> {
     let frame = match f.frame.as_deref() {
         None | Some("world") => FormationFrame::World,
         Some("course") => FormationFrame::Course,
@@ -44,7 +45,7 @@ pub fn slots(f: &FormationSpec) -> Result<Slots, SpecError> {
             ))
         }
     };
-    let (slots, explicit) = slots_of(f)?;
+    let (slots, explicit) = slots_of(f, safety_distance_m)?;
     let n = slots.len();
     if n < 2 {
         return Err(err("formation", format!("needs at least 2 UAVs, found {n}")));
@@ -54,14 +55,14 @@ pub fn slots(f: &FormationSpec) -> Result<Slots, SpecError> {
 
 type SlotsAndRefs = (Vec<FormationSlot>, Vec<Option<ExplicitRefs>>);
 
-fn slots_of(f: &FormationSpec) -> Result<SlotsAndRefs, SpecError> {
+fn slots_of(f: &FormationSpec, safety_distance_m: f64) -> Result<SlotsAndRefs, SpecError> {
     match (&f.shape, f.slot.is_empty()) {
         (Some(_), false) => {
             Err(err("formation", "give either [[formation.slot]] entries or a [formation.shape], not both"))
         }
         (None, true) => Err(err("formation", "needs [[formation.slot]] entries or a [formation.shape]")),
         (Some(shape), true) => {
-            let slots = shape_of(shape)?.slots();
+            let slots = shape_of(shape, safety_distance_m)?.slots();
             // A shape of many UAVs at a large spacing can span more than the models mean.
             if let Some(far) =
                 slots.iter().map(|s| s.offset_m.amax()).max_by(f64::total_cmp).filter(|d| *d > MAX_DISTANCE_M)
@@ -113,7 +114,7 @@ fn slots_of(f: &FormationSpec) -> Result<SlotsAndRefs, SpecError> {
     }
 }
 
-fn shape_of(s: &ShapeSpec) -> Result<Shape, SpecError> {
+fn shape_of(s: &ShapeSpec, safety_distance_m: f64) -> Result<Shape, SpecError> {
     let kind = required("formation.shape.kind", s.kind.clone())?;
     let uavs = || -> Result<usize, SpecError> {
         let n = required("formation.shape.uavs", s.uavs)? as usize;
@@ -166,9 +167,10 @@ fn shape_of(s: &ShapeSpec) -> Result<Shape, SpecError> {
                 None => default_levels(n),
             };
             // Levels on top of each other need a step between them: the built-in swarm's by
-            // default (a lattice of one level has none).
+            // default, or twice the safety distance where that is more (a lattice of one level
+            // has none).
             let level_step = match s.level_step_m {
-                None if levels > 1 => -crate::formation::lattice::LEVEL_M,
+                None if levels > 1 => -default_level_step_m(safety_distance_m),
                 _ => level()?,
             };
             if levels > 1 && level_step == 0.0 {
@@ -186,6 +188,12 @@ fn shape_of(s: &ShapeSpec) -> Result<Shape, SpecError> {
             ))
         }
     })
+}
+
+/// A lattice's height between levels when the file gives none (m): the built-in swarm's,
+/// or twice the safety distance where that is more (its levels stand on top of each other).
+pub fn default_level_step_m(safety_distance_m: f64) -> f64 {
+    crate::formation::lattice::LEVEL_M.max(2.0 * safety_distance_m)
 }
 
 /// Every UAV's dependency table: its explicit `depends_on`, or one derived from the geometry
@@ -401,7 +409,7 @@ pub fn schedule(
             key: e.key.strip_prefix("formation").map_or(e.key.clone(), |rest| format!("{key}{rest}")),
             message: e.message,
         };
-        let Slots { slots, explicit, .. } = slots(&spec).map_err(within)?;
+        let Slots { slots, explicit, .. } = slots(&spec, safety_distance_m).map_err(within)?;
         if slots.len() != first.len() {
             return Err(err(
                 key,
@@ -430,19 +438,26 @@ mod tests {
 
     #[test]
     fn a_lattice_of_several_levels_steps_down_by_default() {
-        let shape = |levels: Option<u32>, step: Option<f64>| {
-            shape_of(&ShapeSpec {
+        let shape_safe = |levels: Option<u32>, step: Option<f64>, safety_m: f64| {
+            let spec = ShapeSpec {
                 kind: Some("lattice".into()),
                 uavs: Some(100),
                 spacing_m: Some(50.0),
                 levels,
                 level_step_m: step,
                 ..ShapeSpec::default()
-            })
+            };
+            shape_of(&spec, safety_m)
         };
+        let shape = |levels: Option<u32>, step: Option<f64>| shape_safe(levels, step, 3.0);
         // Two levels by size: 20 m apart unless the file says otherwise.
         match shape(None, None).expect("valid") {
             Shape::Lattice { levels, level_step, .. } => assert_eq!((levels, level_step), (2, -20.0)),
+            other => panic!("{other:?}"),
+        }
+        // Or twice the safety distance where that is more (the kinematic vehicle's 50 m).
+        match shape_safe(None, None, 50.0).expect("valid") {
+            Shape::Lattice { levels, level_step, .. } => assert_eq!((levels, level_step), (2, -100.0)),
             other => panic!("{other:?}"),
         }
         match shape(Some(3), Some(15.0)).expect("valid") {

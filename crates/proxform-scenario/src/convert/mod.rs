@@ -115,7 +115,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let mut params = controller::params(&spec.controller, dt_s, &vehicle)?;
 
         let mut formation_spec = spec.formation.clone();
-        let formation::Slots { slots, mut frame, explicit } = formation::slots(&formation_spec)?;
+        let formation::Slots { slots, mut frame, explicit } = formation::slots(&formation_spec, safety_distance_m)?;
         if spec.formation.frame.is_none() {
             // A formation of vehicles that turn turns with them: the fixed wing's with its course,
             // the multirotor's with its nose (which need not follow its course).
