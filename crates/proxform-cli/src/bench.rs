@@ -358,7 +358,11 @@ const PHASES: [Phase; 8] = [
     },
     Phase {
         name: "index",
-        functions: &["proxform_core::grid::NeighbourGrid::rebuild_ids", "proxform_core::grid::NeighbourGrid::rebuild"],
+        // (The engines' own: the grid's functions serve the metrics too.)
+        functions: &[
+            "proxform_sim::fast::FastSimulation::index_positions",
+            "proxform_sim::world::engine::World::index_positions",
+        ],
         less: &[],
     },
     Phase {

@@ -325,6 +325,15 @@ impl<'s> FastSimulation<'s> {
         self.restart_controllers();
     }
 
+    /// Index: the neighbour grid over the flying UAVs.
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
+    fn index_positions(&mut self) {
+        let active = &self.members.active;
+        let flying = self.states.iter().enumerate().filter(|(i, _)| active[*i]);
+        self.grid.rebuild_ids(flying.map(|(i, s)| (i as u32, [s[X], s[X + 1], s[X + 2]])), self.c.range);
+    }
+
     /// Index, radio and the per-UAV phases up to the applied inputs, for step `k`.
     fn decide_all(&mut self, k: i64, draw_step: u64, warm: bool) {
         let t = k as f64 * self.c.dt;
@@ -332,9 +341,9 @@ impl<'s> FastSimulation<'s> {
         let origin = self.origin_at(k);
         let len = self.ring.len();
         self.ring[update::ring_index(k as i32, len)] = origin;
+        self.index_positions();
         let active = &self.members.active;
         let flying = || self.states.iter().enumerate().filter(|(i, _)| active[*i]);
-        self.grid.rebuild_ids(flying().map(|(i, s)| (i as u32, [s[X], s[X + 1], s[X + 2]])), self.c.range);
         let spread = relative_speed_bound(flying().map(|(_, s)| [s[VX], s[VX + 1], s[VX + 2]]));
         self.sensor.set_speeds(spread);
         let Self {

@@ -484,6 +484,8 @@ impl<'s> World<'s> {
     }
 
     /// Phase 2, index: the neighbour grid over the active UAVs.
+    // A phase of `proxform bench`'s instruction table: kept a function of its own.
+    #[inline(never)]
     fn index_positions(&mut self) {
         let active = &self.members.active;
         let range = self.scenario.controller().areas.sensing_range_m;
