@@ -197,7 +197,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let (mut radio, mut beacons) = world::radio(&spec.radio, dt_s, duration_s, n)?;
         let network = world::network(&spec.network)?;
         let allowable = world::allowable(&spec.allowable, &vehicle)?;
-        let faults = world::faults(&spec.fault, n)?;
+        let faults = world::faults(&spec.fault, n, duration_s)?;
         if let Some(by) = reassign_on_loss {
             placement::reassignments_within_bounds(by, n, &faults)?;
         }

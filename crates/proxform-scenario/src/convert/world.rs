@@ -5,7 +5,9 @@ use nalgebra::Vector3;
 use proxform_core::angle::{deg, kmh};
 use proxform_core::UavId;
 
-use super::values::{err, non_negative, or_default, positive, probability, required, uav, vec3, within, SpecError};
+use super::values::{
+    err, non_negative, or_default, positive, probability, required, show, uav, vec3, within, SpecError,
+};
 use crate::defaults;
 use crate::faults::Fault;
 use crate::radio::{GilbertElliott, RadioModel};
@@ -92,8 +94,8 @@ pub fn allowable(a: &AllowableSpec, vehicle: &proxform_core::VehicleModel) -> Re
     })
 }
 
-/// The fault schedule.
-pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
+/// The fault schedule of a flight of `duration_s` with `n` UAVs.
+pub fn faults(specs: &[FaultSpec], n: usize, duration_s: f64) -> Result<Vec<Fault>, SpecError> {
     let faults: Vec<Fault> = specs.iter().enumerate().map(|(k, f)| fault(k + 1, f, n)).collect::<Result<_, _>>()?;
     // A UAV joins once and is removed once: a second of either would be a silent no-op, or
     // move the first (whichever comes later wins).
@@ -117,26 +119,6 @@ pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
             ));
         }
     }
-    // Somebody must be left to fly: a schedule that removes every UAV would be judged on
-    // nothing (the removals are one per UAV, checked above).
-    let removals: Vec<(usize, f64)> = faults
-        .iter()
-        .enumerate()
-        .filter_map(|(k, f)| match *f {
-            Fault::Remove { at_s, .. } => Some((k, at_s)),
-            _ => None,
-        })
-        .collect();
-    if n > 0 && removals.len() >= n {
-        let (k, at_s) = removals.iter().copied().fold((0, f64::NEG_INFINITY), |a, b| if b.1 >= a.1 { b } else { a });
-        return Err(err(
-            format!("fault[{}].uav", k + 1),
-            format!(
-                "every one of the {n} UAVs is removed (the last at {at_s} s): nothing would be left to fly or to \
-                 judge"
-            ),
-        ));
-    }
     // A UAV flies from its join (if it has one) to its removal (if it has one): a removal at or
     // before its join would leave it never flying, silently.
     for (k, f) in faults.iter().enumerate() {
@@ -157,7 +139,78 @@ pub fn faults(specs: &[FaultSpec], n: usize) -> Result<Vec<Fault>, SpecError> {
             ));
         }
     }
+    somebody_flies(&faults, n, duration_s)?;
     Ok(faults)
+}
+
+/// Refuses a schedule under which, at some moment of the flight, no UAV flies (every one
+/// removed, or not joined yet): that stretch would be judged on nothing. A UAV flies from its
+/// join (or the start) until its removal (or the end); removals at or after the end never
+/// happen. Each UAV joins and is removed at most once (checked before).
+fn somebody_flies(faults: &[Fault], n: usize, duration_s: f64) -> Result<(), SpecError> {
+    // Per UAV with a join or a removal: (its join, its removal), each (fault index, time).
+    type Span = (Option<(usize, f64)>, Option<(usize, f64)>);
+    let mut spans: std::collections::BTreeMap<usize, Span> = std::collections::BTreeMap::new();
+    for (k, f) in faults.iter().enumerate() {
+        match *f {
+            Fault::Join { uav, at_s, .. } => spans.entry(uav.index()).or_default().0 = Some((k, at_s)),
+            Fault::Remove { uav, at_s } => spans.entry(uav.index()).or_default().1 = Some((k, at_s)),
+            _ => {}
+        }
+    }
+    // A UAV with neither flies throughout.
+    if spans.len() < n {
+        return Ok(());
+    }
+    // (time, +1 a join / −1 a removal, fault index), in time order; at one time the joins
+    // first (a UAV that joins as another is removed keeps the sky occupied).
+    let mut events: Vec<(f64, i32, usize)> = Vec::new();
+    let mut flying = 0i64;
+    for (join, remove) in spans.values() {
+        match join {
+            Some((k, t)) => events.push((*t, 1, *k)),
+            None => flying += 1,
+        }
+        if let Some((k, t)) = remove {
+            events.push((*t, -1, *k));
+        }
+    }
+    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+    let next_join = |after: f64| events.iter().find(|e| e.1 > 0 && e.0 > after).map(|e| e.0);
+    let mut i = 0;
+    if flying == 0 {
+        // Nobody at the start: every UAV joins later.
+        if let Some(&(t, _, k)) = events.first().filter(|e| e.0 > 1e-9) {
+            return Err(err(
+                format!("fault[{}].at_s", k + 1),
+                format!("no UAV flies before {} s (every one joins later): nothing would be flown or judged", show(t)),
+            ));
+        }
+    }
+    while i < events.len() && events[i].0 < duration_s - 1e-9 {
+        let t = events[i].0;
+        let mut last = events[i].2;
+        while i < events.len() && (events[i].0 - t).abs() <= 1e-9 {
+            flying += i64::from(events[i].1);
+            last = events[i].2;
+            i += 1;
+        }
+        if flying <= 0 {
+            let until = match next_join(t + 1e-9).filter(|&t2| t2 < duration_s) {
+                Some(t2) => format!("until {} s", show(t2)),
+                None => "to the end".into(),
+            };
+            return Err(err(
+                format!("fault[{}].at_s", last + 1),
+                format!(
+                    "no UAV flies from {} s {until} (every one of the {n} is removed or has not joined yet): \
+                     nothing would be flown or judged then",
+                    show(t)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The wind.

@@ -49,13 +49,12 @@ pub fn waypoint_segments_at(
         return Err(WaypointError { point: None, message: "needs at least one point".into() });
     }
     let mut all = vec![[0.0f64; 3]];
-    for (k, p) in points.iter().enumerate() {
-        // A list that starts with the start itself, [0, 0, 0], names it twice.
-        if k == 0 && *p == [0.0; 3] && points.len() > 1 {
-            continue;
-        }
-        all.push(*p);
-    }
+    // A list that starts with the start itself, [0, 0, 0], names it twice: it is left out,
+    // and errors still count the points as written (`point` below).
+    let skipped = usize::from(points.len() > 1 && points[0] == [0.0; 3]);
+    all.extend_from_slice(&points[skipped..]);
+    // The written number (from 1) of `all[j]`.
+    let point = |j: usize| Some(j + skipped);
     let legs: Vec<(f64, f64, f64)> = all
         .windows(2)
         .map(|w| {
@@ -65,7 +64,7 @@ pub fn waypoint_segments_at(
         .collect();
     if let Some(k) = legs.iter().position(|l| l.0 < 1e-6) {
         return Err(WaypointError {
-            point: Some(k + 1),
+            point: point(k + 1),
             message: "repeats the previous point (legs need a horizontal length)".into(),
         });
     }
@@ -95,22 +94,23 @@ pub fn waypoint_segments_at(
         .collect();
     // A waypoint that sends the course straight back has no corner for a turn to cut.
     if let Some(k) = turns.iter().position(|t| t.theta.abs() > std::f64::consts::PI - 1e-9) {
-        // Two turns of 90° at the leg's speed, the leg between them as long as their curves.
-        let v = turns[k].speed_mps;
+        // Turning around in two corners of 90°, on a side leg as long as their curves (at the
+        // faster of the two legs' speeds: the side leg's own is the user's to choose).
+        let v = speeds[k].max(speeds[k + 1]);
         let quarter = std::f64::consts::FRAC_PI_2;
         let corner =
             Turn { theta: quarter, arc_s: quarter / (v / r), blend_s: transition_s, reach_m: 0.0, speed_mps: v };
         let side_m = (2.0 * corner.reach(v)).ceil();
+        let w = k + 1 + skipped;
         return Err(WaypointError {
-            point: Some(k + 1),
+            point: point(k + 1),
             message: format!(
-                "waypoint {} reverses the course (leg {} goes straight back along leg {}): a turn of radius {r} m \
-                 rounds a corner, and a reversal has none; add a waypoint at least {} m to one side, so that it \
-                 turns around in two corners",
-                k + 1,
+                "waypoint {w} reverses the course (leg {} goes straight back along leg {}): a turn of radius {r} m \
+                 rounds a corner, and a reversal has none; fly the way back on a parallel line at least {side_m} m \
+                 to one side (a waypoint that far beside waypoint {w}, and the way back from it), so that it turns \
+                 around in two corners of 90° (a vehicle that can turn around)",
                 k + 2,
                 k + 1,
-                side_m
             ),
         });
     }
@@ -124,7 +124,7 @@ pub fn waypoint_segments_at(
         let reach = before.map_or(0.0, |t| t.reach_m) + after.map_or(0.0, |t| t.reach_m);
         if !reach.is_finite() || leg.0 - reach < -1e-6 {
             return Err(WaypointError {
-                point: Some(k + 1),
+                point: point(k + 1),
                 message: format!(
                     "leg {} is too short for its turns (radius {r} m, blended over {transition_s} s) at its ends",
                     k + 1
@@ -152,12 +152,12 @@ pub fn waypoint_segments_at(
                     start_blend_s: blend_in,
                 });
             } else if leg.2.abs() > 1e-9 {
-                return Err(WaypointError { point: Some(k + 1), message: "has no straight part to climb on".into() });
+                return Err(WaypointError { point: point(k + 1), message: "has no straight part to climb on".into() });
             }
         } else {
             if straight_m < 1e-6 {
                 return Err(WaypointError {
-                    point: Some(k + 1),
+                    point: point(k + 1),
                     message: format!("leg {} has no straight part to change its speed on", k + 1),
                 });
             }
@@ -258,6 +258,36 @@ mod tests {
     use crate::path::SegmentsPath;
     use proxform_core::angle::{kmh, wrap_pi};
     use proxform_core::state;
+
+    #[test]
+    fn a_reversal_is_refused_with_a_side_step_that_flies() {
+        // Out and back along one line: refused as a reversal, naming the point as written
+        // (a leading [0, 0, 0] counted), with the side step that loads; a little less does not.
+        for (v_kmh, r, blend) in [(18.0, 30.0, 8.0), (150.0, 300.0, 8.0), (250.0, 800.0, 15.0), (36.0, 20.0, 2.0)] {
+            let v = kmh(v_kmh);
+            for lead in [false, true] {
+                let mut pts = vec![[3000.0, 0.0, 0.0], [0.0, 0.0, 0.0]];
+                if lead {
+                    pts.insert(0, [0.0; 3]);
+                }
+                let e = waypoint_segments_at(&pts, v, None, r, blend).expect_err("a reversal");
+                assert_eq!(e.point, Some(1 + usize::from(lead)), "{}", e.message);
+                assert!(e.message.contains("reverses the course"), "{}", e.message);
+                let side: f64 = e
+                    .message
+                    .split("at least ")
+                    .nth(1)
+                    .and_then(|m| m.split(' ').next())
+                    .and_then(|x| x.parse().ok())
+                    .expect("a distance");
+                let stepped = |d: f64| {
+                    waypoint_segments_at(&[[3000.0, 0.0, 0.0], [3000.0, d, 0.0], [0.0, d, 0.0]], v, None, r, blend)
+                };
+                assert!(stepped(side).is_ok(), "{side} m at {v_kmh} km/h, r {r} m");
+                assert!(stepped(side - 2.0).is_err(), "{side} m at {v_kmh} km/h, r {r} m");
+            }
+        }
+    }
 
     #[test]
     fn waypoints_become_legs_and_turns_of_the_given_radius() {
