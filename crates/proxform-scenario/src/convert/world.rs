@@ -131,10 +131,11 @@ pub fn faults(specs: &[FaultSpec], n: usize, duration_s: f64) -> Result<Vec<Faul
             return Err(err(
                 format!("fault[{}].at_s", k + 1),
                 format!(
-                    "UAV {} is removed at {removed} s, before it joins at {joined} s: a UAV flies from its join to \
+                    "UAV {} is removed at {removed} s, {} it joins at {joined} s: a UAV flies from its join to \
                      its removal, so it would never fly (remove it after it joins, or give the one that comes \
                      back its own id)",
-                    uav.0 + 1
+                    uav.0 + 1,
+                    if joined > removed { "before" } else { "as" }
                 ),
             ));
         }
