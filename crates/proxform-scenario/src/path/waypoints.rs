@@ -123,11 +123,30 @@ pub fn waypoint_segments_at(
         let after = turns.get(k);
         let reach = before.map_or(0.0, |t| t.reach_m) + after.map_or(0.0, |t| t.reach_m);
         if !reach.is_finite() || leg.0 - reach < -1e-6 {
+            let needs = match reach.is_finite() {
+                true => format!("{} m", reach.ceil()),
+                false => "more than any".into(),
+            };
+            // A hairpin (the sharper of its turns): its curve reaches far along the legs.
+            let sharp = [(k, before), (k + 1, after)]
+                .into_iter()
+                .filter_map(|(w, t)| t.map(|t| (w, t.theta.abs().to_degrees())))
+                .filter(|(_, deg)| *deg > 150.0)
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .map_or(String::new(), |(w, deg)| {
+                    format!(
+                        "; waypoint {} turns the course by {deg:.0}°: a hairpin that sharp is flown in two corners, \
+                         the way back on a parallel line to one side",
+                        w + skipped
+                    )
+                });
             return Err(WaypointError {
                 point: point(k + 1),
                 message: format!(
-                    "leg {} is too short for its turns (radius {r} m, blended over {transition_s} s) at its ends",
-                    k + 1
+                    "leg {} is {} m long, too short for its turns (radius {r} m, blended over {transition_s} s) at \
+                     its ends, which need {needs}{sharp}",
+                    k + 1,
+                    leg.0.floor()
                 ),
             });
         }
