@@ -86,20 +86,14 @@ pub fn waypoint_segments_at(
     let mut turns: Vec<Turn> = legs
         .windows(2)
         .zip(&speeds)
-        .map(|(w, &v)| {
-            let theta = proxform_core::angle::wrap_pi(w[1].1 - w[0].1);
-            let arc_s = theta.abs() / (v / r);
-            Turn { theta, arc_s, blend_s: transition_s, reach_m: 0.0, speed_mps: v }
-        })
+        .map(|(w, &v)| Turn::new(proxform_core::angle::wrap_pi(w[1].1 - w[0].1), v, r, transition_s))
         .collect();
     // A waypoint that sends the course straight back has no corner for a turn to cut.
     if let Some(k) = turns.iter().position(|t| t.theta.abs() > std::f64::consts::PI - 1e-9) {
         // Turning around in two corners of 90°, on a side leg as long as their curves (at the
         // faster of the two legs' speeds: the side leg's own is the user's to choose).
         let v = speeds[k].max(speeds[k + 1]);
-        let quarter = std::f64::consts::FRAC_PI_2;
-        let corner =
-            Turn { theta: quarter, arc_s: quarter / (v / r), blend_s: transition_s, reach_m: 0.0, speed_mps: v };
+        let corner = Turn::new(std::f64::consts::FRAC_PI_2, v, r, transition_s);
         let side_m = (2.0 * corner.reach(v)).ceil();
         let w = k + 1 + skipped;
         return Err(WaypointError {
@@ -232,6 +226,12 @@ struct Turn {
 }
 
 impl Turn {
+    /// A course change `theta` (rad) at speed `v` (m/s) on radius `r` (m), blended over
+    /// `blend_s` (s); its reach not yet computed.
+    fn new(theta: f64, v: f64, r: f64, blend_s: f64) -> Self {
+        Self { theta, arc_s: theta.abs() / (v / r), blend_s, reach_m: 0.0, speed_mps: v }
+    }
+
     /// `|D| / (2·cos(θ/2))`, with D the chord of the blended curve at speed `v`.
     fn reach(&self, v: f64) -> f64 {
         let (w, d) = (self.blend_s, self.arc_s);

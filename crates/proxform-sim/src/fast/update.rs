@@ -540,8 +540,9 @@ fn decide(
     };
     let d = uav.step(step, f64::from(v.k) * c.dt, own, obs);
     // What it remembers now goes back to the UAV, kept while there is any (the rule is left
-    // with the empty memory it lent, or none).
-    if let Some(av) = avoid.as_mut() {
+    // with the empty memory it lent, or none); nothing to do for a UAV that remembered
+    // nothing and remembers nothing (most UAVs, most steps).
+    if let Some(av) = avoid.as_mut().filter(|av| av.remembers() || kept.is_some()) {
         let mut memory = kept.take().unwrap_or_default();
         av.exchange_memory(&mut memory);
         *kept = memory.remembers().then_some(memory);
