@@ -17,6 +17,26 @@ use crate::state::{self, Input, State9};
 /// wandering over tens of seconds move it by far less.
 pub const OWN_SETTLE_S: f64 = 2.0;
 
+/// How fast the own-sensor gate widens while readings are refused but still tell how the UAV
+/// moves (m/s): the UAV dead-reckons with their velocity, and that drifts from the truth only
+/// by what the vehicle model misses of an acceleration within a period and by the velocity
+/// noise (about 0.1 m/s on the paper's path: 0.5 m over 5 s). Only an episode in which the
+/// readings froze (no velocity to dead-reckon with) widens at `own_gate_growth_mps`: then the
+/// wind moves the UAV off its prediction. So a position jump of a few metres is refused for as
+/// long as it is not older than its size over this rate (20 s for a 5 m jump), where the wind
+/// rate let it in after 2 s and the UAV flew off by its size (8 s for a 5 m jump).
+pub const OWN_DRIFT_MPS: f64 = 0.25;
+
+/// A jump of the position readings from the prediction that the widened gate let in: while
+/// the dead reckoning can still tell the two apart (its drift since, at [`OWN_DRIFT_MPS`],
+/// less than the jump), a reading back where the UAV would be without it (within the gate) is
+/// taken at once, so that the end of a lasting offset costs no second refusal.
+#[derive(Debug, Clone, Copy)]
+struct LetIn {
+    jump: [f64; 3],
+    age_s: f64,
+}
+
 /// What the UAV expects of its own state, and for how long it has flown on that alone.
 #[derive(Debug, Clone, Copy)]
 struct OwnPrediction {
@@ -38,6 +58,14 @@ struct OwnPrediction {
     last: State9,
     /// Time since a measurement of its own state was last accepted (s).
     unaccepted_s: f64,
+    /// How far the gate has widened since then (m): at [`OWN_DRIFT_MPS`] while the refused
+    /// readings moved, at `own_gate_growth_mps` once one of them was frozen (stale).
+    widened_m: f64,
+    /// Whether a reading refused since the last accepted one was frozen: the UAV dead-reckoned
+    /// without velocity readings, so the wind may have moved it off its prediction.
+    blind: bool,
+    /// The last jump the widened gate let in, while it can be told apart.
+    let_in: Option<LetIn>,
     /// The instant `next` is for (s): the last step's time plus one period.
     for_s: f64,
 }
@@ -82,12 +110,26 @@ impl OwnEstimate {
                 let settled: [f64; 3] =
                     std::array::from_fn(|k| pred.settled[k] + 0.5 * dt * (pred.velocity[k] + measured[state::VX + k]));
                 let unsettled = (at - nalgebra::Vector3::from(settled)).norm();
-                let bound = |g: f64| g + growth * pred.unaccepted_s;
+                let bound = |g: f64| g + pred.widened_m;
                 let refused = |d: f64| d.is_nan() || gate.is_some_and(|g| d > bound(g));
-                if gate.is_some() && (stale || refused(innovation) || refused(unsettled)) {
+                // A reading back from the jump let in last: where the UAV would be without it.
+                let next_at = state::position(&pred.next);
+                if let Some(l) = pred.let_in.as_mut() {
+                    l.age_s += dt;
+                }
+                pred.let_in = pred.let_in.filter(|l| OWN_DRIFT_MPS * l.age_s < nalgebra::Vector3::from(l.jump).norm());
+                let far = refused(innovation) || refused(unsettled);
+                let returns = far
+                    && pred.let_in.zip(gate).is_some_and(|(l, g)| {
+                        let without = next_at - nalgebra::Vector3::from(l.jump);
+                        (at - without).norm() <= g + OWN_DRIFT_MPS * l.age_s
+                    });
+                if gate.is_some() && (stale || (far && !returns)) {
                     // The measurement disagrees with where the UAV knows it flew: fly on that.
                     suspect = true;
                     pred.unaccepted_s += dt;
+                    pred.blind |= stale;
+                    pred.widened_m += dt * if pred.blind { growth } else { OWN_DRIFT_MPS.min(growth) };
                     for k in 0..3 {
                         pred.settled[k] += pred.moved[k];
                     }
@@ -105,9 +147,16 @@ impl OwnEstimate {
                     own
                 } else {
                     // Accepted again after refusals (within the widened gate, a lasting
-                    // offset included): the readings settle where they are now.
-                    let pull = if pred.unaccepted_s > 0.0 { 1.0 } else { (dt / OWN_SETTLE_S).min(1.0) };
-                    pred.unaccepted_s = 0.0;
+                    // offset included) or back from the jump let in last: the readings settle
+                    // where they are now.
+                    let again = pred.unaccepted_s > 0.0;
+                    let pull = if again || returns { 1.0 } else { (dt / OWN_SETTLE_S).min(1.0) };
+                    pred.let_in = match (returns, again) {
+                        (true, _) => None,
+                        (false, true) => Some(LetIn { jump: (at - next_at).into(), age_s: 0.0 }),
+                        (false, false) => pred.let_in,
+                    };
+                    (pred.unaccepted_s, pred.widened_m, pred.blind) = (0.0, 0.0, false);
                     for k in 0..3 {
                         pred.settled[k] = settled[k] + pull * (at[k] - settled[k]);
                     }
@@ -143,7 +192,18 @@ impl OwnEstimate {
             None => {
                 let settled = [own[state::X], own[state::X + 1], own[state::X + 2]];
                 let last = *measured;
-                let p = OwnPrediction { next, settled, velocity, moved, last, unaccepted_s: 0.0, for_s: now_s + dt };
+                let p = OwnPrediction {
+                    next,
+                    settled,
+                    velocity,
+                    moved,
+                    last,
+                    unaccepted_s: 0.0,
+                    widened_m: 0.0,
+                    blind: false,
+                    let_in: None,
+                    for_s: now_s + dt,
+                };
                 self.prediction = Some(Box::new(p));
             }
         }
@@ -157,5 +217,84 @@ impl OwnEstimate {
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
         self.prediction.as_ref().map_or(0, |_| std::mem::size_of::<OwnPrediction>())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vehicle::{KinematicModel, VehicleModel};
+
+    const DT: f64 = 0.1;
+
+    /// A UAV flying straight at 20 m/s: its true state at step `k`.
+    fn truth(k: usize) -> State9 {
+        let mut s = State9::zeros();
+        s[state::X] = 20.0 * DT * k as f64;
+        s[state::VX] = 20.0;
+        s
+    }
+
+    /// `s` with its position `dy` metres to the side.
+    fn aside(mut s: State9, dy: f64) -> State9 {
+        s[state::X + 1] += dy;
+        s
+    }
+
+    /// Whether each of 400 steps' readings `reading(k)` was refused (gate 3 m, widening 1 m/s
+    /// once a reading froze).
+    fn refusals(reading: impl Fn(usize) -> State9) -> Vec<bool> {
+        let params = ControllerParams {
+            own_gate_m: Some(3.0),
+            own_gate_growth_mps: 1.0,
+            dt_s: DT,
+            ..ControllerParams::default()
+        };
+        let setup = ControllerSetup::new(params, VehicleModel::Kinematic(KinematicModel::default())).expect("valid");
+        let mut own = OwnEstimate::default();
+        (0..400)
+            .map(|k| {
+                let t = k as f64 * DT;
+                let measured = reading(k);
+                let (estimate, suspect) = own.estimate(setup.params(), t, &measured);
+                own.expect(&setup, t, (&estimate, &measured), &Input::zeros());
+                suspect
+            })
+            .collect()
+    }
+
+    /// How long the readings were refused from step 10 on before one was taken (s).
+    fn refused_from_10(r: &[bool]) -> f64 {
+        r[10..].iter().take_while(|&&x| x).count() as f64 * DT
+    }
+
+    #[test]
+    fn the_gate_widens_at_the_wind_rate_only_once_a_reading_froze() {
+        // Readings that move, 5 m to the side from step 10 on (a position jump): the UAV
+        // dead-reckons with their velocity, so the gate widens by the dead reckoning's drift,
+        // 2 m in (5 − 3) / OWN_DRIFT_MPS.
+        let moving = refused_from_10(&refusals(|k| if k < 10 { truth(k) } else { aside(truth(k), 5.0) }));
+        assert!((moving - 2.0 / OWN_DRIFT_MPS).abs() <= 0.2, "{moving}");
+        // The reading of step 10 the last one repeated (frozen), then the jump: without
+        // velocity readings the wind may have moved the UAV off its prediction, so the gate
+        // widens at `own_gate_growth_mps` (1 m/s) to the episode's end: the jump is taken after
+        // 2 s.
+        let frozen = refused_from_10(&refusals(|k| match k {
+            0..10 => truth(k),
+            10 => truth(9),
+            _ => aside(truth(k), 5.0),
+        }));
+        assert!((frozen - 2.0).abs() <= 0.2, "{frozen}");
+    }
+
+    #[test]
+    fn the_end_of_a_jump_the_gate_let_in_is_taken_at_once() {
+        // 5 m to the side from step 10 to step 150 (14 s): let in after 8 s; the readings back
+        // where the UAV is are taken at once (without the jump's memory they were refused for
+        // another 8 s).
+        let r = refusals(|k| if (10..150).contains(&k) { aside(truth(k), 5.0) } else { truth(k) });
+        let let_in = 10 + r[10..].iter().take_while(|&&x| x).count();
+        assert!(let_in < 150, "never let in");
+        assert!(r[let_in..].iter().all(|&x| !x), "refused again at step {:?}", r[let_in..].iter().position(|&x| x));
     }
 }

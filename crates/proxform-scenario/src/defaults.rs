@@ -39,10 +39,12 @@ pub const ISOLATION_GATE: f64 = 1.0;
 /// `method = "paper"` and where the fast engine flies the scenario (it does not run the check).
 pub const OWN_GATE_M: f64 = 3.0;
 
-/// How fast the own-sensor gate widens while readings are refused (m/s) when
-/// `controller.own_gate_growth_mps` is unset, in calm air; turbulence adds 3 σ_u of its
-/// horizontal wind (METHOD §8): a UAV flying on its prediction drifts from it by as much as the
-/// wind changed, and a gate that widens more slowly never takes a good reading again.
+/// How fast the own-sensor gate widens while readings are refused, once one of them was frozen
+/// (m/s), when `controller.own_gate_growth_mps` is unset, in calm air; turbulence adds 3 σ_u of
+/// its horizontal wind (METHOD §8): a UAV flying on its prediction without velocity readings
+/// drifts from it by as much as the wind changed, and a gate that widens more slowly never
+/// takes a good reading again. (While the refused readings move, the gate widens at the dead
+/// reckoning's drift, [`proxform_core::own_estimate::OWN_DRIFT_MPS`].)
 pub const OWN_GATE_GROWTH_MPS: f64 = 1.0;
 /// See [`OWN_GATE_GROWTH_MPS`]: the turbulence's horizontal σ counts this many times.
 pub const OWN_GATE_GROWTH_SIGMAS: f64 = 3.0;

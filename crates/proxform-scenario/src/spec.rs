@@ -312,7 +312,8 @@ pub struct ControllerSpec {
     pub isolation_gate: Option<f64>,
     /// Own-sensor check's gate (m, > 0; 0 off). Default off.
     pub own_gate_m: Option<f64>,
-    /// How fast the own-sensor gate widens while measurements are refused (m/s, ≥ 0). Default 1.
+    /// How fast the own-sensor gate widens while measurements are refused, once one of them
+    /// was frozen (m/s, ≥ 0; while they move, 0.25 m/s or this where lower). Default 1.
     pub own_gate_growth_mps: Option<f64>,
     /// Formation control method: "proximity" (default), "paper" (the proximity method with the
     /// paper's choices where proxform's defaults go beyond it), "leader_follower", "consensus"

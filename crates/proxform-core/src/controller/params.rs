@@ -116,9 +116,12 @@ pub struct ControllerParams {
     /// estimate and the input it applied) is suspect, and the UAV flies on that prediction
     /// instead. `None` trusts every measurement. Default `None`.
     pub own_gate_m: Option<f64>,
-    /// How fast the own-sensor check's gate widens while measurements are refused (m/s, ≥ 0),
-    /// the prediction's own drift: a measurement that stays away longer than the prediction can
-    /// be trusted is accepted again. Default 1 m/s.
+    /// How fast the own-sensor check's gate widens while measurements are refused once one of
+    /// them was frozen (m/s, ≥ 0): the drift of a prediction dead-reckoned without velocity
+    /// readings, which the wind moves the UAV off. While every refused reading moves, it widens
+    /// at the dead reckoning's own drift ([`crate::own_estimate::OWN_DRIFT_MPS`], or this where
+    /// lower). A measurement that stays away longer than the prediction can be trusted is
+    /// accepted again. Default 1 m/s.
     pub own_gate_growth_mps: f64,
 }
 
