@@ -68,6 +68,9 @@ pub(crate) struct FollowerJudge {
     pub last_out: f64,
     /// Per change of formation (in the run's order): the last time it was outside them.
     pub changes_last_out: Vec<f64>,
+    /// The last time (s) it flew: its forming and its changes end there if it is removed
+    /// before they do (out of its errors then, it neither formed nor completed them).
+    pub last_seen: f64,
 }
 
 impl FollowerJudge {
@@ -78,6 +81,7 @@ impl FollowerJudge {
             before_ratio: 0.0,
             last_out: f64::NEG_INFINITY,
             changes_last_out: vec![f64::NEG_INFINITY; changes],
+            last_seen: f64::NEG_INFINITY,
         }
     }
 
@@ -85,6 +89,7 @@ impl FollowerJudge {
     /// and in the changes whose windows hold `t` (`in_change(k)`).
     pub fn observe(&mut self, t: f64, ratio: f64, before_change: bool, in_change: impl Fn(usize) -> bool) {
         let out = ratio > 1.0;
+        self.last_seen = t;
         if before_change {
             self.before_ratio = self.before_ratio.max(ratio);
             if out {
@@ -102,7 +107,9 @@ impl FollowerJudge {
 
     /// Its evidence: `judged_steps` and `within` from its accumulated errors; formed from its
     /// last time out when that was before `form_end`'s frame; each change completed when it
-    /// was last out before the window's last frame (`window_last(k)`).
+    /// was last out before the window's last frame (`window_last(k)`). A follower removed
+    /// earlier is judged up to the last frame it flew: removed out of its errors, it did not
+    /// form, nor complete the change it was in.
     pub fn evidence(
         &self,
         judged_steps: u64,
@@ -113,11 +120,12 @@ impl FollowerJudge {
         Evidence {
             judged_steps,
             within,
-            time_to_form_s: formed_at(self.last_out, form_end, dt),
+            time_to_form_s: formed_at(self.last_out, form_end.min(self.last_seen), dt),
             settled_ratio: if self.settled { self.before_ratio } else { 0.0 },
             before_ratio: self.before_ratio,
-            changes_completed: (!self.changes_last_out.is_empty())
-                .then(|| self.changes_last_out.iter().enumerate().all(|(k, &l)| l < window_last(k) - 1e-9)),
+            changes_completed: (!self.changes_last_out.is_empty()).then(|| {
+                self.changes_last_out.iter().enumerate().all(|(k, &l)| l < window_last(k).min(self.last_seen) - 1e-9)
+            }),
         }
     }
 }
@@ -185,5 +193,31 @@ mod tests {
         assert_eq!(e.settled_ratio, 0.0, "not judged from the start");
         // Still out at the window's last frame: not completed.
         assert_eq!(j.evidence(200, false, (9.9, 0.1), |_| 12.0).changes_completed, Some(false));
+    }
+
+    #[test]
+    fn a_follower_removed_out_of_its_errors_neither_formed_nor_completed_its_change() {
+        // Out from 10 s (a change) and removed at 11 s, while the window lasts to 19.9 s.
+        let mut j = FollowerJudge::new(false, 1);
+        for k in 0..=110 {
+            let t = k as f64 * 0.1;
+            j.observe(t, if t < 9.95 { 0.5 } else { 2.0 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+        }
+        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| 19.9).changes_completed, Some(false));
+        // A joiner removed while still forming did not form.
+        let mut j = FollowerJudge::new(false, 0);
+        for k in 0..=110 {
+            j.observe(k as f64 * 0.1, 2.0, true, |_| false);
+        }
+        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| 19.9).time_to_form_s, f64::INFINITY);
+        // Removed within its errors: formed, and the change completed.
+        let mut j = FollowerJudge::new(false, 1);
+        for k in 0..=110 {
+            let t = k as f64 * 0.1;
+            j.observe(t, if (10.0..10.55).contains(&t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+        }
+        let e = j.evidence(111, false, (19.9, 0.1), |_| 19.9);
+        assert_eq!(e.changes_completed, Some(true));
+        assert!(e.time_to_form_s.is_finite());
     }
 }
