@@ -310,3 +310,24 @@ fn a_uav_joining_out_of_sensing_range_homes_on_the_navigators_broadcast() {
     let lost = batch(&join(Some(vec![])), 3, 2);
     assert_eq!(lost.forming.as_ref().map(|f| f.formed_fraction), Some(0.0));
 }
+
+#[test]
+fn a_follower_removed_out_of_its_errors_in_a_change_fails_its_row_and_the_run() {
+    // The shipped V closing into a column at 60 s, UAV5 removed at 66 s while still some 100 m
+    // from its new slot: it never completed the change, and neither did the formation. (Its
+    // row and the run read PASS: each window was judged to its end over the UAVs still
+    // flying.) Removed at 110 s, within its errors, it completed it.
+    let with = |at_s: f64| {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/change-v-column.toml");
+        let text = std::fs::read_to_string(path).expect("shipped")
+            + &format!("\n[[fault]]\nkind = \"remove\"\nuav = 5\nat_s = {at_s}\n");
+        proxform_scenario::load::parse(&text, "change-v-column.toml").expect("valid")
+    };
+    let out = batch(&with(66.0), 1, 2);
+    let k = out.per_uav.iter().position(|&u| u == 5).expect("UAV5's row");
+    assert_eq!((out.per_uav_runs_flown[k], out.per_uav_runs_passed[k]), (2, 0));
+    assert_eq!(out.pass_fraction, 0.0);
+    let within = batch(&with(110.0), 1, 2);
+    assert_eq!((within.per_uav_runs_flown[k], within.per_uav_runs_passed[k]), (2, 2));
+    assert_eq!(within.pass_fraction, 1.0);
+}

@@ -78,6 +78,26 @@ fn a_position_jump_of_a_few_metres_is_refused_for_as_long_as_one_of_twenty() {
 }
 
 #[test]
+fn a_joiner_forming_is_not_one_of_the_other_followers_a_sensor_fault_is_judged_by() {
+    // The shipped triangle with UAV10 joining at 20 s, 20 m behind its slot: it is out of its
+    // errors by design until it has formed, so the "other followers within their errors" of
+    // the sensor faults leave it out (they read 0 of 4 runs where every run passed).
+    let s = scenario("fault-triangle10.toml", |s| {
+        s.fault.push(proxform_scenario::spec::FaultSpec {
+            kind: Some("join".into()),
+            uav: Some(10),
+            at_s: Some(20.0),
+            duration_s: None,
+            offset_m: Some([-20.0, 0.0, 0.0]),
+        });
+    });
+    let b = batch(&s, 4);
+    assert_eq!(b.pass_fraction, 1.0);
+    let f = b.sensor_faults.as_ref().expect("sensor faults");
+    assert_eq!(f.healthy_pass_fraction, 1.0, "{f:?}");
+}
+
+#[test]
 fn the_robust_fusion_alone_keeps_the_others_from_following_a_uav_that_flies_off() {
     // The paper's formation; UAV2's own sensor sticks for 5 s at 40 s and nothing checks it:
     // UAV2 believes the reading and flies off by tens of metres. UAV3 weighs it against the

@@ -139,8 +139,20 @@ pub struct TransitionMetrics {
     pub closest_m: f64,
 }
 
+/// A follower removed in flight: out of its errors at the last frame it flew, it neither
+/// formed nor completed the change it was in.
+#[derive(Debug, Clone, Copy)]
+struct Leaving {
+    uav: usize,
+    /// At the last frame it flew so far: when, and whether out of its errors.
+    last: Option<(f64, bool)>,
+    /// Gone, and counted.
+    gone: bool,
+}
+
 /// One change of formation, as measured: its window (until the next change or the end) and
-/// the last time in it that a follower was outside its allowable errors.
+/// the last time in it that a follower was outside its allowable errors (∞: one left out of
+/// them).
 #[derive(Debug, Clone, Copy)]
 struct Transition {
     at_s: f64,
@@ -242,6 +254,12 @@ pub struct RunMetrics {
     dt: f64,
     /// UAVs with a sensor fault, sorted, each once.
     faulty: Vec<usize>,
+    /// The UAVs the "other followers" of the sensor faults leave out, sorted: those with a
+    /// sensor fault, and the joiners (out of their errors by design until they have formed).
+    not_healthy: Vec<usize>,
+    /// The followers removed in flight, and whether each was out of its allowable errors at
+    /// the last frame it flew.
+    leaving: Vec<Leaving>,
     /// Each sensor fault's aftermath: its UAV, when the fault ends, when the UAV's next
     /// sensor fault starts (∞ for its last), and the last time in between that the UAV was
     /// outside its allowable errors.
@@ -324,6 +342,26 @@ impl RunMetrics {
             order_min: f64::INFINITY,
             connectivity_min: f64::INFINITY,
             dt: scenario.dt_s(),
+            not_healthy: {
+                let joiners = scenario.faults().iter().filter_map(|f| match f {
+                    proxform_scenario::faults::Fault::Join { uav, .. } => Some(uav.index()),
+                    _ => None,
+                });
+                let mut u: Vec<usize> = aftermaths.iter().map(|a| a.uav).chain(joiners).collect();
+                u.sort_unstable();
+                u.dedup();
+                u
+            },
+            leaving: scenario
+                .faults()
+                .iter()
+                .filter_map(|f| match f {
+                    proxform_scenario::faults::Fault::Remove { uav, .. } if uav.index() != nav => {
+                        Some(Leaving { uav: uav.index(), last: None, gone: false })
+                    }
+                    _ => None,
+                })
+                .collect(),
             faulty: {
                 let mut u: Vec<usize> = aftermaths.iter().map(|a| a.uav).collect();
                 u.dedup();
@@ -430,6 +468,33 @@ impl RunMetrics {
             }
         }
         f64::from(size.into_iter().max().unwrap_or(0)) / f64::from(total.max(1))
+    }
+
+    /// The followers removed in flight: each one's errors at every frame it flies, and at the
+    /// first frame without it, if it was out of its errors at its last, the forming or the
+    /// change it was in is not complete (it will never be within them).
+    fn follow_leaving(&mut self, scenario: &Scenario, frame: &StepFrame<'_>, reference: &State9) {
+        for l in self.leaving.iter_mut().filter(|l| !l.gone) {
+            if frame.active[l.uav] {
+                let e = formation_error_to(scenario, frame.formation(scenario), frame.states, reference, l.uav);
+                // The ratio its row is judged by (`FollowerJudge`).
+                let out = (0..6).map(|k| magnitude(e[k]) / self.allowable[k]).fold(0.0, f64::max) > 1.0;
+                l.last = Some((frame.t, out));
+                continue;
+            }
+            let Some((t, out)) = l.last else { continue };
+            l.gone = true;
+            if !out {
+                continue;
+            }
+            let before_change = self.transitions.first().is_none_or(|c| t < c.at_s - 1e-9);
+            if self.forming && before_change {
+                self.last_out_any = f64::INFINITY;
+            }
+            for c in self.transitions.iter_mut().filter(|c| t >= c.at_s - 1e-9 && t < c.until_s - 1e-9) {
+                c.last_out = f64::INFINITY;
+            }
+        }
     }
 
     /// The summary of run `run` lasting `duration_s`.
@@ -694,7 +759,7 @@ struct Partial {
 
 fn partial(
     (nav, settled): (usize, &[bool]),
-    faulty: &[usize],
+    not_healthy: &[usize],
     scenario: &Scenario,
     frame: &StepFrame<'_>,
     reference: &State9,
@@ -727,7 +792,7 @@ fn partial(
         if settled.get(i).copied().unwrap_or(false) {
             p.settled_ratio = p.settled_ratio.max(ratio);
         }
-        if faulty.binary_search(&i).is_err() {
+        if not_healthy.binary_search(&i).is_err() {
             for k in 0..6 {
                 p.healthy_max[k] = p.healthy_max[k].max(magnitude(e[k]));
             }
@@ -772,7 +837,7 @@ impl Observer for RunMetrics {
         self.radio_sent += frame.radio_sent as u64;
         let parallel = n >= crate::world::engine::PARALLEL_MIN_UAVS;
         let parts = crate::parallel::map_chunks(n, CHUNK, parallel, |r| {
-            partial((nav, &self.settled), &self.faulty, scenario, frame, &reference, r)
+            partial((nav, &self.settled), &self.not_healthy, scenario, frame, &reference, r)
         });
         let mut active = 0u64;
         let mut heading = [0.0f64; 3];
@@ -846,7 +911,8 @@ impl Observer for RunMetrics {
         if self.forming && before_change {
             self.ratio_so_far = self.ratio_so_far.max(step_ratio);
             if step_ratio > 1.0 {
-                self.last_out_any = frame.t;
+                // (∞ stays: a follower left out of its errors, `follow_leaving`.)
+                self.last_out_any = self.last_out_any.max(frame.t);
                 self.ratio_before_formed = self.ratio_so_far;
             }
         }
@@ -854,7 +920,7 @@ impl Observer for RunMetrics {
             if frame.t >= c.at_s - 1e-9 && frame.t < c.until_s - 1e-9 {
                 c.ratio = c.ratio.max(step_ratio);
                 if step_ratio > 1.0 {
-                    c.last_out = frame.t;
+                    c.last_out = c.last_out.max(frame.t);
                 }
             }
         }
@@ -862,6 +928,7 @@ impl Observer for RunMetrics {
         if self.transitions.first().is_none_or(|c| frame.t < c.at_s - 1e-9) {
             self.before_ratio = self.before_ratio.max(step_ratio);
         }
+        self.follow_leaving(scenario, frame, &reference);
         let order = (heading[0].powi(2) + heading[1].powi(2) + heading[2].powi(2)).sqrt() / (active.max(1) as f64);
         self.order_sum += order;
         self.order_min = self.order_min.min(order);
