@@ -140,6 +140,40 @@ pub fn faults(specs: &[FaultSpec], n: usize, duration_s: f64) -> Result<Vec<Faul
             ));
         }
     }
+    // A sensor fault strikes a UAV that flies: after its join (before it a stuck sensor froze a
+    // reading of a UAV not yet in the air), before its removal (after it, nothing).
+    for (k, f) in faults.iter().enumerate() {
+        let (uav, at_s, what) = match *f {
+            Fault::Glitch { uav, at_s, .. } => (uav, at_s, "position glitch"),
+            Fault::StuckSensor { uav, at_s, .. } => (uav, at_s, "stuck sensor"),
+            _ => continue,
+        };
+        for (j, g) in faults.iter().enumerate() {
+            let wrong = match *g {
+                Fault::Join { uav: u, at_s: joined, .. } if u == uav && at_s <= joined => Some(format!(
+                    "{} it joins at {joined} s (fault[{}])",
+                    if at_s < joined { "before" } else { "as" },
+                    j + 1
+                )),
+                Fault::Remove { uav: u, at_s: removed } if u == uav && at_s >= removed => Some(format!(
+                    "{} it is removed at {removed} s (fault[{}])",
+                    if at_s > removed { "after" } else { "as" },
+                    j + 1
+                )),
+                _ => None,
+            };
+            if let Some(when) = wrong {
+                return Err(err(
+                    format!("fault[{}].at_s", k + 1),
+                    format!(
+                        "UAV {}'s {what} starts at {at_s} s, {when}: a sensor fault strikes a UAV in flight, after its \
+                         join and before its removal",
+                        uav.0 + 1
+                    ),
+                ));
+            }
+        }
+    }
     somebody_flies(&faults, n, duration_s)?;
     Ok(faults)
 }
