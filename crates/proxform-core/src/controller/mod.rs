@@ -83,36 +83,67 @@ thread_local! {
     static COUNTED: std::cell::RefCell<std::collections::HashSet<u32>> = std::cell::RefCell::default();
 }
 
-/// Up to [`SCAN_UP_TO`] UAV ids, with a 64-bit filter of `id mod 64` in front: a UAV not
-/// counted is told by one test, and only a filter's hit searches the ids (compact, where a
-/// search of the observations themselves read a hundred bytes each).
+/// Up to [`SCAN_UP_TO`] UAV ids in an open-addressed table of twice as many slots (a
+/// multiplicative hash, linear probing): a UAV is told counted or not in one or two probes,
+/// where a search of the ids took one per id counted.
 struct FewIds {
-    ids: [u32; SCAN_UP_TO],
+    slots: [u32; FEW_SLOTS],
     n: usize,
-    filter: u64,
+    /// Whether the id that marks a free slot was counted (held apart: no formation has that
+    /// many UAVs, but an id is what the caller says it is).
+    free_id: bool,
 }
+
+/// The slots of [`FewIds`]: twice [`SCAN_UP_TO`], a power of two.
+const FEW_SLOTS: usize = 2 * SCAN_UP_TO;
+/// An empty slot of [`FewIds`].
+const FREE_ID: u32 = u32::MAX;
 
 impl FewIds {
     fn new() -> Self {
-        Self { ids: [0; SCAN_UP_TO], n: 0, filter: 0 }
+        Self { slots: [FREE_ID; FEW_SLOTS], n: 0, free_id: false }
+    }
+
+    /// The slot `id` hashes to (Fibonacci hashing: the top bits of id × 2³²/φ).
+    #[inline]
+    fn home(id: u32) -> usize {
+        (id.wrapping_mul(0x9E37_79B9) >> (32 - FEW_SLOTS.trailing_zeros())) as usize
     }
 
     /// Whether `id` is counted.
     #[inline]
     fn contains(&self, id: u32) -> bool {
-        self.filter & (1 << (id & 63)) != 0 && self.ids[..self.n].contains(&id)
+        if id == FREE_ID {
+            return self.free_id;
+        }
+        let mut s = Self::home(id);
+        loop {
+            match self.slots[s] {
+                x if x == id => return true,
+                FREE_ID => return false,
+                _ => s = (s + 1) & (FEW_SLOTS - 1),
+            }
+        }
     }
 
-    /// Counts `id`; false when it was counted already. At most [`SCAN_UP_TO`] ids are kept.
+    /// Counts `id`; false when it was counted already. At most [`SCAN_UP_TO`] ids are kept
+    /// (the table stays at most half full, so a probe always ends).
     #[inline]
     fn insert(&mut self, id: u32) -> bool {
-        if self.contains(id) {
-            return false;
+        if id == FREE_ID {
+            return !std::mem::replace(&mut self.free_id, true);
         }
-        if let Some(slot) = self.ids.get_mut(self.n) {
-            *slot = id;
+        let mut s = Self::home(id);
+        loop {
+            match self.slots[s] {
+                x if x == id => return false,
+                FREE_ID => break,
+                _ => s = (s + 1) & (FEW_SLOTS - 1),
+            }
+        }
+        if self.n < SCAN_UP_TO {
+            self.slots[s] = id;
             self.n += 1;
-            self.filter |= 1 << (id & 63);
         }
         true
     }
@@ -120,7 +151,7 @@ impl FewIds {
 
 /// The UAVs counted in a step: few on the stack, many in the thread's set.
 enum Counted<'a> {
-    Few(FewIds),
+    Few(&'a mut FewIds),
     Many(&'a mut std::collections::HashSet<u32>),
 }
 
@@ -588,7 +619,10 @@ impl<T: Tracks> UavView<'_, T> {
                 c.clear();
                 self.sort_into_areas_with(nearest, now_s, own, observations, Counted::Many(c));
             }),
-            false => self.sort_into_areas_with(nearest, now_s, own, observations, Counted::Few(FewIds::new())),
+            false => {
+                let mut few = FewIds::new();
+                self.sort_into_areas_with(nearest, now_s, own, observations, Counted::Few(&mut few))
+            }
         }
     }
 
@@ -1061,6 +1095,40 @@ pub fn push_apart(p: [f64; 3], separation: f64, slots_m: impl FnOnce() -> Option
     if d < limit && d > 1e-9 {
         for k in 0..3 {
             push[k] += (limit - d) * p[k] / d;
+        }
+    }
+}
+
+#[cfg(test)]
+mod few_ids_tests {
+    use super::*;
+
+    #[test]
+    fn the_few_ids_count_as_a_set_does() {
+        // Ids that share their home slot, neighbours' ids, 0 and the free slot's own id, in a
+        // scrambled order with repeats, up to SCAN_UP_TO different ones.
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        for round in 0..200 {
+            let mut few = FewIds::new();
+            let mut set = std::collections::HashSet::new();
+            let pool: Vec<u32> = (0..SCAN_UP_TO as u32)
+                .map(|k| match (k + round) % 5 {
+                    0 => k * 64,
+                    1 => 1000 + k,
+                    2 => FREE_ID - k,
+                    3 => k << 26,
+                    _ => k,
+                })
+                .collect();
+            for _ in 0..64 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let id = pool[(state % pool.len() as u64) as usize];
+                assert_eq!(few.contains(id), set.contains(&id), "{id}");
+                assert_eq!(few.insert(id), set.insert(id), "{id}");
+                assert!(few.contains(id));
+            }
         }
     }
 }
