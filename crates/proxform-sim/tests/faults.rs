@@ -331,3 +331,25 @@ fn a_follower_removed_out_of_its_errors_in_a_change_fails_its_row_and_the_run() 
     assert_eq!((within.per_uav_runs_flown[k], within.per_uav_runs_passed[k]), (2, 2));
     assert_eq!(within.pass_fraction, 1.0);
 }
+
+#[test]
+fn a_re_assignment_cut_short_by_a_second_loss_is_judged_by_the_one_that_follows() {
+    // The shipped V re-assigning its slots after UAV2's loss at 60 s; UAV4 is lost too at 62 s,
+    // while the others still fly to their new slots. The second re-assignment takes over the
+    // first: the formation completes it, every run passes (each read "not completed before
+    // the next" before, 0 of 4 runs, with every follower within its errors from 100 s on);
+    // UAV4, lost out of its errors on its way (in the runs where its slot moved), did not
+    // complete its own.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/reassign-v-loss.toml");
+    let text =
+        std::fs::read_to_string(path).expect("shipped") + "\n[[fault]]\nkind = \"remove\"\nuav = 4\nat_s = 62.0\n";
+    let s = proxform_scenario::load::parse(&text, "reassign-v-loss.toml").expect("valid");
+    let b = batch(&s, 1, 4);
+    assert_eq!(b.pass_fraction, 1.0);
+    for (k, &u) in b.per_uav.iter().enumerate() {
+        match u {
+            4 => assert!(b.per_uav_runs_passed[k] < b.per_uav_runs_flown[k], "UAV4 always passed"),
+            _ => assert_eq!(b.per_uav_runs_passed[k], b.per_uav_runs_flown[k], "UAV{u}"),
+        }
+    }
+}

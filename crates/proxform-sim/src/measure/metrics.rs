@@ -10,7 +10,7 @@ use proxform_core::state::{State9, P};
 use proxform_scenario::Scenario;
 
 use super::observer::{formation_error_to, Observer, StepFrame, StepOutcome};
-use super::verdict::{formed_at, Criterion, Evidence, FollowerJudge};
+use super::verdict::{formed_at, Criterion, Evidence, FollowerJudge, Window};
 
 /// Followers with per-UAV detail in summaries (the first ones).
 pub const PER_UAV_MAX: usize = 4096;
@@ -159,6 +159,9 @@ struct Transition {
     until_s: f64,
     last_out: f64,
     ratio: f64,
+    /// Cut short by a re-assignment (a loss known while it was in force): the re-assignment's
+    /// window judges whether the formation completed it.
+    superseded: bool,
 }
 
 /// How a formation that did not start in its slots came together.
@@ -385,6 +388,7 @@ impl RunMetrics {
                         until_s: stages.get(k + 1).map_or(f64::INFINITY, |s| s.at_s),
                         last_out: f64::NEG_INFINITY,
                         ratio: 0.0,
+                        superseded: false,
                     })
                     .collect()
             },
@@ -491,7 +495,8 @@ impl RunMetrics {
             if self.forming && before_change {
                 self.last_out_any = f64::INFINITY;
             }
-            for c in self.transitions.iter_mut().filter(|c| t >= c.at_s - 1e-9 && t < c.until_s - 1e-9) {
+            // (In a change it flew a step in: at the change's first frame it had not moved yet.)
+            for c in self.transitions.iter_mut().filter(|c| t > c.at_s + 1e-9 && t < c.until_s - 1e-9) {
                 c.last_out = f64::INFINITY;
             }
         }
@@ -511,6 +516,7 @@ impl RunMetrics {
             transition_s: self
                 .transitions
                 .iter()
+                .filter(|c| !c.superseded)
                 .map(|c| {
                     // The window's last frame: the one before the next change, or the flight's.
                     let last = if c.until_s.is_finite() { (c.until_s - self.dt).min(self.t_last) } else { self.t_last };
@@ -545,20 +551,17 @@ impl RunMetrics {
         let controlled = self.total.uncontrolled == 0;
         let pass = safe && on_path && controlled && self.criterion.passes(&evidence);
         // Each sampled follower by the same criterion over its own errors.
-        let window_last = |k: usize| {
+        let window = |k: usize| {
             let c = &self.transitions[k];
-            if c.until_s.is_finite() {
-                (c.until_s - self.dt).min(self.t_last)
-            } else {
-                self.t_last
-            }
+            let last = if c.until_s.is_finite() { (c.until_s - self.dt).min(self.t_last) } else { self.t_last };
+            Window { first: c.at_s, last, superseded: c.superseded }
         };
         let uav_pass: Vec<bool> = self
             .sample
             .iter()
             .zip(&self.judges)
             .map(|((_, a), j)| {
-                let e = j.evidence(a.follower_steps, within(&a.max_abs), (form_end, self.dt), window_last);
+                let e = j.evidence(a.follower_steps, within(&a.max_abs), (form_end, self.dt), window);
                 self.criterion.passes(&e)
             })
             .collect();
@@ -883,7 +886,7 @@ impl Observer for RunMetrics {
         if frame.reassigned && !begun() {
             let until = scenario.schedule().stages().iter().map(|s| s.at_s).find(|&a| a > t + 1e-9);
             for c in self.transitions.iter_mut().filter(|c| c.at_s <= t + 1e-9 && c.until_s > t) {
-                c.until_s = t;
+                (c.until_s, c.superseded) = (t, true);
             }
             let at = self.transitions.iter().position(|c| c.at_s > t).unwrap_or(self.transitions.len());
             for j in self.judges.iter_mut() {
@@ -894,6 +897,7 @@ impl Observer for RunMetrics {
                 until_s: until.unwrap_or(f64::INFINITY),
                 last_out: f64::NEG_INFINITY,
                 ratio: 0.0,
+                superseded: false,
             };
             self.transitions.insert(at, change);
         }

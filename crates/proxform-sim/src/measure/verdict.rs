@@ -56,6 +56,15 @@ impl Criterion {
     }
 }
 
+/// A change of formation's window as a follower is judged in it: its first and last frames
+/// (s), and whether a re-assignment cut it short.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Window {
+    pub first: f64,
+    pub last: f64,
+    pub superseded: bool,
+}
+
 /// One follower's evidence as a run goes: its errors over their allowable errors before the
 /// first change and when it was last outside them, then in each change of formation.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,15 +116,17 @@ impl FollowerJudge {
 
     /// Its evidence: `judged_steps` and `within` from its accumulated errors; formed from its
     /// last time out when that was before `form_end`'s frame; each change completed when it
-    /// was last out before the window's last frame (`window_last(k)`). A follower removed
+    /// was last out before the window's last frame (`window(k)`). A follower removed
     /// earlier is judged up to the last frame it flew: removed out of its errors, it did not
-    /// form, nor complete the change it was in.
+    /// form, nor complete the change it was in (one it flew a step in: at a change's first
+    /// frame nobody has moved yet). A change cut short by a re-assignment is judged by the
+    /// re-assignment's window, but for a follower that left in it.
     pub fn evidence(
         &self,
         judged_steps: u64,
         within: bool,
         (form_end, dt): (f64, f64),
-        window_last: impl Fn(usize) -> f64,
+        window: impl Fn(usize) -> Window,
     ) -> Evidence {
         Evidence {
             judged_steps,
@@ -124,7 +135,12 @@ impl FollowerJudge {
             settled_ratio: if self.settled { self.before_ratio } else { 0.0 },
             before_ratio: self.before_ratio,
             changes_completed: (!self.changes_last_out.is_empty()).then(|| {
-                self.changes_last_out.iter().enumerate().all(|(k, &l)| l < window_last(k).min(self.last_seen) - 1e-9)
+                self.changes_last_out.iter().enumerate().all(|(k, &l)| {
+                    let w = window(k);
+                    (w.superseded && self.last_seen > w.last + 1e-9)
+                        || self.last_seen <= w.first + 1e-9
+                        || l < w.last.min(self.last_seen) - 1e-9
+                })
             }),
         }
     }
@@ -143,6 +159,11 @@ pub(crate) fn formed_at(last_out: f64, form_end: f64, dt: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A change's window from `first` to `last`, run to its end.
+    fn w(first: f64, last: f64) -> Window {
+        Window { first, last, superseded: false }
+    }
 
     fn kept(within: bool) -> Evidence {
         Evidence {
@@ -187,12 +208,12 @@ mod tests {
             let ratio = if t < 4.95 || (10.0..12.05).contains(&t) { 2.0 } else { 0.5 };
             j.observe(t, ratio, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
         }
-        let e = j.evidence(200, false, (9.9, 0.1), |_| 19.9);
+        let e = j.evidence(200, false, (9.9, 0.1), |_| w(10.0, 19.9));
         assert!((e.time_to_form_s - 5.0).abs() < 1e-9, "{}", e.time_to_form_s);
         assert_eq!(e.changes_completed, Some(true));
         assert_eq!(e.settled_ratio, 0.0, "not judged from the start");
         // Still out at the window's last frame: not completed.
-        assert_eq!(j.evidence(200, false, (9.9, 0.1), |_| 12.0).changes_completed, Some(false));
+        assert_eq!(j.evidence(200, false, (9.9, 0.1), |_| w(10.0, 12.0)).changes_completed, Some(false));
     }
 
     #[test]
@@ -203,21 +224,55 @@ mod tests {
             let t = k as f64 * 0.1;
             j.observe(t, if t < 9.95 { 0.5 } else { 2.0 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
         }
-        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| 19.9).changes_completed, Some(false));
+        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(false));
         // A joiner removed while still forming did not form.
         let mut j = FollowerJudge::new(false, 0);
         for k in 0..=110 {
             j.observe(k as f64 * 0.1, 2.0, true, |_| false);
         }
-        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| 19.9).time_to_form_s, f64::INFINITY);
+        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).time_to_form_s, f64::INFINITY);
         // Removed within its errors: formed, and the change completed.
         let mut j = FollowerJudge::new(false, 1);
         for k in 0..=110 {
             let t = k as f64 * 0.1;
             j.observe(t, if (10.0..10.55).contains(&t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
         }
-        let e = j.evidence(111, false, (19.9, 0.1), |_| 19.9);
+        let e = j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9));
         assert_eq!(e.changes_completed, Some(true));
         assert!(e.time_to_form_s.is_finite());
+    }
+
+    #[test]
+    fn a_follower_gone_at_a_changes_first_frame_or_past_a_change_cut_short_is_not_held_to_it() {
+        // Removed as the change begins: its last frame is the change's first, where nobody has
+        // moved yet (far from its new slot): not held to the change.
+        let mut j = FollowerJudge::new(false, 1);
+        for k in 0..=100 {
+            let t = k as f64 * 0.1;
+            j.observe(t, if t < 9.95 { 0.5 } else { 2.0 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+        }
+        assert_eq!(j.evidence(101, false, (9.9, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(true));
+        // A change cut short at 12 s by a re-assignment (the second window, to the end): a
+        // follower out until 11 s and within from then on completed; one out at 11.9 s that
+        // flew on is judged by the re-assignment alone; one that left in it out of its errors
+        // did not complete it.
+        let cut = |k: usize| match k {
+            0 => Window { first: 10.0, last: 11.9, superseded: true },
+            _ => w(12.0, 19.9),
+        };
+        let judge = |out: &dyn Fn(f64) -> bool, until: usize| {
+            let mut j = FollowerJudge::new(false, 2);
+            for k in 0..=until {
+                let t = k as f64 * 0.1;
+                j.observe(t, if out(t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |c| match c {
+                    0 => (10.0 - 1e-9..12.0 - 1e-9).contains(&t),
+                    _ => t >= 12.0 - 1e-9,
+                });
+            }
+            j.evidence(until as u64 + 1, false, (9.9, 0.1), cut).changes_completed
+        };
+        assert_eq!(judge(&|t| (10.0..11.05).contains(&t), 199), Some(true));
+        assert_eq!(judge(&|t| (10.0..12.5).contains(&t), 199), Some(true));
+        assert_eq!(judge(&|t| t >= 10.0, 115), Some(false));
     }
 }
