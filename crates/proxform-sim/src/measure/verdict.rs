@@ -160,6 +160,17 @@ pub(crate) fn formed_at(last_out: f64, form_end: f64, dt: f64) -> f64 {
 mod tests {
     use super::*;
 
+    /// A follower in one change from 10 s, flown every 0.1 s to step `until`, out of its
+    /// errors where `out(t)`.
+    fn flown_to(until: usize, out: impl Fn(f64) -> bool) -> FollowerJudge {
+        let mut j = FollowerJudge::new(false, 1);
+        for k in 0..=until {
+            let t = k as f64 * 0.1;
+            j.observe(t, if out(t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+        }
+        j
+    }
+
     /// A change's window from `first` to `last`, run to its end.
     fn w(first: f64, last: f64) -> Window {
         Window { first, last, superseded: false }
@@ -219,11 +230,7 @@ mod tests {
     #[test]
     fn a_follower_removed_out_of_its_errors_neither_formed_nor_completed_its_change() {
         // Out from 10 s (a change) and removed at 11 s, while the window lasts to 19.9 s.
-        let mut j = FollowerJudge::new(false, 1);
-        for k in 0..=110 {
-            let t = k as f64 * 0.1;
-            j.observe(t, if t < 9.95 { 0.5 } else { 2.0 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
-        }
+        let j = flown_to(110, |t| t >= 9.95);
         assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(false));
         // A joiner removed while still forming did not form.
         let mut j = FollowerJudge::new(false, 0);
@@ -232,11 +239,7 @@ mod tests {
         }
         assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).time_to_form_s, f64::INFINITY);
         // Removed within its errors: formed, and the change completed.
-        let mut j = FollowerJudge::new(false, 1);
-        for k in 0..=110 {
-            let t = k as f64 * 0.1;
-            j.observe(t, if (10.0..10.55).contains(&t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
-        }
+        let j = flown_to(110, |t| (10.0..10.55).contains(&t));
         let e = j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9));
         assert_eq!(e.changes_completed, Some(true));
         assert!(e.time_to_form_s.is_finite());
@@ -246,11 +249,7 @@ mod tests {
     fn a_follower_gone_at_a_changes_first_frame_or_past_a_change_cut_short_is_not_held_to_it() {
         // Removed as the change begins: its last frame is the change's first, where nobody has
         // moved yet (far from its new slot): not held to the change.
-        let mut j = FollowerJudge::new(false, 1);
-        for k in 0..=100 {
-            let t = k as f64 * 0.1;
-            j.observe(t, if t < 9.95 { 0.5 } else { 2.0 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
-        }
+        let j = flown_to(100, |t| t >= 9.95);
         assert_eq!(j.evidence(101, false, (9.9, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(true));
         // A change cut short at 12 s by a re-assignment (the second window, to the end): a
         // follower out until 11 s and within from then on completed; one out at 11.9 s that
