@@ -22,9 +22,9 @@ pub const OWN_SETTLE_S: f64 = 2.0;
 /// by what the vehicle model misses of an acceleration within a period and by the velocity
 /// noise (about 0.1 m/s on the paper's path: 0.5 m over 5 s). Only an episode in which the
 /// readings froze (no velocity to dead-reckon with) widens at `own_gate_growth_mps`: then the
-/// wind moves the UAV off its prediction. So a position jump of a few metres is refused for as
-/// long as it is not older than its size over this rate (20 s for a 5 m jump), where the wind
-/// rate let it in after 2 s and the UAV flew off by its size (8 s for a 5 m jump).
+/// wind moves the UAV off its prediction. So a position jump of a few metres is refused until
+/// the gate has widened to its size ((5 − 3) m / 0.25 m/s = 8 s for a 5 m jump past a 3 m gate),
+/// where the wind's rate let it in after 2 s and the UAV flew off by its size.
 pub const OWN_DRIFT_MPS: f64 = 0.25;
 
 /// A jump of the position readings from the prediction that the widened gate let in: a
@@ -64,7 +64,8 @@ struct OwnPrediction {
     /// Whether a reading refused since the last accepted one was frozen: the UAV dead-reckoned
     /// without velocity readings, so the wind may have moved it off its prediction.
     blind: bool,
-    /// The last jump the widened gate let in, while it can be told apart.
+    /// The last jump the widened gate let in (until another is let in, or a reading returns
+    /// from it).
     let_in: Option<LetIn>,
     /// The instant `next` is for (s): the last step's time plus one period.
     for_s: f64,

@@ -164,6 +164,17 @@ struct Transition {
     superseded: bool,
 }
 
+impl Transition {
+    /// The window's last frame: the one before the next change, or the flight's last (`t_last`).
+    fn last_frame(&self, dt: f64, t_last: f64) -> f64 {
+        if self.until_s.is_finite() {
+            (self.until_s - dt).min(t_last)
+        } else {
+            t_last
+        }
+    }
+}
+
 /// How a formation that did not start in its slots came together.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FormingMetrics {
@@ -482,7 +493,7 @@ impl RunMetrics {
             if frame.active[l.uav] {
                 let e = formation_error_to(scenario, frame.formation(scenario), frame.states, reference, l.uav);
                 // The ratio its row is judged by (`FollowerJudge`).
-                let out = (0..6).map(|k| magnitude(e[k]) / self.allowable[k]).fold(0.0, f64::max) > 1.0;
+                let out = error_ratio(&e, &self.allowable) > 1.0;
                 l.last = Some((frame.t, out));
                 continue;
             }
@@ -519,7 +530,7 @@ impl RunMetrics {
                 .filter(|c| !c.superseded)
                 .map(|c| {
                     // The window's last frame: the one before the next change, or the flight's.
-                    let last = if c.until_s.is_finite() { (c.until_s - self.dt).min(self.t_last) } else { self.t_last };
+                    let last = c.last_frame(self.dt, self.t_last);
                     if c.last_out >= last - 1e-9 {
                         f64::INFINITY
                     } else {
@@ -553,7 +564,7 @@ impl RunMetrics {
         // Each sampled follower by the same criterion over its own errors.
         let window = |k: usize| {
             let c = &self.transitions[k];
-            let last = if c.until_s.is_finite() { (c.until_s - self.dt).min(self.t_last) } else { self.t_last };
+            let last = c.last_frame(self.dt, self.t_last);
             Window { first: c.at_s, last, superseded: c.superseded }
         };
         let uav_pass: Vec<bool> = self
@@ -720,6 +731,13 @@ fn magnitude(x: f64) -> f64 {
     }
 }
 
+/// A follower's formation error `e` over its allowable errors, its worst axis (∞ for NaN): above
+/// 1, it is out of them.
+#[inline]
+fn error_ratio(e: &[f64; 6], allowable: &[f64; 6]) -> f64 {
+    (0..6).map(|k| magnitude(e[k]) / allowable[k]).fold(0.0, f64::max)
+}
+
 #[inline]
 fn accumulate(acc: &mut Acc, e: &[f64; 6], outcome: Option<StepOutcome>) {
     acc.follower_steps += 1;
@@ -790,7 +808,7 @@ fn partial(
         let e = formation_error_to(scenario, frame.formation(scenario), frame.states, reference, i);
         accumulate(&mut p.acc, &e, u.outcome);
         p.speed_sum += speed;
-        let ratio = (0..6).map(|k| magnitude(e[k]) / allowable[k]).fold(0.0, f64::max);
+        let ratio = error_ratio(&e, &allowable);
         p.max_ratio = p.max_ratio.max(ratio);
         if settled.get(i).copied().unwrap_or(false) {
             p.settled_ratio = p.settled_ratio.max(ratio);
@@ -965,7 +983,7 @@ impl Observer for RunMetrics {
             }
             let e = formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
-            let ratio = (0..6).map(|k| magnitude(e[k]) / allowable[k]).fold(0.0, f64::max);
+            let ratio = error_ratio(&e, allowable);
             judge.observe(t, ratio, before_change, |k| {
                 let c = &transitions[k];
                 t >= c.at_s - 1e-9 && t < c.until_s - 1e-9
