@@ -12,23 +12,34 @@ const AXES: [&str; 6] = ["x m", "y m", "z m", "α °", "β °", "γ °"];
 /// id order): all of them up to [`MAX_ROWS`]; beyond, the [`MAX_ROWS`] farthest out of their
 /// allowable errors over the batch (the largest of their worst errors over the allowable ones,
 /// the axis that decides a verdict; those not flown last), so that a deep formation's rear
-/// ranks show.
+/// ranks show; the followers that failed in some run come before all others, so that a FAIL
+/// is never hidden.
 fn rows_shown(s: &proxform_sim::Summary) -> Vec<usize> {
-    let n = s.per_uav.len();
-    if n <= MAX_ROWS {
+    let allow = s.allowable_error.as_array();
+    let ratio: Vec<f64> = (0..s.per_uav.len())
+        .map(|f| {
+            if s.per_uav_runs_flown[f] == 0 {
+                return f64::NEG_INFINITY;
+            }
+            let w = s.per_uav_worst[f].as_array();
+            (0..6).map(|k| w[k] / allow[k]).fold(0.0, f64::max)
+        })
+        .collect();
+    let failed: Vec<bool> = s.per_uav_runs_passed.iter().zip(&s.per_uav_runs_flown).map(|(p, f)| p < f).collect();
+    worst_rows(&failed, &ratio, MAX_ROWS)
+}
+
+/// Of the rows with `failed` and error `ratio`, the `max` to show, in row order: every one up
+/// to `max`; beyond, those that failed first (a scattered start's forming errors outweigh the
+/// error of the one that did not form), then the largest ratios.
+fn worst_rows(failed: &[bool], ratio: &[f64], max: usize) -> Vec<usize> {
+    let n = ratio.len();
+    if n <= max {
         return (0..n).collect();
     }
-    let allow = s.allowable_error.as_array();
-    let ratio = |f: usize| {
-        if s.per_uav_runs_flown[f] == 0 {
-            return f64::NEG_INFINITY;
-        }
-        let w = s.per_uav_worst[f].as_array();
-        (0..6).map(|k| w[k] / allow[k]).fold(0.0, f64::max)
-    };
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| ratio(b).total_cmp(&ratio(a)).then(a.cmp(&b)));
-    order.truncate(MAX_ROWS);
+    order.sort_by(|&a, &b| failed[b].cmp(&failed[a]).then(ratio[b].total_cmp(&ratio[a])).then(a.cmp(&b)));
+    order.truncate(max);
     order.sort_unstable();
     order
 }
@@ -343,5 +354,20 @@ mod tests {
         assert_eq!(fraction(0.99999), "0.99999");
         assert_eq!(fraction(1.0), "1.0000");
         assert_eq!(fraction(0.95), "0.9500");
+    }
+
+    #[test]
+    fn a_follower_that_failed_is_shown_however_small_its_errors() {
+        // Twelve rows, the largest errors those of a scattered start's forming; row 7 failed
+        // with a smaller worst error (removed before it formed): it is shown, as are the
+        // largest of the others.
+        let ratio = [50.0, 40.0, 45.0, 30.0, 60.0, 35.0, 55.0, 20.0, 25.0, 70.0, 65.0, 42.0];
+        let mut failed = [false; 12];
+        failed[7] = true;
+        let shown = worst_rows(&failed, &ratio, 10);
+        assert!(shown.contains(&7), "{shown:?}");
+        assert_eq!(shown.len(), 10);
+        assert!(!shown.contains(&8) && !shown.contains(&3), "the two smallest of the others left out: {shown:?}");
+        assert_eq!(worst_rows(&[false; 3], &ratio[..3], 10), [0, 1, 2]);
     }
 }
