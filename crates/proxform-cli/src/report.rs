@@ -211,7 +211,7 @@ pub fn print(
         let formed = s.counts.formed;
         writeln!(
             out,
-            "forming                  formed (every follower within the allowable errors to the end, or to the first change of formation) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable{}",
+            "forming                  formed (every follower within the allowable errors to the end, or to the first change of formation; a re-assignment while forming carries it on) in {} ({formed} of {} runs), from t = {} s (median), {} s (p99), {} s (max); largest error before forming {}× the allowable{}",
             fraction(f.formed_fraction),
             s.runs,
             number(f.time_to_form_s_median),

@@ -353,3 +353,42 @@ fn a_re_assignment_cut_short_by_a_second_loss_is_judged_by_the_one_that_follows(
         }
     }
 }
+
+#[test]
+fn a_re_assignment_made_while_the_formation_forms_carries_its_forming_on() {
+    // The shipped V re-assigning its slots after a loss, with UAV9 starting 207 m off its slot
+    // and UAV2 lost at 5 s, in its slot: the others re-assign while UAV9 is still on its way.
+    // Forming carries on through the re-assignment: the formation formed when UAV9 reached
+    // its new slot (every run passes; each read "formed from ∞" before, 0 of 3, judged to
+    // the re-assignment's start). A re-assignment made once the formation had formed still
+    // ends forming: UAV2 lost at 40 s, the re-assignment is a change of its own.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/reassign-v-loss.toml");
+    let shipped = std::fs::read_to_string(path).expect("shipped");
+    let start = "placement = \"explicit\"\n\n[[initial.uav]]\nid = 9\nposition_m = [-400.0, -400.0, -20.0]\n";
+    let with_loss_at = |at: &str| {
+        let text = shipped
+            .replace("at_s = 60.0", &format!("at_s = {at}"))
+            .replace("assign_by = \"largest\"\n", &format!("assign_by = \"largest\"\n{start}"));
+        let s = proxform_scenario::load::parse(&text, "reassign-v-loss.toml").expect("valid");
+        run_batch(&s, RunOptions::default(), 1, 2, None, &|| {})
+    };
+    let formed = |b: &proxform_sim::BatchResult| {
+        b.runs.iter().map(|r| r.forming.expect("forming").time_to_form_s).fold(0.0, f64::max)
+    };
+    let early = with_loss_at("5.0");
+    assert_eq!(early.summary.pass_fraction, 1.0, "formed through the re-assignment");
+    let early_formed = formed(&early);
+    assert!(early_formed.is_finite() && early_formed > 5.0, "formed at {early_formed} s");
+    let e = &early.summary;
+    for (k, &u) in e.per_uav.iter().enumerate() {
+        assert_eq!(e.per_uav_runs_passed[k], e.per_uav_runs_flown[k], "UAV{u}");
+    }
+    let late = with_loss_at("40.0");
+    assert_eq!(late.summary.pass_fraction, 1.0);
+    let late_formed = formed(&late);
+    assert!(late_formed < 40.0, "forming ends at the re-assignment made once formed: {late_formed} s");
+    for r in &late.runs {
+        let t = r.transitions.expect("the re-assignment is a change of its own");
+        assert!(t.transition_s.is_finite() && t.transition_s > 0.0, "{t:?}");
+    }
+}

@@ -294,6 +294,10 @@ pub struct RunMetrics {
     /// Separation during the changes (made when the formation may change).
     change_separation: Option<super::separation::Separation>,
     before_ratio: f64,
+    /// Where forming is judged to (exclusive, s): the first change of formation, but for a
+    /// re-assignment made while the formation was still forming, which forming carries on
+    /// through (to the next scheduled change, or the end).
+    forming_until: f64,
     last_out_any: f64,
     ratio_so_far: f64,
     ratio_before_formed: f64,
@@ -406,6 +410,7 @@ impl RunMetrics {
             change_separation: (!scenario.schedule().is_empty() || scenario.reassign_on_loss().is_some())
                 .then(|| super::separation::Separation::new(scenario.safety_distance_m())),
             before_ratio: 0.0,
+            forming_until: scenario.schedule().stages().first().map_or(f64::INFINITY, |s| s.at_s),
             last_out_any: f64::NEG_INFINITY,
             ratio_so_far: 0.0,
             ratio_before_formed: 0.0,
@@ -502,8 +507,7 @@ impl RunMetrics {
             if !out {
                 continue;
             }
-            let before_change = self.transitions.first().is_none_or(|c| t < c.at_s - 1e-9);
-            if self.forming && before_change {
+            if self.forming && t < self.forming_until - 1e-9 {
                 self.last_out_any = f64::INFINITY;
             }
             // (In a change it flew a step in: at the change's first frame it had not moved yet.)
@@ -518,8 +522,12 @@ impl RunMetrics {
         let steps = self.samples.max(1) as f64;
         let rms = |a: &Acc, n: f64| a.sum_sq.map(|v| (v / n).sqrt());
         // Formed when every follower was within its errors from some time to the last frame
-        // before the first change of formation (or the end).
-        let form_end = self.transitions.first().map_or(self.t_last, |c| (c.at_s - self.dt).min(self.t_last));
+        // of forming: before the first change of formation (or a re-assignment made once it
+        // had formed), or the end.
+        let form_end = match self.forming_until.is_finite() {
+            true => (self.forming_until - self.dt).min(self.t_last),
+            false => self.t_last,
+        };
         let time_to_form_s = formed_at(self.last_out_any, form_end, self.dt);
         // A run in which no follower flew has nothing to judge: it does not pass. A formation
         // that did not start in its slots passes when it formed in time and stayed formed.
@@ -903,6 +911,14 @@ impl Observer for RunMetrics {
         let begun = || transitions.iter().any(|c| c.at_s >= t - dt - 1e-9 && c.at_s <= t + 1e-9);
         if frame.reassigned && !begun() {
             let until = scenario.schedule().stages().iter().map(|s| s.at_s).find(|&a| a > t + 1e-9);
+            // A re-assignment made while the formation was still forming (a follower out of
+            // its errors at the last frame before it) is forming's continuation: the formation
+            // has formed when it has formed in the new slots. Made once it had formed, it ends
+            // forming, as a change does.
+            let still_forming = self.forming && t < self.forming_until - 1e-9 && self.last_out_any >= t - dt - 1e-9;
+            if !still_forming {
+                self.forming_until = self.forming_until.min(t);
+            }
             for c in self.transitions.iter_mut().filter(|c| c.at_s <= t + 1e-9 && c.until_s > t) {
                 (c.until_s, c.superseded) = (t, true);
             }
@@ -930,7 +946,8 @@ impl Observer for RunMetrics {
         if before_change {
             self.settled_ratio = self.settled_ratio.max(settled_ratio);
         }
-        if self.forming && before_change {
+        let in_forming = frame.t < self.forming_until - 1e-9;
+        if self.forming && in_forming {
             self.ratio_so_far = self.ratio_so_far.max(step_ratio);
             if step_ratio > 1.0 {
                 // (∞ stays: a follower left out of its errors, `follow_leaving`.)
@@ -984,7 +1001,7 @@ impl Observer for RunMetrics {
             let e = formation_error_to(scenario, frame.formation(scenario), frame.states, &reference, *i);
             accumulate(acc, &e, frame.uavs[*i].outcome);
             let ratio = error_ratio(&e, allowable);
-            judge.observe(t, ratio, before_change, |k| {
+            judge.observe(t, ratio, (before_change, in_forming), |k| {
                 let c = &transitions[k];
                 t >= c.at_s - 1e-9 && t < c.until_s - 1e-9
             });

@@ -73,7 +73,8 @@ pub(crate) struct FollowerJudge {
     pub settled: bool,
     /// Largest error ratio before the first change.
     pub before_ratio: f64,
-    /// Last time (s) outside its allowable errors before the first change.
+    /// Last time (s) outside its allowable errors while the formation was forming (before the
+    /// first change, or through a re-assignment made while it was still forming).
     pub last_out: f64,
     /// Per change of formation (in the run's order): the last time it was outside them.
     pub changes_last_out: Vec<f64>,
@@ -95,15 +96,22 @@ impl FollowerJudge {
     }
 
     /// Its error ratio `ratio` at time `t`: before the first change when `before_change`,
-    /// and in the changes whose windows hold `t` (`in_change(k)`).
-    pub fn observe(&mut self, t: f64, ratio: f64, before_change: bool, in_change: impl Fn(usize) -> bool) {
+    /// while the formation forms when `forming`, and in the changes whose windows hold `t`
+    /// (`in_change(k)`).
+    pub fn observe(
+        &mut self,
+        t: f64,
+        ratio: f64,
+        (before_change, forming): (bool, bool),
+        in_change: impl Fn(usize) -> bool,
+    ) {
         let out = ratio > 1.0;
         self.last_seen = t;
         if before_change {
             self.before_ratio = self.before_ratio.max(ratio);
-            if out {
-                self.last_out = t;
-            }
+        }
+        if forming && out {
+            self.last_out = t;
         }
         if out {
             for (k, last) in self.changes_last_out.iter_mut().enumerate() {
@@ -166,7 +174,7 @@ mod tests {
         let mut j = FollowerJudge::new(false, 1);
         for k in 0..=until {
             let t = k as f64 * 0.1;
-            j.observe(t, if out(t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+            j.observe(t, if out(t) { 2.0 } else { 0.5 }, (t < 10.0 - 1e-9, t < 10.0 - 1e-9), |_| t >= 10.0 - 1e-9);
         }
         j
     }
@@ -217,7 +225,7 @@ mod tests {
         for k in 0..200 {
             let t = k as f64 * 0.1;
             let ratio = if t < 4.95 || (10.0..12.05).contains(&t) { 2.0 } else { 0.5 };
-            j.observe(t, ratio, t < 10.0 - 1e-9, |_| t >= 10.0 - 1e-9);
+            j.observe(t, ratio, (t < 10.0 - 1e-9, t < 10.0 - 1e-9), |_| t >= 10.0 - 1e-9);
         }
         let e = j.evidence(200, false, (9.9, 0.1), |_| w(10.0, 19.9));
         assert!((e.time_to_form_s - 5.0).abs() < 1e-9, "{}", e.time_to_form_s);
@@ -228,6 +236,29 @@ mod tests {
     }
 
     #[test]
+    fn forming_carried_on_past_the_first_change_judges_forming_not_the_errors_before_it() {
+        // Forming carried on through a re-assignment at 5 s to 20 s: out of its errors to
+        // 12 s (after the re-assignment's start), within them after. It formed at 12.1 s; its
+        // errors before the change are those before 5 s only.
+        let mut j = FollowerJudge::new(true, 1);
+        for k in 0..300 {
+            let t = k as f64 * 0.1;
+            let ratio = if t < 4.95 {
+                0.5
+            } else if t < 12.05 {
+                3.0
+            } else {
+                0.5
+            };
+            j.observe(t, ratio, (t < 5.0 - 1e-9, t < 20.0 - 1e-9), |_| t >= 5.0 - 1e-9);
+        }
+        let e = j.evidence(300, false, (19.9, 0.1), |_| w(5.0, 29.9));
+        assert!((e.time_to_form_s - 12.1).abs() < 1e-9, "{}", e.time_to_form_s);
+        assert_eq!(e.before_ratio, 0.5);
+        assert_eq!(e.changes_completed, Some(true));
+    }
+
+    #[test]
     fn a_follower_removed_out_of_its_errors_neither_formed_nor_completed_its_change() {
         // Out from 10 s (a change) and removed at 11 s, while the window lasts to 19.9 s.
         let j = flown_to(110, |t| t >= 9.95);
@@ -235,7 +266,7 @@ mod tests {
         // A joiner removed while still forming did not form.
         let mut j = FollowerJudge::new(false, 0);
         for k in 0..=110 {
-            j.observe(k as f64 * 0.1, 2.0, true, |_| false);
+            j.observe(k as f64 * 0.1, 2.0, (true, true), |_| false);
         }
         assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).time_to_form_s, f64::INFINITY);
         // Removed within its errors: formed, and the change completed.
@@ -263,7 +294,7 @@ mod tests {
             let mut j = FollowerJudge::new(false, 2);
             for k in 0..=until {
                 let t = k as f64 * 0.1;
-                j.observe(t, if out(t) { 2.0 } else { 0.5 }, t < 10.0 - 1e-9, |c| match c {
+                j.observe(t, if out(t) { 2.0 } else { 0.5 }, (t < 10.0 - 1e-9, t < 10.0 - 1e-9), |c| match c {
                     0 => (10.0 - 1e-9..12.0 - 1e-9).contains(&t),
                     _ => t >= 12.0 - 1e-9,
                 });
