@@ -3,6 +3,7 @@
 use std::io::{self, Write};
 use std::time::Duration;
 
+use proxform_scenario::faults::Fault;
 use proxform_scenario::Scenario;
 use proxform_sim::Summary;
 
@@ -197,14 +198,28 @@ pub fn print(
     }
     if let Some(f) = &s.sensor_faults {
         let healthy = s.counts.healthy_passed;
+        // The navigator has no slot error to come back within: its faults show in what the
+        // followers did and on the path line.
+        let nav = scenario.navigator();
+        let followers_faulty = scenario.faults().iter().any(|x| match x {
+            Fault::Glitch { uav, .. } | Fault::StuckSensor { uav, .. } => *uav != nav,
+            _ => false,
+        });
+        let back = match followers_faulty {
+            true => format!(
+                "faulty UAVs back within them {} s after the fault (median), {} s (p99), {} s (max)",
+                number(f.rejoin_s_median),
+                number(f.rejoin_s_p99),
+                number(f.rejoin_s_max)
+            ),
+            false => "the faulty UAV is the navigator (no slot error of its own: see the path line)".to_string(),
+        };
         writeln!(
             out,
-            "sensor faults            the other followers within the allowable errors in {} ({healthy} of {} runs); faulty UAVs back within them {} s after the fault (median), {} s (p99), {} s (max)",
+            "sensor faults            the {}followers within the allowable errors in {} ({healthy} of {} runs); {back}",
+            if followers_faulty { "other " } else { "" },
             fraction(f.healthy_pass_fraction),
             s.runs,
-            number(f.rejoin_s_median),
-            number(f.rejoin_s_p99),
-            number(f.rejoin_s_max)
         )?;
     }
     if let Some(f) = &s.forming {

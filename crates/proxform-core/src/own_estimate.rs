@@ -182,6 +182,13 @@ impl OwnEstimate {
     pub fn expect(&mut self, setup: &ControllerSetup, now_s: f64, (own, measured): (&State9, &State9), input: &Input) {
         let dt = setup.params().dt_s;
         let next = setup.vehicle().predict(own, input, dt);
+        self.expect_state((now_s, dt), (own, measured), next);
+    }
+
+    /// After `own` at `now_s` (from the reading `measured`): the state `next` the UAV expects
+    /// one period `dt` on, however it knows it (a UAV whose autopilot flies it along its plan
+    /// knows how it moved).
+    pub fn expect_state(&mut self, (now_s, dt): (f64, f64), (own, measured): (&State9, &State9), next: State9) {
         let velocity = [own[state::VX], own[state::VX + 1], own[state::VX + 2]];
         let moved = std::array::from_fn(|k| next[state::X + k] - own[state::X + k]);
         match &mut self.prediction {

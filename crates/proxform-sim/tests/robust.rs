@@ -597,3 +597,28 @@ fn a_uav_whose_readings_are_refused_dead_reckons_with_their_velocity_once_they_m
     assert!(f.rejoin_s_max < 10.0, "{f:?}");
     assert!(f.healthy_pass_fraction >= 0.95, "{f:?}");
 }
+
+#[test]
+fn the_navigators_own_sensor_faults_do_not_drag_the_followers_on_either_engine() {
+    // fault-triangle10's two sensor faults struck on the navigator (UAV1) instead: its sensor
+    // stuck for 5 s at 40 s, its fix 20 m off for 3 s at 60 s. The rear rows, out of its
+    // sensing range, hear it only over the radio, and the robust fusion never weighs it down:
+    // its broadcast of the stuck reading dragged UAV7-10 up to 123 m off (0 of 4 runs). It now
+    // checks its reading as a follower does before it broadcasts: every run passes, on both
+    // engines. With the own-sensor check off, its raw reading goes out and they are dragged.
+    for engine in ["reference", "fast"] {
+        let faulty_navigator = |gate: Option<f64>| {
+            scenario("fault-triangle10.toml", |s| {
+                s.fault.iter_mut().for_each(|f| f.uav = Some(1));
+                s.engine = Some(engine.into());
+                s.controller.own_gate_m = gate;
+            })
+        };
+        let checked = batch(&faulty_navigator(Some(3.0)), 4);
+        assert_eq!(checked.pass_fraction, 1.0, "{engine}");
+        let unchecked = batch(&faulty_navigator(Some(0.0)), 2);
+        assert_eq!(unchecked.pass_fraction, 0.0, "{engine}: the raw reading drags them");
+        let dragged = (7..=10).map(|u| worst_over_allowable(&unchecked, u)).fold(0.0, f64::max);
+        assert!(dragged > 10.0, "{engine}: {dragged}");
+    }
+}

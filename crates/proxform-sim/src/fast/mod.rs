@@ -54,6 +54,7 @@ use crate::world::airwaves::Airwaves;
 use crate::world::environment::{self, EnvStep, UavEnv};
 use crate::world::measurement::{self, Message};
 use crate::world::membership::Membership;
+use crate::world::navigator_check::NavigatorCheck;
 use crate::world::options::RunOptions;
 use crate::world::plant;
 use crate::world::reach::Reach;
@@ -132,6 +133,8 @@ pub struct FastSimulation<'s> {
     start: [f64; 3],
     origin0: [f64; 3],
     parallel: bool,
+    /// What the navigator broadcasts of itself, checked (the reference engine's own).
+    navigator_check: NavigatorCheck,
 }
 
 impl std::fmt::Debug for FastSimulation<'_> {
@@ -198,6 +201,7 @@ impl<'s> FastSimulation<'s> {
             start,
             origin0: [p0[X], p0[X + 1], p0[X + 2]],
             parallel: n >= crate::world::engine::PARALLEL_MIN_UAVS,
+            navigator_check: NavigatorCheck::default(),
             c,
         };
         sim.warm_up();
@@ -368,6 +372,7 @@ impl<'s> FastSimulation<'s> {
             sensor,
             ideal,
             members,
+            navigator_check,
             ..
         } = self;
         let view = View {
@@ -410,6 +415,8 @@ impl<'s> FastSimulation<'s> {
                 relative: false,
             });
         }
+        // (In the warm-up the navigator's readings are not checked: its sensors are ideal.)
+        measurement::check_navigator(sc, (t, states), (!warm).then_some(navigator_check), &mut messages);
         // Relays: every flying follower forwards what its tracks know of the leader, in the
         // order of the UAVs (as the reference's agents).
         let controlled = |i: usize| members.active[i] && i != c.nav && i != members.lead.leader.index();

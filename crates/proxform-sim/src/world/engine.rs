@@ -27,6 +27,7 @@ use super::airwaves::Airwaves;
 use super::environment::{EnvStep, UavEnv};
 use super::measurement::{self, OwnSensors};
 use super::membership::Membership;
+use super::navigator_check::NavigatorCheck;
 use super::options::{NeighbourSearch, RunOptions};
 use super::phases::{for_each_block, for_each_block_in_order, Mode, StepContext};
 use super::reach::Reach;
@@ -102,6 +103,8 @@ struct World<'s> {
     sensor: ProximitySensor,
     start: [f64; 3],
     parallel: bool,
+    /// What the navigator broadcasts of itself, checked ([`NavigatorCheck`]).
+    navigator_check: NavigatorCheck,
 }
 
 impl<'s> Simulation<'s> {
@@ -165,6 +168,7 @@ impl<'s> Simulation<'s> {
             sensor: ProximitySensor::of(scenario),
             start: [s0[state::X], s0[state::Y], s0[state::Z]],
             parallel: n >= PARALLEL_MIN_UAVS,
+            navigator_check: NavigatorCheck::default(),
         };
         Self { world, agents, outside, next: starts, uavs: vec![UavStep::default(); n] }
     }
@@ -521,7 +525,7 @@ impl<'s> World<'s> {
     }
 
     /// Phase 4, radio: every broadcasting UAV sends its own measurement (in flight with its
-    /// position-fix bias and sensor faults), and, with `relay_navigator`, every follower what
+    /// position-fix bias and sensor faults; the navigator's checked, [`NavigatorCheck`]), and, with `relay_navigator`, every follower what
     /// its agent knows of the navigator at `t`; the messages sent `delay` steps ago arrive now
     /// (none before the first arrive).
     fn send_radio(&mut self, (key, t): (StreamKey, f64), delay: usize, flight: bool, agents: &[Option<Agent>]) {
@@ -533,6 +537,9 @@ impl<'s> World<'s> {
         };
         let mut now = self.air.buffer(delay);
         measurement::compose(self.scenario, &self.current, &sensors, (self.members.lead, self.parallel), &mut now);
+        // (In the warm-up the navigator's readings are not checked: its sensors are ideal.)
+        let check = flight.then_some(&mut self.navigator_check);
+        measurement::check_navigator(self.scenario, (t, &self.current), check, &mut now);
         measurement::relays(
             self.scenario,
             &self.current,

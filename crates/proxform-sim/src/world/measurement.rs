@@ -3,7 +3,8 @@
 //! A UAV's measurement of its own state is its true state with white noise (its own-state
 //! stream at the step), plus, in flight, the bias of its position fix and its sensor faults
 //! (a glitch, a stuck sensor). The agent decides from it, and a UAV that broadcasts sends it:
-//! a message carries what the sender believes, not the truth.
+//! a message carries what the sender believes, not the truth (the navigator's, checked first
+//! when the own-sensor check or filter is on: [`super::navigator_check`]).
 
 use proxform_core::assignment::Lead;
 use proxform_core::state::{self, State9};
@@ -112,6 +113,22 @@ pub fn compose(
         m.state = sensors.measure(j, s);
         m.at = [s[state::X], s[state::Y], s[state::Z]];
     });
+}
+
+/// Replaces the state of the navigator's own message among `out` (sent at `t`; `states`
+/// the true states) by what its check (None: the warm-up) makes of the reading: the one place
+/// both engines check it.
+pub fn check_navigator(
+    sc: &Scenario,
+    (t, states): (f64, &[State9]),
+    check: Option<&mut super::navigator_check::NavigatorCheck>,
+    out: &mut [Message],
+) {
+    let Some(check) = check else { return };
+    let nav = sc.navigator().0;
+    if let Some(m) = out.iter_mut().find(|m| m.sender == nav && m.about == nav) {
+        m.state = check.checked(sc.controller(), t, (&states[nav as usize], &m.state));
+    }
 }
 
 /// Appends to `out` the relays of this step (`radio.relay_navigator`): every active follower

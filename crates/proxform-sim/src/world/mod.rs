@@ -7,6 +7,7 @@ pub mod environment;
 pub mod faults;
 pub mod measurement;
 pub mod membership;
+pub mod navigator_check;
 pub mod options;
 pub mod phases;
 pub mod placement;
