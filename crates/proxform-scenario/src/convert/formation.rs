@@ -10,7 +10,7 @@ use proxform_core::{
 };
 
 use super::values::{
-    distance, err, finite, positive, probability, required, show, uav, vec3, SpecError, MAX_DISTANCE_M,
+    distance, distance3, err, finite, positive, probability, required, show, uav, vec3, SpecError, MAX_DISTANCE_M,
 };
 use super::MAX_UAVS;
 use crate::defaults;
@@ -97,10 +97,7 @@ fn slots_of(f: &FormationSpec, safety_distance_m: f64) -> Result<SlotsAndRefs, S
                 if slots[i].is_some() {
                     return Err(err(format!("{key}.id"), format!("duplicate id {id}")));
                 }
-                let offset = vec3(&format!("{key}.offset_m"), required(&format!("{key}.offset_m"), s.offset_m)?)?;
-                for k in 0..3 {
-                    distance(&format!("{key}.offset_m[{}]", k + 1), offset[k])?;
-                }
+                let offset = distance3(&format!("{key}.offset_m"), required(&format!("{key}.offset_m"), s.offset_m)?)?;
                 let att = match s.attitude_offset_deg {
                     Some(a) => vec3(&format!("{key}.attitude_offset_deg"), a)?.map(deg),
                     None => Vector3::zeros(),

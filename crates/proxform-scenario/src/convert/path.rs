@@ -2,7 +2,7 @@
 
 use proxform_core::angle::{deg, kmh};
 
-use super::values::{distance, err, finite, non_negative, positive, required, speed_kmh, vec3, SpecError};
+use super::values::{distance, distance3, err, finite, non_negative, positive, required, speed_kmh, SpecError};
 use crate::defaults;
 use crate::path::waypoints::waypoint_segments_at;
 use crate::path::{NavigatorPath, PaperPath, Segment, SegmentsPath};
@@ -117,10 +117,7 @@ pub fn path(p: &PathSpec) -> Result<NavigatorPath, SpecError> {
             let points = required("path.points_m", p.points_m.clone())?;
             let transition = positive("path.transition_s", p.transition_s.unwrap_or(defaults::PATH_TRANSITION_S))?;
             for (k, pt) in points.iter().enumerate() {
-                let q = vec3(&format!("path.points_m[{}]", k + 1), *pt)?;
-                for a in 0..3 {
-                    distance(&format!("path.points_m[{}]", k + 1), q[a])?;
-                }
+                distance3(&format!("path.points_m[{}]", k + 1), *pt)?;
             }
             let leg_speeds = match &p.leg_speeds_kmh {
                 Some(speeds) => {

@@ -131,6 +131,16 @@ pub fn distance(key: &str, v: f64) -> Result<f64, SpecError> {
     within(key, v, MAX_DISTANCE_M, "m", "the models are for formations and flights of up to 1000 km")
 }
 
+/// A position or offset: three distances within [`MAX_DISTANCE_M`] (`key[1]`, `key[2]`,
+/// `key[3]` named where one is not).
+pub fn distance3(key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SpecError> {
+    let out = vec3(key, v)?;
+    for k in 0..3 {
+        distance(&format!("{key}[{}]", k + 1), out[k])?;
+    }
+    Ok(out)
+}
+
 /// A speed within [`MAX_SPEED_KMH`].
 pub fn speed_kmh(key: &str, v: f64) -> Result<f64, SpecError> {
     within(key, v, MAX_SPEED_KMH, "km/h", "faster than any vehicle the models describe")

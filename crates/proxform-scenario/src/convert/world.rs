@@ -6,7 +6,7 @@ use proxform_core::angle::{deg, kmh};
 use proxform_core::UavId;
 
 use super::values::{
-    err, non_negative, or_default, positive, probability, required, show, uav, vec3, within, SpecError,
+    distance3, err, non_negative, or_default, positive, probability, required, show, uav, vec3, within, SpecError,
 };
 use crate::defaults;
 use crate::faults::Fault;
@@ -356,7 +356,7 @@ fn fault(k: usize, f: &FaultSpec, n: usize) -> Result<Fault, SpecError> {
     let duration = || positive(&format!("{key}.duration_s"), required(&format!("{key}.duration_s"), f.duration_s)?);
     let offset = || -> Result<Vector3<f64>, SpecError> {
         match f.offset_m {
-            Some(o) => vec3(&format!("{key}.offset_m"), o),
+            Some(o) => distance3(&format!("{key}.offset_m"), o),
             None => Ok(Vector3::zeros()),
         }
     };
