@@ -198,28 +198,34 @@ pub fn print(
     }
     if let Some(f) = &s.sensor_faults {
         let healthy = s.counts.healthy_passed;
-        // The navigator has no slot error to come back within: its faults show in what the
-        // followers did and on the path line.
+        // The navigator has no slot error to come back within: its faults show in the
+        // followers' errors alone.
         let nav = scenario.navigator();
-        let followers_faulty = scenario.faults().iter().any(|x| match x {
-            Fault::Glitch { uav, .. } | Fault::StuckSensor { uav, .. } => *uav != nav,
-            _ => false,
-        });
-        let back = match followers_faulty {
-            true => format!(
-                "faulty UAVs back within them {} s after the fault (median), {} s (p99), {} s (max)",
+        let struck = |navigator: bool| {
+            scenario.faults().iter().any(|x| match x {
+                Fault::Glitch { uav, .. } | Fault::StuckSensor { uav, .. } => (*uav == nav) == navigator,
+                _ => false,
+            })
+        };
+        let mut back = Vec::new();
+        if struck(false) {
+            back.push(format!(
+                "faulty followers back within them {} s after the fault (median), {} s (p99), {} s (max)",
                 number(f.rejoin_s_median),
                 number(f.rejoin_s_p99),
                 number(f.rejoin_s_max)
-            ),
-            false => "the faulty UAV is the navigator (no slot error of its own: see the path line)".to_string(),
-        };
+            ));
+        }
+        if struck(true) {
+            back.push("the navigator's own faults show in the followers' errors (it has no slot error)".into());
+        }
         writeln!(
             out,
-            "sensor faults            the {}followers within the allowable errors in {} ({healthy} of {} runs); {back}",
-            if followers_faulty { "other " } else { "" },
+            "sensor faults            the {}followers within the allowable errors in {} ({healthy} of {} runs); {}",
+            if struck(false) { "other " } else { "" },
             fraction(f.healthy_pass_fraction),
             s.runs,
+            back.join("; ")
         )?;
     }
     if let Some(f) = &s.forming {
@@ -241,7 +247,7 @@ pub fn print(
             let in_time = s.counts.formed_in_time;
             writeln!(
                 out,
-                "formed in time           by form_within_s = {} s in {in_time} of {} runs (the others do not pass)",
+                "formed in time           by form_within_s = {} s (from the start, or from slots re-assigned while forming) in {in_time} of {} runs (the others do not pass)",
                 number(limit),
                 s.runs
             )?;

@@ -383,6 +383,25 @@ fn a_re_assignment_made_while_the_formation_forms_carries_its_forming_on() {
     for (k, &u) in e.per_uav.iter().enumerate() {
         assert_eq!(e.per_uav_runs_passed[k], e.per_uav_runs_flown[k], "UAV{u}");
     }
+    // With a deadline of 20 s and the loss at 15 s: UAV9 reached its slot as the others
+    // re-assigned, and the followers that moved up the wing for the loss formed by 25 s. The
+    // deadline counts from the re-assignment (new slots to form in): from the start, the run
+    // failed and blamed the followers that had formed, while a loss 0.1 s later passed.
+    let deadline = |at: &str| {
+        let text = shipped
+            .replace("at_s = 60.0", &format!("at_s = {at}"))
+            .replace("assign_by = \"largest\"\n", &format!("assign_by = \"largest\"\nform_within_s = 20.0\n{start}"));
+        let s = proxform_scenario::load::parse(&text, "reassign-v-loss.toml").expect("valid");
+        run_batch(&s, RunOptions::default(), 1, 2, None, &|| {})
+    };
+    for at in ["15.0", "15.1"] {
+        let b = deadline(at);
+        assert_eq!(b.summary.pass_fraction, 1.0, "loss at {at} s");
+        let e = &b.summary;
+        for (k, &u) in e.per_uav.iter().enumerate() {
+            assert_eq!(e.per_uav_runs_passed[k], e.per_uav_runs_flown[k], "loss at {at} s: UAV{u}");
+        }
+    }
     let late = with_loss_at("40.0");
     assert_eq!(late.summary.pass_fraction, 1.0);
     let late_formed = formed(&late);

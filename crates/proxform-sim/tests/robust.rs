@@ -622,3 +622,34 @@ fn the_navigators_own_sensor_faults_do_not_drag_the_followers_on_either_engine()
         assert!(dragged > 10.0, "{engine}: {dragged}");
     }
 }
+
+#[test]
+fn the_leaders_check_holds_from_the_first_step_for_long_jumps_and_after_a_succession() {
+    // fault-triangle10's faults replaced by `faults` (kind, uav, at_s, duration_s, offset in y).
+    // Each failed every run before (0 of 2): a jump of the navigator's fix from the flight's
+    // first step was taken as its position (its followers then held 12-20 m off for 75 s); a
+    // jump lasting 30 s was let in as the gate widened; the successor's broadcasts, once
+    // UAV1 is lost, went out unchecked.
+    let with = |faults: &[(&str, u32, f64, Option<f64>, f64)]| {
+        scenario("fault-triangle10.toml", |s| {
+            s.fault = faults
+                .iter()
+                .map(|&(kind, uav, at_s, duration_s, y)| proxform_scenario::spec::FaultSpec {
+                    kind: Some(kind.into()),
+                    uav: Some(uav),
+                    at_s: Some(at_s),
+                    duration_s,
+                    offset_m: (kind == "glitch").then_some([0.0, y, 0.0]),
+                })
+                .collect();
+        })
+    };
+    let cases = [
+        ("from the first step", with(&[("glitch", 1, 0.0, Some(3.0), 20.0)])),
+        ("for 30 s", with(&[("glitch", 1, 30.0, Some(30.0), 10.0)])),
+        ("the successor's", with(&[("remove", 1, 30.0, None, 0.0), ("stuck_sensor", 2, 50.0, Some(5.0), 0.0)])),
+    ];
+    for (case, s) in &cases {
+        assert_eq!(batch(s, 2).pass_fraction, 1.0, "{case}");
+    }
+}

@@ -416,7 +416,8 @@ impl<'s> FastSimulation<'s> {
             });
         }
         // (In the warm-up the navigator's readings are not checked: its sensors are ideal.)
-        measurement::check_navigator(sc, (t, states), (!warm).then_some(navigator_check), &mut messages);
+        let leader = (members.lead.leader, t, &states[..]);
+        measurement::check_navigator(sc, leader, (!warm).then_some(navigator_check), &mut messages);
         // Relays: every flying follower forwards what its tracks know of the leader, in the
         // order of the UAVs (as the reference's agents).
         let controlled = |i: usize| members.active[i] && i != c.nav && i != members.lead.leader.index();

@@ -539,7 +539,7 @@ impl<'s> World<'s> {
         measurement::compose(self.scenario, &self.current, &sensors, (self.members.lead, self.parallel), &mut now);
         // (In the warm-up the navigator's readings are not checked: its sensors are ideal.)
         let check = flight.then_some(&mut self.navigator_check);
-        measurement::check_navigator(self.scenario, (t, &self.current), check, &mut now);
+        measurement::check_navigator(self.scenario, (self.members.lead.leader, t, &self.current), check, &mut now);
         measurement::relays(
             self.scenario,
             &self.current,

@@ -115,19 +115,19 @@ pub fn compose(
     });
 }
 
-/// Replaces the state of the navigator's own message among `out` (sent at `t`; `states`
-/// the true states) by what its check (None: the warm-up) makes of the reading: the one place
-/// both engines check it.
+/// Replaces the state of the leader's own message among `out` (the navigator's, or its
+/// successor's once it leads; sent at `t`; `states` the true states) by what its check (None:
+/// the warm-up) makes of the reading: the one place both engines check it.
 pub fn check_navigator(
     sc: &Scenario,
-    (t, states): (f64, &[State9]),
+    (leader, t, states): (UavId, f64, &[State9]),
     check: Option<&mut super::navigator_check::NavigatorCheck>,
     out: &mut [Message],
 ) {
     let Some(check) = check else { return };
-    let nav = sc.navigator().0;
-    if let Some(m) = out.iter_mut().find(|m| m.sender == nav && m.about == nav) {
-        m.state = check.checked(sc.controller(), t, (&states[nav as usize], &m.state));
+    let lead = leader.0;
+    if let Some(m) = out.iter_mut().find(|m| m.sender == lead && m.about == lead) {
+        m.state = check.checked(sc.controller(), (lead, t), (&states[lead as usize], &m.state));
     }
 }
 

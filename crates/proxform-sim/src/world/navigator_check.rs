@@ -1,48 +1,67 @@
-//! The navigator's check of its own sensor before it broadcasts: what it says of itself is
-//! what it believes, as a follower decides on what it believes.
+//! The leader's check of its own sensor before it broadcasts: what it says of itself is what
+//! it believes, as a follower decides on what it believes.
 //!
-//! The navigator flies its plan, so nothing it decides rests on its own measurement; but the
-//! followers take its broadcast as it comes (the robust fusion weighs every other neighbour
-//! down when it strays, never the navigator), and those out of sensing range hear nothing
-//! else of it. So with the own-sensor check or filter on (`own_gate_m`, `own_filter_gain`), the
-//! navigator runs the followers' [`OwnEstimate`] on its own readings, predicting each from the
-//! last by how its autopilot moved it, and broadcasts the result: a stuck sensor or a
-//! position jump is refused there as in a follower, instead of dragging every UAV that leans
-//! on it. Both engines compose the navigator's message through it.
+//! The leader (the navigator, or its successor once it leads) flies its plan by its
+//! autopilot, so nothing it decides rests on its own measurement; but the followers take its
+//! broadcast as it comes (the robust fusion weighs every other neighbour down when it
+//! strays, never the leader), and those out of sensing range hear nothing else of it. So
+//! with the own-sensor check or filter on (`own_gate_m`, `own_filter_gain`), the leader runs
+//! the followers' [`OwnEstimate`] on its own readings and broadcasts the result: a stuck
+//! sensor or a position jump is refused there as in a follower, instead of dragging every UAV
+//! that leans on it.
+//!
+//! Its prediction is how its autopilot moved it since the last step, from where it started
+//! (its plan's start, or where it was when it took the lead): it does not drift as a
+//! follower's dead reckoning does, so its gate never widens, and a jump is refused however
+//! long it lasts. Both engines compose the leader's message through it.
 
 use proxform_core::controller::ControllerParams;
 use proxform_core::own_estimate::OwnEstimate;
 use proxform_core::state::{self, State9};
 
-/// The navigator's own estimate, and its last step.
+/// The leader's own estimate, and its last step.
 #[derive(Debug, Clone, Default)]
 pub struct NavigatorCheck {
     own: OwnEstimate,
+    /// The UAV checked: the leader when it was last checked.
+    leader: Option<u32>,
     /// The last step checked: its time (s), the state broadcast, the reading, the true state.
     last: Option<(f64, State9, State9, State9)>,
 }
 
 impl NavigatorCheck {
-    /// What the navigator broadcasts at `t` of its reading `measured`, its true state being
+    /// What leader `leader` broadcasts at `t` of its reading `measured`, its true state being
     /// `truth`: the reading itself while `params` use neither the check nor the filter.
-    pub fn checked(&mut self, params: &ControllerParams, t: f64, (truth, measured): (&State9, &State9)) -> State9 {
+    pub fn checked(
+        &mut self,
+        params: &ControllerParams,
+        (leader, t): (u32, f64),
+        (truth, measured): (&State9, &State9),
+    ) -> State9 {
         if !OwnEstimate::used(params) {
             return *measured;
         }
-        if let Some((t0, own0, measured0, truth0)) = self.last {
+        // Its prediction does not drift: the gate need not widen.
+        let params = ControllerParams { own_gate_growth_mps: 0.0, ..*params };
+        let dt = params.dt_s;
+        if self.leader != Some(leader) {
+            // A new leader (or the flight's first step): it starts where it knows it is, come
+            // from where its velocity says it was a period ago.
+            *self = Self { leader: Some(leader), ..Self::default() };
+            let mut before = *truth;
+            for k in 0..3 {
+                before[state::X + k] -= dt * truth[state::VX + k];
+            }
+            self.own.expect_state((t - dt, dt), (&before, &before), *truth);
+        } else if let Some((t0, own0, measured0, truth0)) = self.last {
             // It knows how it moved since: its autopilot flew it (a step skipped makes the
             // estimate start again from the reading: `OwnEstimate::estimate`).
             let next = own0 + state::difference(truth, &truth0);
-            self.own.expect_state((t0, params.dt_s), (&own0, &measured0), next);
+            self.own.expect_state((t0, dt), (&own0, &measured0), next);
         }
-        let (own, _) = self.own.estimate(params, t, measured);
+        let (own, _) = self.own.estimate(&params, t, measured);
         self.last = Some((t, own, *measured, *truth));
         own
-    }
-
-    /// Forgets what it remembers (after a warm-up, whose readings are not the flight's).
-    pub fn forget(&mut self) {
-        *self = Self::default();
     }
 }
 
@@ -50,7 +69,7 @@ impl NavigatorCheck {
 mod tests {
     use super::*;
 
-    /// The navigator flying straight at 70 m/s: its true state at `t`.
+    /// A leader flying straight at 70 m/s: its true state at `t`.
     fn truth(t: f64) -> State9 {
         let mut s = State9::zeros();
         s[state::X] = 70.0 * t;
@@ -58,30 +77,58 @@ mod tests {
         s
     }
 
+    /// What `check` broadcasts of leader 0 over steps `steps`, its reading `reading(t)`.
+    fn said(
+        check: &mut NavigatorCheck,
+        params: &ControllerParams,
+        steps: std::ops::Range<usize>,
+        reading: impl Fn(f64) -> State9,
+    ) -> Vec<State9> {
+        let dt = params.dt_s;
+        steps.map(|k| k as f64 * dt).map(|t| check.checked(params, (0, t), (&truth(t), &reading(t)))).collect()
+    }
+
+    fn noisy(t: f64) -> State9 {
+        let mut s = truth(t);
+        s[state::Y] = 0.01 * ((t * 10.0).round() % 3.0);
+        s
+    }
+
     #[test]
     fn a_stuck_reading_is_not_broadcast_and_a_clean_one_is_as_read() {
         let params = ControllerParams { own_gate_m: Some(3.0), ..ControllerParams::default() };
         let mut check = NavigatorCheck::default();
-        let dt = params.dt_s;
-        for k in 0..20 {
-            let t = k as f64 * dt;
-            let mut reading = truth(t);
-            reading[state::Y] = 0.01 * (k % 3) as f64;
-            assert_eq!(check.checked(&params, t, (&truth(t), &reading)), reading, "step {k}");
-        }
-        // The sensor sticks at 2 s: the navigator broadcasts where it knows it flew.
+        let clean = said(&mut check, &params, 0..20, noisy);
+        assert!(clean.iter().enumerate().all(|(k, s)| *s == noisy(k as f64 * 0.1)), "taken as read");
+        // The sensor sticks at 2 s: the leader broadcasts where it knows it flew.
         let frozen = truth(2.0);
-        for k in 20..70 {
-            let t = k as f64 * dt;
-            let said = check.checked(&params, t, (&truth(t), &frozen));
-            assert!((said[state::X] - 70.0 * t).abs() < 0.1, "step {k}: {} vs {}", said[state::X], 70.0 * t);
+        for (k, s) in (20..70).zip(said(&mut check, &params, 20..70, |_| frozen)) {
+            let t = k as f64 * 0.1;
+            assert!((s[state::X] - 70.0 * t).abs() < 0.1, "step {k}: {} vs {}", s[state::X], 70.0 * t);
         }
         // Without the check or the filter, the reading goes out as it is.
-        let off = ControllerParams::default();
         let mut plain = NavigatorCheck::default();
-        for k in 0..5 {
-            let t = k as f64 * dt;
-            assert_eq!(plain.checked(&off, t, (&truth(t), &frozen)), frozen);
-        }
+        assert!(said(&mut plain, &ControllerParams::default(), 0..5, |_| frozen).iter().all(|s| *s == frozen));
+    }
+
+    #[test]
+    fn a_jump_from_the_first_step_or_lasting_long_is_refused_and_a_new_leader_is_checked_afresh() {
+        let params = ControllerParams { own_gate_m: Some(3.0), ..ControllerParams::default() };
+        let jumped = |t: f64| {
+            let mut s = noisy(t);
+            s[state::Y] += 10.0;
+            s
+        };
+        // From the flight's first step, for 60 s: never broadcast.
+        let mut check = NavigatorCheck::default();
+        let out = said(&mut check, &params, 0..600, jumped);
+        assert!(out.iter().all(|s| s[state::Y].abs() < 0.1), "a jump got through");
+        // Back to clean readings: taken at once.
+        let back = said(&mut check, &params, 600..610, noisy);
+        assert!(back.iter().zip(600..).all(|(s, k)| *s == noisy(k as f64 * 0.1)));
+        // Another leader from 61 s, its reading off from its first step: refused as well.
+        let t = 61.0;
+        let s = check.checked(&params, (1, t), (&truth(t), &jumped(t)));
+        assert!(s[state::Y].abs() < 0.1, "{}", s[state::Y]);
     }
 }
