@@ -207,8 +207,17 @@ pub fn print(
                 _ => false,
             })
         };
+        // A fault lasting to the end of the flight has no return to time.
+        let ends = scenario.faults().iter().any(|x| match *x {
+            Fault::Glitch { uav, at_s, duration_s, .. } | Fault::StuckSensor { uav, at_s, duration_s } => {
+                uav != nav && at_s + duration_s < scenario.duration_s()
+            }
+            _ => false,
+        });
         let mut back = Vec::new();
-        if struck(false) {
+        if struck(false) && !ends {
+            back.push("the faulty followers' faults last to the end of the flight (no return to time)".into());
+        } else if struck(false) {
             back.push(format!(
                 "faulty followers back within them {} s after the fault (median), {} s (p99), {} s (max)",
                 number(f.rejoin_s_median),
