@@ -256,7 +256,7 @@ pub fn print(
             let in_time = s.counts.formed_in_time;
             writeln!(
                 out,
-                "formed in time           by form_within_s = {} s (from the start, or from slots re-assigned while forming) in {in_time} of {} runs (the others do not pass)",
+                "formed in time           by form_within_s = {} s in {in_time} of {} runs (the others do not pass)",
                 number(limit),
                 s.runs
             )?;

@@ -214,6 +214,14 @@ mod tests {
         assert!(!paper.controller().plan_forward);
         assert!(paper.controller().isolation_gate.is_none());
         assert_eq!((default.controller().own_gate_m, paper.controller().own_gate_m), (Some(3.0), None));
+        // Above the position noise: 4 √2 σ where that exceeds 3 m; a gate set within it warns.
+        let noisy = v("\n[noise]\nposition_m = 1.5");
+        let gate = noisy.controller().own_gate_m.expect("on");
+        assert!((gate - 4.0 * std::f64::consts::SQRT_2 * 1.5).abs() < 1e-9, "{gate}");
+        assert!(noisy.warnings().iter().all(|w| w.key != "controller.own_gate_m"));
+        let set = v("own_gate_m = 3.0\n[noise]\nposition_m = 1.5");
+        assert_eq!(set.controller().own_gate_m, Some(3.0), "the file's own");
+        assert!(set.warnings().iter().any(|w| w.key == "controller.own_gate_m"), "{:?}", set.warnings());
         // Keys the file sets win.
         assert!(v("method = \"paper\"\nplan_forward = true").controller().plan_forward);
         let e = crate::load::parse(

@@ -35,9 +35,19 @@ pub const AVOID_PER_SAFETY: f64 = 1.25;
 pub const ISOLATION_GATE: f64 = 1.0;
 
 /// The own-sensor check's gate (m) when `controller.own_gate_m` is unset (METHOD §8): a reading
-/// of the UAV's own position this far from its prediction is refused. Unset with
-/// `method = "paper"` and where the fast engine flies the scenario (it does not run the check).
+/// of the UAV's own position this far from its prediction is refused (or the noise's floor,
+/// [`own_gate_floor_m`], where that is larger). Unset with `method = "paper"`.
 pub const OWN_GATE_M: f64 = 3.0;
+/// The own-sensor gate is at least this many standard deviations of the difference of two
+/// position readings (√2 σ of the position noise): a clean reading lies farther from the last
+/// one's prediction in fewer than 1 of 10 000 steps (per axis), where a gate within the noise
+/// refused clean readings and flew on a held one's error. (3 m up to σ = 0.53 m.)
+pub const OWN_GATE_NOISE_SIGMAS: f64 = 4.0;
+
+/// The own-sensor gate that noise of σ `position_m` (m) alone seldom exceeds (m).
+pub fn own_gate_floor_m(position_m: f64) -> f64 {
+    OWN_GATE_NOISE_SIGMAS * std::f64::consts::SQRT_2 * position_m
+}
 
 /// How fast the own-sensor gate widens while readings are refused, once one of them was frozen
 /// (m/s), when `controller.own_gate_growth_mps` is unset, in calm air; turbulence adds 3 σ_u of

@@ -431,7 +431,7 @@ fn controller(sc: &Scenario, notes: &mut Derived) -> ControllerSpec {
         own_gate_m: follows(
             set.own_gate_m,
             p.own_gate_m.unwrap_or(0.0),
-            ("controller", "own_gate_m", "the method"),
+            ("controller", "own_gate_m", "the method and the position noise"),
             notes,
         ),
         own_gate_growth_mps: match p.own_gate_m {

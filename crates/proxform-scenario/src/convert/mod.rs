@@ -335,8 +335,10 @@ impl TryFrom<ScenarioSpec> for Scenario {
         // The own-sensor check by default (METHOD §8) for every method but the paper's,
         // whichever engine flies. Its gate widens at least as fast as the turbulence can move a
         // UAV off its prediction.
+        // A gate within the position noise refuses clean readings: the default lies above it.
+        let noise_floor_m = defaults::own_gate_floor_m(noise.position_m);
         if spec.controller.own_gate_m.is_none() && !paper {
-            params.own_gate_m = Some(defaults::OWN_GATE_M);
+            params.own_gate_m = Some(defaults::OWN_GATE_M.max(noise_floor_m));
         }
         if spec.controller.own_gate_growth_mps.is_none() {
             let sigma_u = wind.turbulence.map_or(0.0, |t| t.scales().1[0]);
@@ -349,6 +351,19 @@ impl TryFrom<ScenarioSpec> for Scenario {
         let setup = ControllerSetup::with_plan(params, vehicle, plan).map_err(|e| err("controller", e.to_string()))?;
         let mut warnings = world::faults_after(&faults, duration_s);
         warnings.append(&mut schedule_warnings);
+        if let Some(g) = spec.controller.own_gate_m.filter(|g| *g > 0.0 && *g < noise_floor_m) {
+            warnings.push(err(
+                "controller.own_gate_m",
+                format!(
+                    "{} m is within the position noise (noise.position_m = {} m): clean readings will be refused \
+                     and their UAVs fly, and broadcast, a held reading's error; {} m or more refuses only \
+                     what the noise seldom does (the default)",
+                    show(g),
+                    show(noise.position_m),
+                    show((noise_floor_m * 100.0).ceil() / 100.0)
+                ),
+            ));
+        }
         if navigator_by_radio {
             warnings.extend(formation::beyond_the_navigators_radio(
                 &formation.slots,

@@ -219,7 +219,7 @@ impl Aggregator {
             self.forming.add([]);
             self.counts.formed += u64::from(f.time_to_form_s.is_finite());
             self.counts.formed_in_time +=
-                u64::from(self.form_within_s.is_some_and(|limit| f.time_to_form_s <= f.clock_s + limit + 1e-9));
+                u64::from(self.form_within_s.is_some_and(|limit| f.time_to_form_s <= limit + 1e-9));
             self.forming_t.push(f.time_to_form_s);
             self.forming_transient = self.forming_transient.max(f.transient_error_ratio);
             if let Some(v) = f.settled_error_ratio {

@@ -181,11 +181,6 @@ pub struct FormingMetrics {
     /// From this time on (s) every follower stayed within every allowable error: 0 when none
     /// ever left them, ∞ when some follower was outside them at the end (not formed).
     pub time_to_form_s: f64,
-    /// When the clock of `form_within_s` started (s): 0, or the start of the last slot
-    /// re-assignment made while the formation was still forming (it then had new slots to
-    /// form in, from there).
-    #[serde(default)]
-    pub clock_s: f64,
     /// Largest error over its allowable error (any axis, any follower) before that time.
     pub transient_error_ratio: f64,
     /// Largest error over its allowable error, over the whole flight, of the followers that
@@ -303,8 +298,6 @@ pub struct RunMetrics {
     /// re-assignment made while the formation was still forming, which forming carries on
     /// through (to the next scheduled change, or the end).
     forming_until: f64,
-    /// See [`FormingMetrics::clock_s`].
-    forming_clock_s: f64,
     last_out_any: f64,
     ratio_so_far: f64,
     ratio_before_formed: f64,
@@ -418,7 +411,6 @@ impl RunMetrics {
                 .then(|| super::separation::Separation::new(scenario.safety_distance_m())),
             before_ratio: 0.0,
             forming_until: scenario.schedule().stages().first().map_or(f64::INFINITY, |s| s.at_s),
-            forming_clock_s: 0.0,
             last_out_any: f64::NEG_INFINITY,
             ratio_so_far: 0.0,
             ratio_before_formed: 0.0,
@@ -565,7 +557,6 @@ impl RunMetrics {
             judged_steps: self.total.follower_steps,
             within: within(&self.total.max_abs),
             time_to_form_s,
-            form_clock_s: self.forming_clock_s,
             settled_ratio: self.settled_ratio,
             before_ratio: self.before_ratio,
             changes_completed: transitions.as_ref().map(|t| t.transition_s.is_finite()),
@@ -589,8 +580,7 @@ impl RunMetrics {
             .iter()
             .zip(&self.judges)
             .map(|((_, a), j)| {
-                let e =
-                    j.evidence(a.follower_steps, within(&a.max_abs), (form_end, self.forming_clock_s, self.dt), window);
+                let e = j.evidence(a.follower_steps, within(&a.max_abs), (form_end, self.dt), window);
                 self.criterion.passes(&e)
             })
             .collect();
@@ -631,7 +621,6 @@ impl RunMetrics {
             }),
             forming: self.forming.then(|| FormingMetrics {
                 time_to_form_s,
-                clock_s: self.forming_clock_s,
                 transient_error_ratio: self.ratio_before_formed,
                 settled_error_ratio: self.settled.iter().any(|s| *s).then_some(self.settled_ratio),
             }),
@@ -927,9 +916,8 @@ impl Observer for RunMetrics {
             // has formed when it has formed in the new slots. Made once it had formed, it ends
             // forming, as a change does.
             let still_forming = self.forming && t < self.forming_until - 1e-9 && self.last_out_any >= t - dt - 1e-9;
-            match still_forming {
-                true => self.forming_clock_s = t,
-                false => self.forming_until = self.forming_until.min(t),
+            if !still_forming {
+                self.forming_until = self.forming_until.min(t);
             }
             for c in self.transitions.iter_mut().filter(|c| c.at_s <= t + 1e-9 && c.until_s > t) {
                 (c.until_s, c.superseded) = (t, true);

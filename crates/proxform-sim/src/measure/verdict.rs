@@ -28,9 +28,6 @@ pub(crate) struct Evidence {
     /// When the formation (or the follower) was formed, to the end or the first change (s; ∞:
     /// never).
     pub time_to_form_s: f64,
-    /// When the clock of `form_within_s` started (s): 0, or the start of the last
-    /// re-assignment made while the formation was still forming (new slots to form in).
-    pub form_clock_s: f64,
     /// Largest error over its allowable error of the followers judged from the start (those
     /// that started in their slots and do not join), before the first change.
     pub settled_ratio: f64,
@@ -46,7 +43,7 @@ impl Criterion {
         e.judged_steps > 0
             && match (self.form_within_s, e.changes_completed) {
                 // Formed in time, then every change completed.
-                (Some(limit), changes) => e.time_to_form_s <= e.form_clock_s + limit + 1e-9 && changes.unwrap_or(true),
+                (Some(limit), changes) => e.time_to_form_s <= limit + 1e-9 && changes.unwrap_or(true),
                 // Joiners: the others kept their errors and the joiners formed (before the
                 // first change, then every change completed).
                 (None, changes) if self.forming => {
@@ -136,14 +133,13 @@ impl FollowerJudge {
         &self,
         judged_steps: u64,
         within: bool,
-        (form_end, form_clock_s, dt): (f64, f64, f64),
+        (form_end, dt): (f64, f64),
         window: impl Fn(usize) -> Window,
     ) -> Evidence {
         Evidence {
             judged_steps,
             within,
             time_to_form_s: formed_at(self.last_out, form_end.min(self.last_seen), dt),
-            form_clock_s,
             settled_ratio: if self.settled { self.before_ratio } else { 0.0 },
             before_ratio: self.before_ratio,
             changes_completed: (!self.changes_last_out.is_empty()).then(|| {
@@ -193,7 +189,6 @@ mod tests {
             judged_steps: 10,
             within,
             time_to_form_s: 0.0,
-            form_clock_s: 0.0,
             settled_ratio: 0.0,
             before_ratio: 0.0,
             changes_completed: None,
@@ -232,12 +227,12 @@ mod tests {
             let ratio = if t < 4.95 || (10.0..12.05).contains(&t) { 2.0 } else { 0.5 };
             j.observe(t, ratio, (t < 10.0 - 1e-9, t < 10.0 - 1e-9), |_| t >= 10.0 - 1e-9);
         }
-        let e = j.evidence(200, false, (9.9, 0.0, 0.1), |_| w(10.0, 19.9));
+        let e = j.evidence(200, false, (9.9, 0.1), |_| w(10.0, 19.9));
         assert!((e.time_to_form_s - 5.0).abs() < 1e-9, "{}", e.time_to_form_s);
         assert_eq!(e.changes_completed, Some(true));
         assert_eq!(e.settled_ratio, 0.0, "not judged from the start");
         // Still out at the window's last frame: not completed.
-        assert_eq!(j.evidence(200, false, (9.9, 0.0, 0.1), |_| w(10.0, 12.0)).changes_completed, Some(false));
+        assert_eq!(j.evidence(200, false, (9.9, 0.1), |_| w(10.0, 12.0)).changes_completed, Some(false));
     }
 
     #[test]
@@ -257,7 +252,7 @@ mod tests {
             };
             j.observe(t, ratio, (t < 5.0 - 1e-9, t < 20.0 - 1e-9), |_| t >= 5.0 - 1e-9);
         }
-        let e = j.evidence(300, false, (19.9, 0.0, 0.1), |_| w(5.0, 29.9));
+        let e = j.evidence(300, false, (19.9, 0.1), |_| w(5.0, 29.9));
         assert!((e.time_to_form_s - 12.1).abs() < 1e-9, "{}", e.time_to_form_s);
         assert_eq!(e.before_ratio, 0.5);
         assert_eq!(e.changes_completed, Some(true));
@@ -267,16 +262,16 @@ mod tests {
     fn a_follower_removed_out_of_its_errors_neither_formed_nor_completed_its_change() {
         // Out from 10 s (a change) and removed at 11 s, while the window lasts to 19.9 s.
         let j = flown_to(110, |t| t >= 9.95);
-        assert_eq!(j.evidence(111, false, (19.9, 0.0, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(false));
+        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(false));
         // A joiner removed while still forming did not form.
         let mut j = FollowerJudge::new(false, 0);
         for k in 0..=110 {
             j.observe(k as f64 * 0.1, 2.0, (true, true), |_| false);
         }
-        assert_eq!(j.evidence(111, false, (19.9, 0.0, 0.1), |_| w(10.0, 19.9)).time_to_form_s, f64::INFINITY);
+        assert_eq!(j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9)).time_to_form_s, f64::INFINITY);
         // Removed within its errors: formed, and the change completed.
         let j = flown_to(110, |t| (10.0..10.55).contains(&t));
-        let e = j.evidence(111, false, (19.9, 0.0, 0.1), |_| w(10.0, 19.9));
+        let e = j.evidence(111, false, (19.9, 0.1), |_| w(10.0, 19.9));
         assert_eq!(e.changes_completed, Some(true));
         assert!(e.time_to_form_s.is_finite());
     }
@@ -286,7 +281,7 @@ mod tests {
         // Removed as the change begins: its last frame is the change's first, where nobody has
         // moved yet (far from its new slot): not held to the change.
         let j = flown_to(100, |t| t >= 9.95);
-        assert_eq!(j.evidence(101, false, (9.9, 0.0, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(true));
+        assert_eq!(j.evidence(101, false, (9.9, 0.1), |_| w(10.0, 19.9)).changes_completed, Some(true));
         // A change cut short at 12 s by a re-assignment (the second window, to the end): a
         // follower out until 11 s and within from then on completed; one out at 11.9 s that
         // flew on is judged by the re-assignment alone; one that left in it out of its errors
@@ -304,7 +299,7 @@ mod tests {
                     _ => t >= 12.0 - 1e-9,
                 });
             }
-            j.evidence(until as u64 + 1, false, (9.9, 0.0, 0.1), cut).changes_completed
+            j.evidence(until as u64 + 1, false, (9.9, 0.1), cut).changes_completed
         };
         assert_eq!(judge(&|t| (10.0..11.05).contains(&t), 199), Some(true));
         assert_eq!(judge(&|t| (10.0..12.5).contains(&t), 199), Some(true));

@@ -44,7 +44,7 @@ impl NavigatorCheck {
         // Its prediction does not drift: the gate need not widen.
         let params = ControllerParams { own_gate_growth_mps: 0.0, ..*params };
         let dt = params.dt_s;
-        if self.leader != Some(leader) {
+        let expected = if self.leader != Some(leader) {
             // A new leader (or the flight's first step): it starts where it knows it is, come
             // from where its velocity says it was a period ago.
             *self = Self { leader: Some(leader), ..Self::default() };
@@ -53,13 +53,24 @@ impl NavigatorCheck {
                 before[state::X + k] -= dt * truth[state::VX + k];
             }
             self.own.expect_state((t - dt, dt), (&before, &before), *truth);
+            Some(*truth)
         } else if let Some((t0, own0, measured0, truth0)) = self.last {
             // It knows how it moved since: its autopilot flew it (a step skipped makes the
             // estimate start again from the reading: `OwnEstimate::estimate`).
             let next = own0 + state::difference(truth, &truth0);
             self.own.expect_state((t0, dt), (&own0, &measured0), next);
+            Some(next)
+        } else {
+            None
+        };
+        let (mut own, refused) = self.own.estimate(&params, t, measured);
+        if let Some(next) = expected.filter(|_| refused) {
+            // A refused reading tells it nothing, not even its velocity: a follower
+            // dead-reckons with that velocity because its prediction drifts; the leader's
+            // does not, and a reading stuck before it took the lead would carry a frozen
+            // velocity on in every broadcast.
+            own = next;
         }
-        let (own, _) = self.own.estimate(&params, t, measured);
         self.last = Some((t, own, *measured, *truth));
         own
     }
@@ -130,5 +141,22 @@ mod tests {
         let t = 61.0;
         let s = check.checked(&params, (1, t), (&truth(t), &jumped(t)));
         assert!(s[state::Y].abs() < 0.1, "{}", s[state::Y]);
+        // A leader whose sensor stuck before it took the lead, in a turn: its broadcasts
+        // follow how it flies, not the frozen reading's position nor its velocity.
+        let turning = |t: f64| {
+            let mut s = truth(t);
+            s[state::VY] = 2.0 * t;
+            s[state::Y] = t * t;
+            s
+        };
+        let frozen = turning(59.0);
+        let mut check = NavigatorCheck::default();
+        for k in 0..50 {
+            let t = 60.0 + k as f64 * 0.1;
+            let s = check.checked(&params, (2, t), (&turning(t), &frozen));
+            let e = turning(t);
+            assert!((s[state::VY] - e[state::VY]).abs() < 1e-6, "step {k}: {} vs {}", s[state::VY], e[state::VY]);
+            assert!((s[state::Y] - e[state::Y]).abs() < 1e-6, "step {k}");
+        }
     }
 }
