@@ -58,7 +58,8 @@ fn load(args: &CompareArgs) -> Result<Comparison> {
         } else {
             crate::scenarios::load_spec(&dir.join(s)).map_err(|e| format!("{e:#}"))?
         };
-        crate::scenarios::check(spec.clone(), &source).map_err(|e| format!("{e:#}"))?;
+        let base = crate::scenarios::check(spec.clone(), &source).map_err(|e| format!("{e:#}"))?;
+        crate::scenarios::warn(&base, &source);
         if let Some(d) = args.duration_s {
             spec.duration_s = Some(d);
             Scenario::try_from(spec.clone()).map_err(|e| format!("--duration-s: {}", e.message))?;

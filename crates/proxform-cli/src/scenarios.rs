@@ -46,15 +46,24 @@ pub fn load_spec(path: &Path) -> Result<(ScenarioSpec, Source)> {
 
 /// Prints the scenario's warnings to standard error, located in its file when it has one.
 pub fn warn(scenario: &Scenario, source: &Source) {
+    warn_once(scenario, source, &mut Vec::new());
+}
+
+/// [`warn`], but for the warnings not among `said` yet (the cells of a sweep, which share
+/// most of theirs), which it records.
+pub fn warn_once(scenario: &Scenario, source: &Source, said: &mut Vec<String>) {
     for w in scenario.warnings() {
-        let said = match source {
+        let line = match source {
             Source::File { name, text } => match load::locate(text, &w.key) {
                 Some(line) => format!("warning: {name}:{line}: {w}"),
                 None => format!("warning: {name}: {w}"),
             },
             Source::BuiltIn => format!("warning: {w}"),
         };
-        eprintln!("{}", crate::terminal_safe(&said));
+        if !said.contains(&line) {
+            eprintln!("{}", crate::terminal_safe(&line));
+            said.push(line);
+        }
     }
 }
 

@@ -103,6 +103,7 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
     }
     // Every cell is checked before anything flies.
     let mut cells: Vec<(String, Scenario)> = Vec::with_capacity(grid.len());
+    let mut warned = Vec::new();
     for cell in &grid {
         let label = cell.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ");
         let mut s = spec.clone();
@@ -117,6 +118,7 @@ pub fn run(args: &SweepArgs) -> Result<ExitCode> {
             },
         };
         crate::scenarios::engine(&sc, &source).with_context(|| format!("cell {label}"))?;
+        crate::scenarios::warn_once(&sc, &source, &mut warned);
         cells.push((label, sc));
     }
     let name = cells.first().map_or("sweep", |c| c.1.name()).to_string();

@@ -39,9 +39,10 @@ pub const ISOLATION_GATE: f64 = 1.0;
 /// [`own_gate_floor_m`], where that is larger). Unset with `method = "paper"`.
 pub const OWN_GATE_M: f64 = 3.0;
 /// The own-sensor gate is at least this many standard deviations of the difference of two
-/// position readings (√2 σ of the position noise): a clean reading lies farther from the last
-/// one's prediction in fewer than 1 of 10 000 steps (per axis), where a gate within the noise
-/// refused clean readings and flew on a held one's error. (3 m up to σ = 0.53 m.)
+/// position readings (√2 σ of the position noise, per axis): a clean reading lies farther than
+/// that from the last one's prediction (a distance in three axes) in about 1 of 1 000 steps,
+/// where a gate within the noise refused clean readings and flew on a held one's error. (3 m up
+/// to σ = 0.53 m.) The price: a jump up to about the gate is not seen.
 pub const OWN_GATE_NOISE_SIGMAS: f64 = 4.0;
 
 /// The own-sensor gate that noise of σ `position_m` (m) alone seldom exceeds (m).

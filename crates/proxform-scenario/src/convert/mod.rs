@@ -355,7 +355,7 @@ impl TryFrom<ScenarioSpec> for Scenario {
             warnings.push(err(
                 "controller.own_gate_m",
                 format!(
-                    "{} m is within the position noise (noise.position_m = {} m): clean readings will be refused \
+                    "{} m is within the position noise (σ = {} m): clean readings will be refused \
                      and their UAVs fly, and broadcast, a held reading's error; {} m or more refuses only \
                      what the noise seldom does (the default)",
                     show(g),

@@ -12,8 +12,8 @@
 //!
 //! Its prediction is how its autopilot moved it since the last step, from where it started
 //! (its plan's start, or where it was when it took the lead): it does not drift as a
-//! follower's dead reckoning does, so its gate never widens, and a jump is refused however
-//! long it lasts. Both engines compose the leader's message through it.
+//! follower's dead reckoning does, so its gate never widens, and a jump beyond the gate is
+//! refused however long it lasts (one within it, as for a follower, is not seen). Both engines compose the leader's message through it.
 
 use proxform_core::controller::ControllerParams;
 use proxform_core::own_estimate::OwnEstimate;
