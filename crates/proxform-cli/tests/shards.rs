@@ -245,6 +245,20 @@ fn a_sweep_of_two_by_three_cells_equals_the_six_single_batches() {
 }
 
 #[test]
+fn a_sweep_prints_its_cells_warnings_once_each() {
+    // The cell with position noise of 3 m flies a 3 m own-sensor gate within it: warned
+    // about once (the other cell, 0.5 m, has none), as `proxform run` warns.
+    let dir = scratch("sweep-warnings");
+    let text = ok(proxform()
+        .args(["sweep", "-q", "--set", "noise.position_m=0.5,3", "--set", "controller.own_gate_m=3,3.0", "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .expect("sweeps"));
+    let warned = text.lines().filter(|l| l.starts_with("warning:") && l.contains("controller.own_gate_m")).count();
+    assert_eq!(warned, 1, "{text}");
+}
+
+#[test]
 fn a_batch_of_many_runs_holds_a_few_numbers_per_run_not_the_runs() {
     // 10^5 one-step runs: holding every run's summary costs ~1.2 kB each (126 MiB peak when
     // it did); the fold in run order and the journal on disk hold ~100 bytes (16 MiB).
