@@ -46,6 +46,22 @@ pub fn noise(n: &NoiseSpec) -> Result<(MeasurementNoise, Option<CorrelatedNoise>
             non_negative,
         )?) * scale,
     };
+    // The same limits hold for the noise flown, scaled: a scaled σ beyond them is refused as
+    // `noise.scale` (and a printed scenario, whose σ are the scaled ones, loads again).
+    let scaled = [noise.position_m, noise.velocity_mps * 3.6, noise.attitude_rad.to_degrees()];
+    for ((key, max, unit), v) in LIMITS.iter().zip(scaled) {
+        if v > *max * (1.0 + 1e-12) {
+            return Err(err(
+                "noise.scale",
+                format!(
+                    "{} times {key} is {} {unit}, beyond {} {unit}: noise that large measures nothing",
+                    show(scale),
+                    show(v),
+                    show(*max)
+                ),
+            ));
+        }
+    }
     let actuation = or_default("noise.actuation_error", n.actuation_error, defaults::ACTUATION_ERROR, probability)?;
     let gnss = match (n.gnss_bias_m, n.gnss_tau_s) {
         (Some(sigma), tau) => Some(CorrelatedNoise {
