@@ -200,24 +200,20 @@ pub fn print(
         let healthy = s.counts.healthy_passed;
         // The navigator has no slot error to come back within: its faults show in the
         // followers' errors alone.
-        let nav = scenario.navigator();
-        let struck = |navigator: bool| {
-            scenario.faults().iter().any(|x| match x {
-                Fault::Glitch { uav, .. } | Fault::StuckSensor { uav, .. } => (*uav == nav) == navigator,
-                _ => false,
-            })
-        };
         // A fault lasting to the end of the flight has no return to time.
-        let ends = scenario.faults().iter().any(|x| match *x {
-            Fault::Glitch { uav, at_s, duration_s, .. } | Fault::StuckSensor { uav, at_s, duration_s } => {
-                uav != nav && at_s + duration_s < scenario.duration_s()
+        let nav = scenario.navigator();
+        let (mut navigator, mut followers, mut ends) = (false, false, false);
+        for x in scenario.faults() {
+            if let Fault::Glitch { uav, at_s, duration_s, .. } | Fault::StuckSensor { uav, at_s, duration_s } = *x {
+                navigator |= uav == nav;
+                followers |= uav != nav;
+                ends |= uav != nav && at_s + duration_s < scenario.duration_s();
             }
-            _ => false,
-        });
+        }
         let mut back = Vec::new();
-        if struck(false) && !ends {
+        if followers && !ends {
             back.push("the faulty followers' faults last to the end of the flight (no return to time)".into());
-        } else if struck(false) {
+        } else if followers {
             back.push(format!(
                 "faulty followers back within them {} s after the fault (median), {} s (p99), {} s (max)",
                 number(f.rejoin_s_median),
@@ -225,13 +221,13 @@ pub fn print(
                 number(f.rejoin_s_max)
             ));
         }
-        if struck(true) {
+        if navigator {
             back.push("the navigator's own faults show in the followers' errors (it has no slot error)".into());
         }
         writeln!(
             out,
             "sensor faults            the {}followers within the allowable errors in {} ({healthy} of {} runs); {}",
-            if struck(false) { "other " } else { "" },
+            if followers { "other " } else { "" },
             fraction(f.healthy_pass_fraction),
             s.runs,
             back.join("; ")

@@ -525,7 +525,8 @@ impl<'s> World<'s> {
     }
 
     /// Phase 4, radio: every broadcasting UAV sends its own measurement (in flight with its
-    /// position-fix bias and sensor faults; the navigator's checked, [`NavigatorCheck`]), and, with `relay_navigator`, every follower what
+    /// position-fix bias and sensor faults; the leader's checked, [`NavigatorCheck`]), and,
+    /// with `relay_navigator`, every follower what
     /// its agent knows of the navigator at `t`; the messages sent `delay` steps ago arrive now
     /// (none before the first arrive).
     fn send_radio(&mut self, (key, t): (StreamKey, f64), delay: usize, flight: bool, agents: &[Option<Agent>]) {

@@ -124,7 +124,9 @@ pub fn check_navigator(
     check: Option<&mut super::navigator_check::NavigatorCheck>,
     out: &mut [Message],
 ) {
-    let Some(check) = check else { return };
+    let Some(check) = check.filter(|_| proxform_core::own_estimate::OwnEstimate::used(sc.controller())) else {
+        return;
+    };
     let lead = leader.0;
     if let Some(m) = out.iter_mut().find(|m| m.sender == lead && m.about == lead) {
         m.state = check.checked(sc.controller(), (lead, t), (&states[lead as usize], &m.state));

@@ -23,10 +23,9 @@ use proxform_core::state::{self, State9};
 #[derive(Debug, Clone, Default)]
 pub struct NavigatorCheck {
     own: OwnEstimate,
-    /// The UAV checked: the leader when it was last checked.
-    leader: Option<u32>,
-    /// The last step checked: its time (s), the state broadcast, the reading, the true state.
-    last: Option<(f64, State9, State9, State9)>,
+    /// The last step checked: the leader then, the time (s), the state broadcast, the reading,
+    /// the true state.
+    last: Option<(u32, f64, State9, State9, State9)>,
 }
 
 impl NavigatorCheck {
@@ -44,34 +43,33 @@ impl NavigatorCheck {
         // Its prediction does not drift: the gate need not widen.
         let params = ControllerParams { own_gate_growth_mps: 0.0, ..*params };
         let dt = params.dt_s;
-        let expected = if self.leader != Some(leader) {
-            // A new leader (or the flight's first step): it starts where it knows it is, come
-            // from where its velocity says it was a period ago.
-            *self = Self { leader: Some(leader), ..Self::default() };
-            let mut before = *truth;
-            for k in 0..3 {
-                before[state::X + k] -= dt * truth[state::VX + k];
+        let expected = match self.last {
+            Some((l, t0, own0, measured0, truth0)) if l == leader => {
+                // It knows how it moved since: its autopilot flew it (a step skipped makes the
+                // estimate start again from the reading: `OwnEstimate::estimate`).
+                let next = own0 + state::difference(truth, &truth0);
+                self.own.expect_state((t0, dt), (&own0, &measured0), next);
+                next
             }
-            self.own.expect_state((t - dt, dt), (&before, &before), *truth);
-            Some(*truth)
-        } else if let Some((t0, own0, measured0, truth0)) = self.last {
-            // It knows how it moved since: its autopilot flew it (a step skipped makes the
-            // estimate start again from the reading: `OwnEstimate::estimate`).
-            let next = own0 + state::difference(truth, &truth0);
-            self.own.expect_state((t0, dt), (&own0, &measured0), next);
-            Some(next)
-        } else {
-            None
+            _ => {
+                // A new leader (or the flight's first step): it starts where it knows it is,
+                // come from where its velocity says it was a period ago.
+                self.own = OwnEstimate::default();
+                let mut before = *truth;
+                for k in 0..3 {
+                    before[state::X + k] -= dt * truth[state::VX + k];
+                }
+                self.own.expect_state((t - dt, dt), (&before, &before), *truth);
+                *truth
+            }
         };
-        let (mut own, refused) = self.own.estimate(&params, t, measured);
-        if let Some(next) = expected.filter(|_| refused) {
-            // A refused reading tells it nothing, not even its velocity: a follower
-            // dead-reckons with that velocity because its prediction drifts; the leader's
-            // does not, and a reading stuck before it took the lead would carry a frozen
-            // velocity on in every broadcast.
-            own = next;
-        }
-        self.last = Some((t, own, *measured, *truth));
+        let (own, refused) = self.own.estimate(&params, t, measured);
+        // A refused reading tells it nothing, not even its velocity: a follower dead-reckons
+        // with that velocity because its prediction drifts; the leader's does not, and a
+        // reading stuck before it took the lead would carry a frozen velocity on in every
+        // broadcast.
+        let own = if refused { expected } else { own };
+        self.last = Some((leader, t, own, *measured, *truth));
         own
     }
 }
